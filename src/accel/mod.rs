@@ -1,0 +1,3 @@
+//! Ray acceleration structures. Only `bvh.rs` names obvhs.
+
+pub mod bvh;

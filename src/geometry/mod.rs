@@ -1,0 +1,7 @@
+//! Rays, triangles and robust ray spawning.
+
+pub mod offset;
+pub mod ray;
+pub mod triangle;
+
+pub use ray::Ray;

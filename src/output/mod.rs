@@ -1,0 +1,4 @@
+//! Writing results: EXR images (only `exr.rs` names the exr crate) and PNG previews.
+
+pub mod exr;
+pub mod png;

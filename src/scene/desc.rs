@@ -1,0 +1,221 @@
+//! Plain scene description: what the USD reader produces and the scene builder consumes.
+//!
+//! Everything here is already resolved to the renderer's conventions (DESIGN.md §2):
+//! positions in metres, Y up, world space; triangles counter-clockwise when seen from the
+//! side their geometric normal points to; every entity carries its USD prim path so that
+//! errors and reports can name it.
+
+use glam::{Mat4, Vec2, Vec3};
+use std::path::PathBuf;
+
+/// The whole stage as plain data.
+#[derive(Clone, Debug, Default)]
+pub struct SceneDescription {
+    /// The file the stage was read from (used in messages and EXR metadata).
+    pub source: PathBuf,
+    pub meshes: Vec<MeshDesc>,
+    pub materials: Vec<MaterialDesc>,
+    pub lights: Vec<LightDesc>,
+    pub cameras: Vec<CameraDesc>,
+    pub render: RenderSettingsDesc,
+    /// Unsupported standard prims and attributes that were skipped, one line each.
+    pub warnings: Vec<String>,
+}
+
+/// A triangulated mesh in world space (metres, Y up).
+#[derive(Clone, Debug, Default)]
+pub struct MeshDesc {
+    pub prim_path: String,
+    pub positions: Vec<Vec3>,
+    /// Triangles as indices into `positions`, wound so that the front face (the side
+    /// `(p1 - p0) x (p2 - p0)` points to) is the USD front face (`orientation` applied).
+    pub indices: Vec<[u32; 3]>,
+    /// Optional shading normals, one per triangle corner (vertex and faceVarying
+    /// interpolation are both expanded to this), world space, unit length.
+    pub normals: Option<Vec<[Vec3; 3]>>,
+    /// Optional `st` texture coordinates, one per triangle corner.
+    pub uvs: Option<Vec<[Vec2; 3]>>,
+    /// Index into `SceneDescription::materials`.
+    pub material: Option<usize>,
+    pub double_sided: bool,
+    /// Set when the prim has `MeshLightAPI` (the mesh itself is a light).
+    pub light: Option<EmissionDesc>,
+}
+
+/// A spectrum as authored in the stage.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpectrumDesc {
+    /// Linear Rec.709 RGB, uplifted with Jakob–Hanika 2019.
+    Rgb([f32; 3]),
+    /// A file in `spectra/`, e.g. `"colorchecker/dark_skin"`.
+    Named(String),
+    /// (nm, value) pairs, linearly interpolated.
+    Samples(Vec<(f32, f32)>),
+}
+
+/// What a material prim resolved to.
+#[derive(Clone, Debug)]
+pub struct MaterialDesc {
+    pub prim_path: String,
+    pub kind: MaterialKind,
+    /// `emissiveColor` of a UsdPreviewSurface: an emitter of that RGB radiance in nits.
+    pub emission: Option<[f32; 3]>,
+}
+
+#[derive(Clone, Debug)]
+pub enum MaterialKind {
+    /// `spectral:diffuse`: Lambertian (roughness 0) or Oren–Nayar (σ in radians).
+    Diffuse { reflectance: SpectrumDesc, roughness: f32 },
+    /// `spectral:conductor`.
+    Conductor { eta: SpectrumDesc, k: SpectrumDesc, roughness: f32 },
+    /// `spectral:dielectric`.
+    Dielectric { ior: IorDesc, roughness: f32, thin: bool },
+    /// `spectral:plastic`.
+    Plastic { reflectance: SpectrumDesc, ior: f32, roughness: f32 },
+    /// `UsdPreviewSurface`.
+    PreviewSurface(PreviewSurfaceDesc),
+}
+
+/// Index of refraction of a dielectric.
+#[derive(Clone, Debug, PartialEq)]
+pub enum IorDesc {
+    Constant(f32),
+    /// A named glass in `spectra/glass/`, e.g. `"BK7"`.
+    Glass(String),
+    /// Sellmeier B and C coefficients (C in µm²).
+    Sellmeier { b: [f32; 3], c: [f32; 3] },
+}
+
+/// The inputs of a UsdPreviewSurface shader, with the spec's defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreviewSurfaceDesc {
+    pub diffuse_color: [f32; 3],
+    pub emissive_color: [f32; 3],
+    pub use_specular_workflow: bool,
+    pub specular_color: [f32; 3],
+    pub metallic: f32,
+    pub roughness: f32,
+    pub clearcoat: f32,
+    pub clearcoat_roughness: f32,
+    pub opacity: f32,
+    pub opacity_threshold: f32,
+    pub ior: f32,
+}
+
+impl Default for PreviewSurfaceDesc {
+    fn default() -> Self {
+        // Defaults from the UsdPreviewSurface specification.
+        PreviewSurfaceDesc {
+            diffuse_color: [0.18; 3],
+            emissive_color: [0.0; 3],
+            use_specular_workflow: false,
+            specular_color: [0.0; 3],
+            metallic: 0.0,
+            roughness: 0.5,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.01,
+            opacity: 1.0,
+            opacity_threshold: 0.0,
+            ior: 1.5,
+        }
+    }
+}
+
+/// The spectral shape of an emitter when `spectral:emission*` is authored.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpdDesc {
+    /// A named SPD: `"CIE-A"`, `"CIE-D65"`, `"CIE-F11"`, `"LED-B3"`, ...
+    Named(String),
+    /// `"blackbody"` with `spectral:temperature` in kelvin.
+    Blackbody(f32),
+    /// `spectral:emission:samples`, (nm, value) pairs.
+    Samples(Vec<(f32, f32)>),
+}
+
+/// The UsdLux `LightAPI` inputs shared by every light, plus our `spectral:` ones.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmissionDesc {
+    pub color: [f32; 3],
+    /// Luminance in nits (DESIGN.md §2).
+    pub intensity: f32,
+    pub exposure: f32,
+    pub normalize: bool,
+    /// `inputs:enableColorTemperature` ? `inputs:colorTemperature` : None.
+    pub color_temperature: Option<f32>,
+    pub spd: Option<SpdDesc>,
+    /// `spectral:luminousFlux` in lm (replaces intensity).
+    pub luminous_flux: Option<f32>,
+    /// `spectral:luminousIntensity` in cd (replaces intensity).
+    pub luminous_intensity: Option<f32>,
+}
+
+impl Default for EmissionDesc {
+    fn default() -> Self {
+        EmissionDesc {
+            color: [1.0; 3],
+            intensity: 1.0,
+            exposure: 0.0,
+            normalize: false,
+            color_temperature: None,
+            spd: None,
+            luminous_flux: None,
+            luminous_intensity: None,
+        }
+    }
+}
+
+/// A UsdLux light (other than a mesh light, which lives on its `MeshDesc`).
+#[derive(Clone, Debug)]
+pub struct LightDesc {
+    pub prim_path: String,
+    pub kind: LightKind,
+    /// Light-to-world transform in metres, Y up. UsdLux lights emit along their local -Z.
+    pub to_world: Mat4,
+    pub emission: EmissionDesc,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightKind {
+    /// Centred on the origin in the local XY plane, emitting towards -Z.
+    Rect { width: f32, height: f32 },
+    /// Centred on the origin in the local XY plane, emitting towards -Z.
+    Disk { radius: f32 },
+    Sphere { radius: f32 },
+    /// Along the local X axis.
+    Cylinder { radius: f32, length: f32 },
+    /// Shining along the local -Z axis; `angle` is the angular diameter in degrees.
+    Distant { angle_deg: f32 },
+    /// An environment; `texture` is a lat-long image (absolute path) or None for constant.
+    Dome { texture: Option<PathBuf> },
+}
+
+/// A UsdGeomCamera.
+#[derive(Clone, Debug)]
+pub struct CameraDesc {
+    pub prim_path: String,
+    /// Camera-to-world in metres, Y up; the camera looks along its local -Z with +Y up.
+    pub to_world: Mat4,
+    /// Focal length and apertures in the same unit (tenths of a stage unit in USD).
+    pub focal_length: f32,
+    pub horizontal_aperture: f32,
+    pub vertical_aperture: f32,
+    /// Clipping range in metres.
+    pub clip_near: f32,
+    pub clip_far: f32,
+    /// 0 means a pinhole.
+    pub f_stop: f32,
+    /// Focus distance in metres.
+    pub focus_distance: f32,
+    /// Lens radius in metres for the thin-lens model (0 for a pinhole), already derived
+    /// from focal length, fStop and the stage's units.
+    pub lens_radius: f32,
+    pub exposure: f32,
+}
+
+/// The RenderSettings prim, if any.
+#[derive(Clone, Debug, Default)]
+pub struct RenderSettingsDesc {
+    pub resolution: Option<(u32, u32)>,
+    /// Prim path of the camera the settings name.
+    pub camera: Option<String>,
+}

@@ -1,0 +1,1 @@
+//! PLACEHOLDER — owned by the USD helper; replaced wholesale.

@@ -1,0 +1,111 @@
+//! A spectrum tabulated at 1 nm over the simulated range, the storage for every measured
+//! curve (CIE observer, illuminants, reflectances, metal n and k).
+
+use super::{LAMBDA_MAX, LAMBDA_MIN};
+
+/// Number of 1 nm samples in [`LAMBDA_MIN`, `LAMBDA_MAX`].
+pub const DENSE_LEN: usize = (LAMBDA_MAX - LAMBDA_MIN) as usize + 1;
+
+/// Values at every integer nm from 360 to 830, linearly interpolated in between and
+/// zero outside.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DenseSpectrum {
+    pub values: Box<[f32; DENSE_LEN]>,
+}
+
+impl DenseSpectrum {
+    pub fn constant(v: f32) -> DenseSpectrum {
+        DenseSpectrum { values: Box::new([v; DENSE_LEN]) }
+    }
+
+    /// Builds from a closure evaluated at every integer nm.
+    pub fn from_fn(f: impl Fn(f32) -> f32) -> DenseSpectrum {
+        let mut values = Box::new([0.0; DENSE_LEN]);
+        for (i, v) in values.iter_mut().enumerate() {
+            *v = f(LAMBDA_MIN + i as f32);
+        }
+        DenseSpectrum { values }
+    }
+
+    /// Resamples (nm, value) pairs sorted by wavelength by linear interpolation; outside the
+    /// given range the end values are held (as colour-science's default extrapolator does).
+    /// Returns None for an empty or unsorted table.
+    pub fn from_samples(samples: &[(f32, f32)]) -> Option<DenseSpectrum> {
+        if samples.is_empty() || samples.windows(2).any(|w| w[1].0 <= w[0].0) {
+            return None;
+        }
+        if samples.iter().any(|s| !s.0.is_finite() || !s.1.is_finite()) {
+            return None;
+        }
+        Some(DenseSpectrum::from_fn(|lambda| interpolate(samples, lambda)))
+    }
+
+    /// The value at `lambda` nm.
+    #[inline]
+    pub fn eval(&self, lambda: f32) -> f32 {
+        let x = lambda - LAMBDA_MIN;
+        if !(0.0..=(DENSE_LEN - 1) as f32).contains(&x) {
+            return 0.0;
+        }
+        let i = (x as usize).min(DENSE_LEN - 2);
+        let t = x - i as f32;
+        self.values[i] * (1.0 - t) + self.values[i + 1] * t
+    }
+
+    /// ∫ self(λ) other(λ) dλ over the range by the trapezoidal rule on the 1 nm grid.
+    pub fn inner_product(&self, other: &DenseSpectrum) -> f64 {
+        let n = DENSE_LEN;
+        let mut sum = 0.0f64;
+        for i in 0..n {
+            let w = if i == 0 || i == n - 1 { 0.5 } else { 1.0 };
+            sum += w * self.values[i] as f64 * other.values[i] as f64;
+        }
+        sum
+    }
+
+    pub fn scaled(&self, s: f32) -> DenseSpectrum {
+        DenseSpectrum::from_fn(|l| self.eval(l) * s)
+    }
+
+    pub fn max_value(&self) -> f32 {
+        self.values.iter().copied().fold(0.0, f32::max)
+    }
+}
+
+/// Linear interpolation in a sorted (x, y) table, holding the end values outside it.
+pub fn interpolate(samples: &[(f32, f32)], x: f32) -> f32 {
+    let first = samples[0];
+    let last = samples[samples.len() - 1];
+    if x <= first.0 {
+        return first.1;
+    }
+    if x >= last.0 {
+        return last.1;
+    }
+    let i = samples.partition_point(|s| s.0 <= x);
+    let (a, b) = (samples[i - 1], samples[i]);
+    let t = (x - a.0) / (b.0 - a.0);
+    a.1 + t * (b.1 - a.1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resampling_is_linear_and_holds_ends() {
+        let s = DenseSpectrum::from_samples(&[(400.0, 1.0), (500.0, 3.0)]).unwrap();
+        assert_eq!(s.eval(360.0), 1.0);
+        assert!((s.eval(450.0) - 2.0).abs() < 1e-6);
+        assert!((s.eval(450.5) - 2.01).abs() < 1e-5);
+        assert_eq!(s.eval(830.0), 3.0);
+        assert_eq!(s.eval(900.0), 0.0);
+    }
+
+    #[test]
+    fn rejects_unsorted_and_empty() {
+        assert!(DenseSpectrum::from_samples(&[]).is_none());
+        assert!(DenseSpectrum::from_samples(&[(500.0, 1.0), (400.0, 1.0)]).is_none());
+        assert!(DenseSpectrum::from_samples(&[(500.0, f32::NAN)]).is_none());
+    }
+}

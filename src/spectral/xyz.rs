@@ -1,0 +1,61 @@
+//! From spectra to CIE 1931 XYZ in photometric units (Y in cd/m² for a radiance).
+
+use super::data;
+use super::dense::DenseSpectrum;
+use super::{SampledSpectrum, SampledWavelengths, K_M, N_LAMBDA};
+
+/// Monte Carlo estimate of K_m ∫ L(λ) {x̄,ȳ,z̄}(λ) dλ from one set of hero wavelengths:
+/// the mean over lanes of L(λᵢ) x̄(λᵢ) / p(λᵢ) (lanes with pdf 0 contribute nothing).
+#[inline]
+pub fn sampled_to_xyz(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
+    let [xb, yb, zb] = data::cie_xyz();
+    let mut xyz = [0.0f32; 3];
+    for i in 0..N_LAMBDA {
+        if w.pdf[i] == 0.0 || l[i] == 0.0 {
+            continue;
+        }
+        let v = l[i] / w.pdf[i];
+        let lambda = w.lambda[i];
+        xyz[0] += v * xb.eval(lambda);
+        xyz[1] += v * yb.eval(lambda);
+        xyz[2] += v * zb.eval(lambda);
+    }
+    xyz.map(|c| c * K_M / N_LAMBDA as f32)
+}
+
+/// K_m ∫ s(λ) {x̄,ȳ,z̄}(λ) dλ on the 1 nm grid.
+pub fn dense_to_xyz(s: &DenseSpectrum) -> [f64; 3] {
+    let [xb, yb, zb] = data::cie_xyz();
+    [xb, yb, zb].map(|cmf| K_M as f64 * s.inner_product(cmf))
+}
+
+/// Luminance (cd/m²) of a radiance spectrum, or luminous quantity of any spectral one:
+/// K_m ∫ s(λ) ȳ(λ) dλ.
+pub fn luminance(s: &DenseSpectrum) -> f64 {
+    K_M as f64 * s.inner_product(&data::cie_xyz()[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn y_bar_integral_matches_cie() {
+        // ∫ȳ dλ over 360–830 nm at 1 nm is 106.856895 (CIE 015:2018 tables; colour-science).
+        let one = DenseSpectrum::constant(1.0);
+        let y = one.inner_product(&data::cie_xyz()[1]);
+        assert!((y - 106.856_895).abs() < 1e-3, "{y}");
+    }
+
+    #[test]
+    fn monte_carlo_estimate_is_unbiased_for_a_constant() {
+        let n = 20_000;
+        let mut y = 0.0f64;
+        for i in 0..n {
+            let w = SampledWavelengths::sample_visible((i as f32 + 0.5) / n as f32);
+            y += sampled_to_xyz(SampledSpectrum::ONE, &w)[1] as f64;
+        }
+        let expected = K_M as f64 * 106.856_895;
+        assert!((y / n as f64 / expected - 1.0).abs() < 1e-3);
+    }
+}
