@@ -25,11 +25,19 @@ impl fmt::Display for Error {
 impl Error {
     /// An error about a whole file (missing, unreadable, malformed).
     pub fn file(file: impl AsRef<Path>, reason: impl Into<String>) -> Error {
-        Error { file: file.as_ref().display().to_string(), prim: None, reason: reason.into() }
+        Error {
+            file: file.as_ref().display().to_string(),
+            prim: None,
+            reason: reason.into(),
+        }
     }
 
     /// An error about one prim of a file.
-    pub fn prim(file: impl AsRef<Path>, prim: impl Into<String>, reason: impl Into<String>) -> Error {
+    pub fn prim(
+        file: impl AsRef<Path>,
+        prim: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Error {
         Error {
             file: file.as_ref().display().to_string(),
             prim: Some(prim.into()),

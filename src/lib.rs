@@ -5,6 +5,7 @@ pub mod accel;
 pub mod bxdf;
 pub mod error;
 pub mod geometry;
+pub mod imageio;
 pub mod integrator;
 pub mod light;
 pub mod material;

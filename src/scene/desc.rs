@@ -65,13 +65,28 @@ pub struct MaterialDesc {
 #[derive(Clone, Debug)]
 pub enum MaterialKind {
     /// `spectral:diffuse`: Lambertian (roughness 0) or Oren–Nayar (σ in radians).
-    Diffuse { reflectance: SpectrumDesc, roughness: f32 },
+    Diffuse {
+        reflectance: SpectrumDesc,
+        roughness: f32,
+    },
     /// `spectral:conductor`.
-    Conductor { eta: SpectrumDesc, k: SpectrumDesc, roughness: f32 },
+    Conductor {
+        eta: SpectrumDesc,
+        k: SpectrumDesc,
+        roughness: f32,
+    },
     /// `spectral:dielectric`.
-    Dielectric { ior: IorDesc, roughness: f32, thin: bool },
+    Dielectric {
+        ior: IorDesc,
+        roughness: f32,
+        thin: bool,
+    },
     /// `spectral:plastic`.
-    Plastic { reflectance: SpectrumDesc, ior: f32, roughness: f32 },
+    Plastic {
+        reflectance: SpectrumDesc,
+        ior: f32,
+        roughness: f32,
+    },
     /// `UsdPreviewSurface`.
     PreviewSurface(PreviewSurfaceDesc),
 }
@@ -83,7 +98,10 @@ pub enum IorDesc {
     /// A named glass in `spectra/glass/`, e.g. `"BK7"`.
     Glass(String),
     /// Sellmeier B and C coefficients (C in µm²).
-    Sellmeier { b: [f32; 3], c: [f32; 3] },
+    Sellmeier {
+        b: [f32; 3],
+        c: [f32; 3],
+    },
 }
 
 /// The inputs of a UsdPreviewSurface shader, with the spec's defaults.
@@ -177,16 +195,30 @@ pub struct LightDesc {
 #[derive(Clone, Debug, PartialEq)]
 pub enum LightKind {
     /// Centred on the origin in the local XY plane, emitting towards -Z.
-    Rect { width: f32, height: f32 },
+    Rect {
+        width: f32,
+        height: f32,
+    },
     /// Centred on the origin in the local XY plane, emitting towards -Z.
-    Disk { radius: f32 },
-    Sphere { radius: f32 },
+    Disk {
+        radius: f32,
+    },
+    Sphere {
+        radius: f32,
+    },
     /// Along the local X axis.
-    Cylinder { radius: f32, length: f32 },
+    Cylinder {
+        radius: f32,
+        length: f32,
+    },
     /// Shining along the local -Z axis; `angle` is the angular diameter in degrees.
-    Distant { angle_deg: f32 },
+    Distant {
+        angle_deg: f32,
+    },
     /// An environment; `texture` is a lat-long image (absolute path) or None for constant.
-    Dome { texture: Option<PathBuf> },
+    Dome {
+        texture: Option<PathBuf>,
+    },
 }
 
 /// A UsdGeomCamera.

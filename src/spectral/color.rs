@@ -27,7 +27,10 @@ fn matrices() -> &'static Matrices {
         let p = DMat3::from_cols(col(PRIMARIES[0]), col(PRIMARIES[1]), col(PRIMARIES[2]));
         let s = p.inverse() * white;
         let rgb_to_xyz = DMat3::from_cols(p.x_axis * s.x, p.y_axis * s.y, p.z_axis * s.z);
-        Matrices { rgb_to_xyz, xyz_to_rgb: rgb_to_xyz.inverse() }
+        Matrices {
+            rgb_to_xyz,
+            xyz_to_rgb: rgb_to_xyz.inverse(),
+        }
     })
 }
 
@@ -64,11 +67,18 @@ mod tests {
     #[test]
     fn close_to_the_standard_matrix() {
         // IEC 61966-2-1 sRGB: Y row = 0.2126, 0.7152, 0.0722.
-        let y = [rgb_to_xyz([1.0, 0.0, 0.0])[1], rgb_to_xyz([0.0, 1.0, 0.0])[1], rgb_to_xyz([0.0, 0.0, 1.0])[1]];
+        let y = [
+            rgb_to_xyz([1.0, 0.0, 0.0])[1],
+            rgb_to_xyz([0.0, 1.0, 0.0])[1],
+            rgb_to_xyz([0.0, 0.0, 1.0])[1],
+        ];
         for (a, b) in y.iter().zip([0.2126, 0.7152, 0.0722]) {
             assert!((a - b).abs() < 1e-3, "{y:?}");
         }
         let xy = white_xy();
-        assert!((xy[0] - 0.3127).abs() < 2e-4 && (xy[1] - 0.3290).abs() < 2e-4, "{xy:?}");
+        assert!(
+            (xy[0] - 0.3127).abs() < 2e-4 && (xy[1] - 0.3290).abs() < 2e-4,
+            "{xy:?}"
+        );
     }
 }

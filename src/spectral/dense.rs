@@ -15,7 +15,9 @@ pub struct DenseSpectrum {
 
 impl DenseSpectrum {
     pub fn constant(v: f32) -> DenseSpectrum {
-        DenseSpectrum { values: Box::new([v; DENSE_LEN]) }
+        DenseSpectrum {
+            values: Box::new([v; DENSE_LEN]),
+        }
     }
 
     /// Builds from a closure evaluated at every integer nm.
@@ -37,7 +39,9 @@ impl DenseSpectrum {
         if samples.iter().any(|s| !s.0.is_finite() || !s.1.is_finite()) {
             return None;
         }
-        Some(DenseSpectrum::from_fn(|lambda| interpolate(samples, lambda)))
+        Some(DenseSpectrum::from_fn(|lambda| {
+            interpolate(samples, lambda)
+        }))
     }
 
     /// The value at `lambda` nm.

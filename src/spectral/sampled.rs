@@ -39,7 +39,13 @@ impl SampledSpectrum {
     /// Division that yields 0 where the divisor is 0 (pbrt's SafeDiv).
     #[inline]
     pub fn safe_div(self, d: SampledSpectrum) -> SampledSpectrum {
-        SampledSpectrum::from_fn(|i| if d.0[i] != 0.0 { self.0[i] / d.0[i] } else { 0.0 })
+        SampledSpectrum::from_fn(|i| {
+            if d.0[i] != 0.0 {
+                self.0[i] / d.0[i]
+            } else {
+                0.0
+            }
+        })
     }
 
     /// True when every lane is finite.

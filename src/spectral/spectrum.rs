@@ -15,9 +15,15 @@ pub enum Spectrum {
     /// An illuminant from RGB: scale · sigmoid(λ) · D65(λ) (pbrt-v4 RGBIlluminantSpectrum).
     RgbIlluminant(RgbIlluminantSpectrum),
     /// Tabulated data times a scale.
-    Dense { data: Arc<DenseSpectrum>, scale: f32 },
+    Dense {
+        data: Arc<DenseSpectrum>,
+        scale: f32,
+    },
     /// Planck's law at `kelvin` times a scale (W·m⁻²·sr⁻¹·nm⁻¹ before scaling).
-    Blackbody { kelvin: f32, scale: f32 },
+    Blackbody {
+        kelvin: f32,
+        scale: f32,
+    },
 }
 
 impl Spectrum {
@@ -46,10 +52,19 @@ impl Spectrum {
     pub fn scaled(&self, s: f32) -> Spectrum {
         match self {
             Spectrum::Constant(c) => Spectrum::Constant(c * s),
-            Spectrum::Dense { data, scale } => Spectrum::Dense { data: data.clone(), scale: scale * s },
-            Spectrum::Blackbody { kelvin, scale } => Spectrum::Blackbody { kelvin: *kelvin, scale: scale * s },
+            Spectrum::Dense { data, scale } => Spectrum::Dense {
+                data: data.clone(),
+                scale: scale * s,
+            },
+            Spectrum::Blackbody { kelvin, scale } => Spectrum::Blackbody {
+                kelvin: *kelvin,
+                scale: scale * s,
+            },
             Spectrum::RgbIlluminant(r) => Spectrum::RgbIlluminant(r.scaled(s)),
-            Spectrum::Sigmoid(_) => Spectrum::Dense { data: Arc::new(self.to_dense()), scale: s },
+            Spectrum::Sigmoid(_) => Spectrum::Dense {
+                data: Arc::new(self.to_dense()),
+                scale: s,
+            },
         }
     }
 }

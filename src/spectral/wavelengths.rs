@@ -38,7 +38,10 @@ impl SampledWavelengths {
             let up = (u + i as f32 / N_LAMBDA as f32).fract();
             LAMBDA_MIN + up * range
         });
-        SampledWavelengths { lambda, pdf: [1.0 / range; N_LAMBDA] }
+        SampledWavelengths {
+            lambda,
+            pdf: [1.0 / range; N_LAMBDA],
+        }
     }
 
     /// The pdfs as a spectrum (for dividing estimates).
@@ -78,7 +81,7 @@ pub fn visible_wavelength_pdf(lambda: f32) -> f32 {
         return 0.0;
     }
     let c = (0.0072 * (lambda - 538.0)).cosh();
-    0.003_939_804_2 / (c * c)
+    0.003_939_804 / (c * c)
 }
 
 #[cfg(test)]
@@ -90,7 +93,9 @@ mod tests {
         let n = 47_000;
         let h = (LAMBDA_MAX - LAMBDA_MIN) as f64 / n as f64;
         let sum: f64 = (0..n)
-            .map(|i| visible_wavelength_pdf(LAMBDA_MIN + (i as f64 + 0.5) as f32 * h as f32) as f64 * h)
+            .map(|i| {
+                visible_wavelength_pdf(LAMBDA_MIN + (i as f64 + 0.5) as f32 * h as f32) as f64 * h
+            })
             .sum();
         assert!((sum - 1.0).abs() < 1e-4, "{sum}");
     }
@@ -109,7 +114,10 @@ mod tests {
     #[test]
     fn rotations_are_stratified() {
         let w = SampledWavelengths::sample_visible(0.9);
-        assert!(w.lambda.iter().all(|l| (LAMBDA_MIN..=LAMBDA_MAX).contains(l)));
+        assert!(w
+            .lambda
+            .iter()
+            .all(|l| (LAMBDA_MIN..=LAMBDA_MAX).contains(l)));
         let mut sorted = w.lambda;
         sorted.sort_by(f32::total_cmp);
         assert!(sorted.windows(2).all(|p| p[1] > p[0]));

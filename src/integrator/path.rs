@@ -1,0 +1,206 @@
+//! Unidirectional path tracing with next-event estimation, multiple importance sampling
+//! (power heuristic, Veach 1997 §9.2) between light and BSDF sampling, and Russian roulette
+//! (PBR 4ed §13.4, the PathIntegrator).
+//!
+//! Depth counts scattering events as pbrt's `maxdepth`: depth 0 sees emitters directly,
+//! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8).
+
+use crate::bxdf::{Bsdf, TransportMode};
+use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
+use crate::geometry::Ray;
+use crate::light::{LightHit, LightSampleContext};
+use crate::sampling::{power_heuristic, Sampler};
+use crate::scene::{Hit, Scene, SurfaceHit};
+use crate::spectral::{SampledSpectrum, SampledWavelengths};
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug)]
+pub struct PathIntegrator {
+    pub max_depth: u32,
+}
+
+/// What the previous vertex knew, for MIS when a BSDF-sampled ray finds an emitter.
+#[derive(Clone, Copy)]
+struct Previous {
+    ctx: LightSampleContext,
+    pdf_bsdf_w: f32,
+    specular: bool,
+}
+
+impl PathIntegrator {
+    /// Radiance arriving along `ray` (limited to t < t_max for the camera ray), at the path's
+    /// wavelengths. Not yet divided by the wavelength pdfs.
+    pub fn li(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        mut t_max: f32,
+        lambda: &SampledWavelengths,
+        sampler: &mut Sampler,
+    ) -> SampledSpectrum {
+        let mut l = SampledSpectrum::ZERO;
+        let mut beta = SampledSpectrum::ONE;
+        let mut prev: Option<Previous> = None;
+        let mut depth = 0;
+        loop {
+            let Some(hit) = scene.intersect(&ray, t_max) else {
+                l += beta * self.escaped(scene, ray.d, prev, lambda);
+                break;
+            };
+            let si = match hit {
+                Hit::Light { light, hit } => {
+                    l += beta * self.emitted(scene, light, &hit, -ray.d, prev, lambda);
+                    break;
+                }
+                Hit::Surface(si) => si,
+            };
+            if let Some(light) = si.light {
+                let lh = LightHit {
+                    p: si.p,
+                    n: si.ng,
+                    t: si.t,
+                };
+                l += beta * self.emitted(scene, light, &lh, -ray.d, prev, lambda);
+            }
+            if depth == self.max_depth {
+                break;
+            }
+            depth += 1;
+            let wo = -ray.d;
+            let bsdf = scene.materials[si.material as usize].bsdf(si.ns, lambda);
+            if !bsdf.is_specular() {
+                l += beta * self.sample_ld(scene, &si, &bsdf, wo, lambda, sampler);
+            }
+            let (uc, u) = (sampler.get_1d(), sampler.get_2d());
+            let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
+                break;
+            };
+            beta *= bs.f * (bs.wi.dot(si.ns).abs() / bs.pdf_w);
+            prev = Some(Previous {
+                ctx: LightSampleContext { p: si.p, n: si.ng },
+                pdf_bsdf_w: bs.pdf_w,
+                specular: bs.specular,
+            });
+            ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
+            t_max = f32::INFINITY;
+            if !russian_roulette(&mut beta, depth, sampler) {
+                break;
+            }
+        }
+        l
+    }
+
+    /// Emission from an area light met by the path, MIS-weighted against light sampling.
+    fn emitted(
+        &self,
+        scene: &Scene,
+        light: u32,
+        hit: &LightHit,
+        w: Vec3,
+        prev: Option<Previous>,
+        lambda: &SampledWavelengths,
+    ) -> SampledSpectrum {
+        let lgt = &scene.lights[light as usize];
+        let le = lgt.l(hit, w, lambda);
+        match prev {
+            Some(p) if !p.specular && !le.is_black() => {
+                let pdf_light =
+                    scene.light_sampler.pmf(light as usize) * lgt.pdf_li(&p.ctx, -w, hit);
+                le * power_heuristic(p.pdf_bsdf_w, pdf_light)
+            }
+            _ => le,
+        }
+    }
+
+    /// Radiance from infinite lights along an escaped ray.
+    fn escaped(
+        &self,
+        scene: &Scene,
+        d: Vec3,
+        prev: Option<Previous>,
+        lambda: &SampledWavelengths,
+    ) -> SampledSpectrum {
+        let far = LightHit {
+            p: Vec3::ZERO,
+            n: Vec3::ZERO,
+            t: f32::INFINITY,
+        };
+        let mut l = SampledSpectrum::ZERO;
+        for &i in &scene.infinite_lights {
+            let lgt = &scene.lights[i as usize];
+            let le = lgt.le(d, lambda);
+            if le.is_black() {
+                continue;
+            }
+            l += match prev {
+                Some(p) if !p.specular => {
+                    let pdf_light =
+                        scene.light_sampler.pmf(i as usize) * lgt.pdf_li(&p.ctx, d, &far);
+                    le * power_heuristic(p.pdf_bsdf_w, pdf_light)
+                }
+                _ => le,
+            };
+        }
+        l
+    }
+
+    /// Next-event estimation: one light chosen by power, one point on it, MIS-weighted
+    /// against BSDF sampling (Veach 1997 eq. 9.13 with β = 2).
+    fn sample_ld(
+        &self,
+        scene: &Scene,
+        si: &SurfaceHit,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        lambda: &SampledWavelengths,
+        sampler: &mut Sampler,
+    ) -> SampledSpectrum {
+        let (ul, u) = (sampler.get_1d(), sampler.get_2d());
+        let Some((light, pmf)) = scene.light_sampler.sample(ul) else {
+            return SampledSpectrum::ZERO;
+        };
+        let ctx = LightSampleContext { p: si.p, n: si.ng };
+        let lgt = &scene.lights[light];
+        let Some(ls) = lgt.sample_li(&ctx, u, lambda) else {
+            return SampledSpectrum::ZERO;
+        };
+        if ls.l.is_black() || ls.pdf_w == 0.0 {
+            return SampledSpectrum::ZERO;
+        }
+        let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(si.ns).abs();
+        if f.is_black() {
+            return SampledSpectrum::ZERO;
+        }
+        let (shadow, t) = if ls.infinite {
+            (spawn_ray(si.p, si.p_error, si.ng, ls.wi), f32::INFINITY)
+        } else if matches!(lgt, crate::light::Light::Triangle(_)) {
+            spawn_ray_to(si.p, si.p_error, si.ng, ls.p_light, Vec3::ZERO, ls.n_light)
+        } else {
+            spawn_ray_to_point(si.p, si.p_error, si.ng, ls.p_light)
+        };
+        if scene.occluded(&shadow, t, Some(light as u32)) {
+            return SampledSpectrum::ZERO;
+        }
+        let pdf_light = pmf * ls.pdf_w;
+        if ls.delta {
+            return f * ls.l / pdf_light;
+        }
+        let w = power_heuristic(pdf_light, bsdf.pdf(wo, ls.wi, TransportMode::Radiance));
+        f * ls.l * (w / pdf_light)
+    }
+}
+
+/// Russian roulette after the second bounce when the throughput has dropped below 1
+/// (PBR 4ed §13.4.1, q = max(0, 1 − max β)); returns false when the path is terminated.
+#[inline]
+fn russian_roulette(beta: &mut SampledSpectrum, depth: u32, sampler: &mut Sampler) -> bool {
+    let m = beta.max_value();
+    if m < 1.0 && depth > 1 {
+        let q = (1.0 - m).max(0.0);
+        if sampler.get_1d() < q {
+            return false;
+        }
+        *beta = *beta / (1.0 - q);
+    }
+    true
+}

@@ -1,0 +1,162 @@
+//! UsdLux DomeLight: radiance arriving from every direction, constant or from a lat-long
+//! texture in the OpenEXR convention the UsdLux text adopts (+Y pole; longitude 0 along +Z,
+//! +π/2 along +X; the image's left column is longitude +π, its top row latitude +π/2).
+//! Constant domes are sampled uniformly over the sphere; textured ones by a piecewise-constant
+//! 2D distribution over luminance · sin θ (PBR 4ed §12.5.2, pdf_w = pdf_uv / (2π² sin θ)).
+
+use super::{LightLiSample, LightSampleContext};
+use crate::math::INV_PI;
+use crate::sampling::distribution::Distribution2D;
+use crate::sampling::warp::{uniform_sphere, UNIFORM_SPHERE_PDF};
+use crate::spectral::uplift::RgbIlluminantSpectrum;
+use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
+use glam::{Mat3, Vec3};
+use std::f32::consts::PI;
+
+/// A lat-long radiance map: per texel an RGB illuminant spectrum (already scaled).
+#[derive(Clone, Debug)]
+pub struct LatLong {
+    pub width: usize,
+    pub height: usize,
+    pub texels: Vec<RgbIlluminantSpectrum>,
+    /// Per-texel luminance in cd/m², row-major (for reports and the sampler).
+    pub luminance: Vec<f32>,
+    pub distribution: Distribution2D,
+}
+
+#[derive(Clone, Debug)]
+pub struct DomeLight {
+    pub prim_path: String,
+    /// World → dome-local rotation.
+    pub world_to_local: Mat3,
+    /// Constant radiance (when `map` is None) or the scale of the map.
+    pub radiance: Spectrum,
+    pub map: Option<LatLong>,
+}
+
+impl DomeLight {
+    pub fn sample_li(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        let (wi, pdf_w) = match &self.map {
+            None => (uniform_sphere(u), UNIFORM_SPHERE_PDF),
+            Some(map) => {
+                let (uv, pdf_uv) = map.distribution.sample(u);
+                let d_local = uv_to_dir(uv);
+                let sin_theta = (1.0 - d_local.y * d_local.y).max(0.0).sqrt();
+                if sin_theta == 0.0 || pdf_uv == 0.0 {
+                    return None;
+                }
+                (
+                    self.world_to_local.transpose() * d_local,
+                    pdf_uv / (2.0 * PI * PI * sin_theta),
+                )
+            }
+        };
+        let l = self.le(wi, lambda);
+        Some(LightLiSample {
+            l,
+            wi,
+            pdf_w,
+            p_light: ctx.p + 2.0e7 * wi,
+            n_light: Vec3::ZERO,
+            delta: false,
+            infinite: true,
+        })
+    }
+
+    pub fn pdf_li(&self, wi: Vec3) -> f32 {
+        match &self.map {
+            None => UNIFORM_SPHERE_PDF,
+            Some(map) => {
+                let d = self.world_to_local * wi;
+                let sin_theta = (1.0 - d.y * d.y).max(0.0).sqrt();
+                if sin_theta == 0.0 {
+                    return 0.0;
+                }
+                map.distribution.pdf(dir_to_uv(d)) / (2.0 * PI * PI * sin_theta)
+            }
+        }
+    }
+
+    pub fn le(&self, d: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
+        match &self.map {
+            None => self.radiance.sample(lambda),
+            Some(map) => {
+                let [u, v] = dir_to_uv(self.world_to_local * d);
+                let x = ((u * map.width as f32) as usize).min(map.width - 1);
+                let y = ((v * map.height as f32) as usize).min(map.height - 1);
+                let t = &map.texels[y * map.width + x];
+                SampledSpectrum::from_fn(|i| t.eval(lambda.lambda[i]))
+                    * self.radiance.sample(lambda)
+            }
+        }
+    }
+
+    /// Φ ≈ π r² ∫ L dω (PBR 4ed §12.5.1's bound for infinite lights).
+    pub fn luminous_power(&self, scene_radius: f32) -> f32 {
+        let avg = match &self.map {
+            None => crate::spectral::xyz::luminance(&self.radiance.to_dense()) as f32,
+            Some(map) => {
+                map_average(map) * crate::spectral::xyz::luminance(&self.radiance.to_dense()) as f32
+            }
+        };
+        4.0 * PI * PI * scene_radius * scene_radius * avg
+    }
+}
+
+/// Mean luminance over the sphere (sin θ weighted).
+fn map_average(map: &LatLong) -> f32 {
+    let mut sum = 0.0f64;
+    let mut wsum = 0.0f64;
+    for y in 0..map.height {
+        let w = ((y as f64 + 0.5) / map.height as f64 * std::f64::consts::PI).sin();
+        for x in 0..map.width {
+            sum += w * map.luminance[y * map.width + x] as f64;
+            wsum += w;
+        }
+    }
+    (sum / wsum.max(1e-30)) as f32
+}
+
+/// Lat-long (u, v) in [0,1)² → dome-local unit direction.
+#[inline]
+pub fn uv_to_dir(uv: [f32; 2]) -> Vec3 {
+    let lon = PI * (1.0 - 2.0 * uv[0]);
+    let lat = PI * (0.5 - uv[1]);
+    Vec3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos())
+}
+
+/// Dome-local unit direction → lat-long (u, v).
+#[inline]
+pub fn dir_to_uv(d: Vec3) -> [f32; 2] {
+    let lon = d.x.atan2(d.z);
+    let lat = d.y.clamp(-1.0, 1.0).asin();
+    let u = (1.0 - lon * INV_PI) * 0.5;
+    let v = 0.5 - lat * INV_PI;
+    [
+        u.clamp(0.0, 1.0 - f32::EPSILON),
+        v.clamp(0.0, 1.0 - f32::EPSILON),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latlong_follows_the_openexr_convention() {
+        let z = uv_to_dir([0.5, 0.5]);
+        assert!((z - Vec3::Z).length() < 1e-5, "{z}");
+        let x = uv_to_dir([0.25, 0.5]);
+        assert!((x - Vec3::X).length() < 1e-5, "{x}");
+        assert!((uv_to_dir([0.3, 0.0]) - Vec3::Y).length() < 1e-5);
+        for uv in [[0.1, 0.2], [0.7, 0.9], [0.45, 0.5]] {
+            let back = dir_to_uv(uv_to_dir(uv));
+            assert!((back[0] - uv[0]).abs() < 1e-5 && (back[1] - uv[1]).abs() < 1e-5);
+        }
+    }
+}

@@ -1,0 +1,138 @@
+//! UsdLux SphereLight: a sphere emitting outwards. Seen from outside it is sampled uniformly
+//! in the cone it subtends (PBR 4ed §6.2.4); from inside, uniformly by area.
+
+use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
+use crate::math::{safe_sqrt, Frame};
+use crate::sampling::warp::{uniform_cone, uniform_cone_pdf, uniform_sphere};
+use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
+use glam::Vec3;
+use std::f32::consts::PI;
+
+#[derive(Clone, Debug)]
+pub struct SphereLight {
+    pub prim_path: String,
+    pub center: Vec3,
+    pub radius: f32,
+    pub radiance: Spectrum,
+}
+
+impl SphereLight {
+    pub fn area(&self) -> f32 {
+        4.0 * PI * self.radius * self.radius
+    }
+
+    /// cos θmax of the cone subtended at `p`, or None when `p` is inside the sphere.
+    fn cos_theta_max(&self, p: Vec3) -> Option<f32> {
+        let dist2 = (p - self.center).length_squared();
+        let r2 = self.radius * self.radius;
+        if dist2 <= r2 * 1.0001 {
+            return None;
+        }
+        Some(safe_sqrt(1.0 - r2 / dist2))
+    }
+
+    pub fn sample_li(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        let Some(cos_max) = self.cos_theta_max(ctx.p) else {
+            return self.sample_li_inside(ctx, u, lambda);
+        };
+        let axis = (self.center - ctx.p).normalize();
+        let wi = Frame::from_normal(axis).to_world(uniform_cone(u, cos_max));
+        // The point where wi meets the sphere (nearest root); tangent rays graze it.
+        let hit = self
+            .intersect(ctx.p, wi, f32::INFINITY)
+            .unwrap_or(LightHit {
+                p: self.center + self.radius * (ctx.p - self.center).normalize(),
+                n: (ctx.p - self.center).normalize(),
+                t: (self.center - ctx.p).length(),
+            });
+        let pdf_w = uniform_cone_pdf(cos_max);
+        if !pdf_w.is_finite() {
+            return None;
+        }
+        Some(LightLiSample {
+            l: self.radiance.sample(lambda),
+            wi,
+            pdf_w,
+            p_light: hit.p,
+            n_light: hit.n,
+            delta: false,
+            infinite: false,
+        })
+    }
+
+    fn sample_li_inside(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        let n = uniform_sphere(u);
+        let p = self.center + self.radius * n;
+        let wi = (p - ctx.p).normalize_or_zero();
+        let pdf_w = area_to_solid_angle(1.0 / self.area(), ctx.p, p, n);
+        if wi == Vec3::ZERO || pdf_w == 0.0 || !pdf_w.is_finite() || n.dot(-wi) <= 0.0 {
+            return None;
+        }
+        Some(LightLiSample {
+            l: self.radiance.sample(lambda),
+            wi,
+            pdf_w,
+            p_light: p,
+            n_light: n,
+            delta: false,
+            infinite: false,
+        })
+    }
+
+    pub fn pdf_li(&self, ctx: &LightSampleContext, _wi: Vec3, hit: &LightHit) -> f32 {
+        match self.cos_theta_max(ctx.p) {
+            Some(cos_max) => uniform_cone_pdf(cos_max),
+            None => area_to_solid_angle(1.0 / self.area(), ctx.p, hit.p, hit.n),
+        }
+    }
+
+    pub fn l(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
+        self.radiance.sample(lambda)
+    }
+
+    /// Nearest ray–sphere hit with t in (0, t_max), on the side facing the ray origin
+    /// (the quadratic in the numerically stable form of PBR 4ed §6.8.4 / Haines et al. 2019).
+    pub fn intersect(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<LightHit> {
+        let f = o - self.center;
+        let a = d.length_squared();
+        let b_half = f.dot(d);
+        // Discriminant as r² − |f − (f·d̂)d̂|² (Haines et al., Ray Tracing Gems ch. 7, eq. 10).
+        let perp = f - (b_half / a) * d;
+        let disc = a * (self.radius * self.radius - perp.length_squared());
+        if disc < 0.0 {
+            return None;
+        }
+        let q = -(b_half + b_half.signum() * disc.sqrt());
+        let c = f.length_squared() - self.radius * self.radius;
+        let (mut t0, mut t1) = (c / q, q / a);
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        let t = if t0 > 0.0 { t0 } else { t1 };
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        let p_raw = o + t * d;
+        let n = (p_raw - self.center).normalize();
+        Some(LightHit {
+            p: self.center + self.radius * n,
+            n,
+            t,
+        })
+    }
+
+    /// Φv = π · 4πr² · Lv.
+    pub fn luminous_power(&self) -> f32 {
+        PI * self.area() * xyz::luminance(&self.radiance.to_dense()) as f32
+    }
+}

@@ -1,0 +1,103 @@
+//! Warps from [0,1)² to shapes and directions, with their pdfs.
+
+use crate::math::{safe_sqrt, INV_2PI, INV_4PI, INV_PI};
+use glam::{Vec2, Vec3};
+use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+
+/// Concentric map of the square to the unit disk (Shirley & Chiu 1997; PBR 4ed §A.5.1).
+#[inline]
+pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
+    let o = Vec2::new(2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+/// Cosine-weighted hemisphere around +Z by Malley's method (PBR 4ed §A.5.3).
+#[inline]
+pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
+    let d = concentric_disk(u);
+    Vec3::new(d.x, d.y, safe_sqrt(1.0 - d.x * d.x - d.y * d.y))
+}
+
+/// pdf of [`cosine_hemisphere`] per solid angle: cos θ / π.
+#[inline]
+pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    cos_theta.max(0.0) * INV_PI
+}
+
+/// Uniform direction on the unit sphere (PBR 4ed §A.5.2).
+#[inline]
+pub fn uniform_sphere(u: [f32; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let r = safe_sqrt(1.0 - z * z);
+    let phi = 2.0 * PI * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+pub const UNIFORM_SPHERE_PDF: f32 = INV_4PI;
+
+/// Uniform direction in the cone of half-angle θmax around +Z (PBR 4ed §A.5.4).
+#[inline]
+pub fn uniform_cone(u: [f32; 2], cos_theta_max: f32) -> Vec3 {
+    let cos_theta = (1.0 - u[0]) + u[0] * cos_theta_max;
+    let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
+    let phi = u[1] * 2.0 * PI;
+    Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
+}
+
+/// pdf of [`uniform_cone`]: 1 / (2π (1 − cos θmax)).
+#[inline]
+pub fn uniform_cone_pdf(cos_theta_max: f32) -> f32 {
+    INV_2PI / (1.0 - cos_theta_max)
+}
+
+/// Uniform barycentrics on a triangle (PBR 4ed §A.5.5, the square-root parameterisation of
+/// Turk 1990): returns (b0, b1, b2).
+#[inline]
+pub fn uniform_triangle(u: [f32; 2]) -> [f32; 3] {
+    let su0 = u[0].sqrt();
+    let b0 = 1.0 - su0;
+    let b1 = u[1] * su0;
+    [b0, b1, 1.0 - b0 - b1]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Sampler;
+
+    #[test]
+    fn warps_stay_on_their_domains() {
+        let mut s = Sampler::new(3, 0, 0);
+        for _ in 0..10_000 {
+            let u = s.get_2d();
+            assert!(concentric_disk(u).length() <= 1.0 + 1e-6);
+            let d = cosine_hemisphere(u);
+            assert!((d.length() - 1.0).abs() < 1e-5 && d.z >= 0.0);
+            assert!((uniform_sphere(u).length() - 1.0).abs() < 1e-5);
+            assert!(uniform_cone(u, 0.9).z >= 0.9 - 1e-6);
+            let b = uniform_triangle(u);
+            assert!(b.iter().all(|&x| x >= -1e-6) && (b.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn cosine_hemisphere_has_the_right_mean_cosine() {
+        // E[cos θ] under p = cos θ/π is 2/3; standard deviation of cos θ is sqrt(1/2 - 4/9).
+        let mut s = Sampler::new(5, 0, 0);
+        let n = 100_000;
+        let mean: f64 = (0..n)
+            .map(|_| cosine_hemisphere(s.get_2d()).z as f64)
+            .sum::<f64>()
+            / n as f64;
+        let sigma = (0.5f64 - 4.0 / 9.0).sqrt() / (n as f64).sqrt();
+        assert!((mean - 2.0 / 3.0).abs() < 5.0 * sigma, "{mean}");
+    }
+}

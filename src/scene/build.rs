@@ -1,0 +1,499 @@
+//! From the plain [`SceneDescription`] to the render [`Scene`]: spectra resolved and
+//! validated, lights built in absolute units, triangles put behind the BVH, a camera chosen.
+
+use super::desc::*;
+use super::render_scene::{Mesh, Scene, Summary, TriRef};
+use crate::accel::bvh::Bvh;
+use crate::imageio;
+use crate::light::dome::LatLong;
+use crate::light::emission::{self, Photometric};
+use crate::light::*;
+use crate::material::Material;
+use crate::math::Frame;
+use crate::sampling::distribution::Distribution2D;
+use crate::sensor::Camera;
+use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
+use crate::spectral::{data, DenseSpectrum, Spectrum};
+use crate::{Error, Result};
+use glam::{Mat3, Mat4, Vec3};
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+/// Image width when neither RenderSettings nor the command line gives a resolution.
+const DEFAULT_WIDTH: u32 = 640;
+
+pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<Scene> {
+    let file = &desc.source;
+    let mut warnings = desc.warnings.clone();
+    let mut materials = desc
+        .materials
+        .iter()
+        .map(|m| material(m, &mut warnings).map_err(|r| Error::prim(file, &m.prim_path, r)))
+        .collect::<Result<Vec<_>>>()?;
+    let default_material = materials.len() as u32;
+    materials.push(Material::Diffuse {
+        reflectance: Spectrum::Constant(0.18),
+    });
+
+    let mut lights = Vec::new();
+    let mut meshes = Vec::new();
+    for m in &desc.meshes {
+        meshes.push(
+            mesh(desc, m, default_material, &mut lights)
+                .map_err(|r| Error::prim(file, &m.prim_path, r))?,
+        );
+    }
+    let (tri_refs, triangles) = flatten_triangles(&meshes);
+    let bvh = Bvh::build(&triangles);
+    let (center, radius) = bounding_sphere(&bvh);
+    for l in &desc.lights {
+        if let Some(light) =
+            light(l, &mut warnings).map_err(|r| Error::prim(file, &l.prim_path, r))?
+        {
+            lights.push(light);
+        }
+    }
+    let camera = camera(desc, resolution, center, radius)?;
+    let light_sampler = LightSampler::new(&lights, radius);
+    let infinite_lights = indices_where(&lights, Light::is_infinite);
+    let shape_lights = indices_where(&lights, Light::is_analytic_shape);
+    let summary = Summary {
+        meshes: meshes.len(),
+        triangles: triangles.len(),
+        materials: desc.materials.len(),
+        lights: desc.lights.len() + desc.meshes.iter().filter(|m| m.light.is_some()).count(),
+        camera: camera.prim_path.clone(),
+        warnings,
+    };
+    Ok(Scene {
+        source: file.clone(),
+        meshes,
+        tri_refs,
+        bvh,
+        materials,
+        lights,
+        light_sampler,
+        infinite_lights,
+        shape_lights,
+        camera,
+        center,
+        radius,
+        summary,
+    })
+}
+
+fn indices_where(lights: &[Light], f: impl Fn(&Light) -> bool) -> Vec<u32> {
+    lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| f(l))
+        .map(|(i, _)| i as u32)
+        .collect()
+}
+
+/// A reflectance spectrum from its description, validated to lie in [0, 1].
+pub fn reflectance(s: &SpectrumDesc) -> std::result::Result<Spectrum, String> {
+    let dense = match s {
+        SpectrumDesc::Rgb(rgb) => {
+            if rgb.iter().any(|c| !c.is_finite()) {
+                return Err(format!("reflectance {rgb:?} is not finite"));
+            }
+            return Ok(Spectrum::Sigmoid(uplift::reflectance(*rgb)));
+        }
+        SpectrumDesc::Named(token) => data::named(token)
+            .cloned()
+            .ok_or_else(|| format!("unknown spectrum '{token}' (not a file in spectra/)"))?,
+        SpectrumDesc::Samples(samples) => DenseSpectrum::from_samples(samples)
+            .ok_or("reflectance samples must be finite (nm, value) pairs sorted by wavelength")?,
+    };
+    if dense.values.iter().any(|&v| !(0.0..=1.0).contains(&v)) {
+        return Err("a reflectance must lie in [0, 1] at every wavelength".into());
+    }
+    Ok(Spectrum::Dense {
+        data: Arc::new(dense),
+        scale: 1.0,
+    })
+}
+
+fn material(m: &MaterialDesc, warnings: &mut Vec<String>) -> std::result::Result<Material, String> {
+    match &m.kind {
+        MaterialKind::Diffuse {
+            reflectance: r,
+            roughness,
+        } => {
+            if *roughness != 0.0 {
+                warnings.push(format!(
+                    "{}: Oren–Nayar roughness not supported yet; rendered as Lambertian",
+                    m.prim_path
+                ));
+            }
+            Ok(Material::Diffuse {
+                reflectance: reflectance(r)?,
+            })
+        }
+        MaterialKind::PreviewSurface(ps) => {
+            let d = PreviewSurfaceDesc::default();
+            if ps.metallic != d.metallic
+                || ps.use_specular_workflow && ps.specular_color != [0.0; 3]
+                || ps.clearcoat != d.clearcoat
+                || ps.opacity != d.opacity
+            {
+                warnings.push(format!("{}: only diffuseColor and emissiveColor of UsdPreviewSurface are rendered so far", m.prim_path));
+            }
+            Ok(Material::Diffuse {
+                reflectance: reflectance(&SpectrumDesc::Rgb(ps.diffuse_color))?,
+            })
+        }
+        MaterialKind::Conductor { .. }
+        | MaterialKind::Dielectric { .. }
+        | MaterialKind::Plastic { .. } => {
+            warnings.push(format!(
+                "{}: this spectral: material is not implemented yet; rendered as 50% grey diffuse",
+                m.prim_path
+            ));
+            Ok(Material::Diffuse {
+                reflectance: Spectrum::Constant(0.5),
+            })
+        }
+    }
+}
+
+/// Validates a mesh, assigns its material and turns emissive meshes into triangle lights.
+fn mesh(
+    desc: &SceneDescription,
+    m: &MeshDesc,
+    default_material: u32,
+    lights: &mut Vec<Light>,
+) -> std::result::Result<Mesh, String> {
+    let n = m.positions.len();
+    if let Some(bad) = m.indices.iter().flatten().find(|&&i| i as usize >= n) {
+        return Err(format!(
+            "face vertex index {bad} is out of range (the mesh has {n} points)"
+        ));
+    }
+    if m.positions.iter().any(|p| !p.is_finite()) {
+        return Err("points must be finite".into());
+    }
+    let material = m.material.map_or(default_material, |i| i as u32);
+    let emission = mesh_emission(desc, m)?;
+    let light_offset = emission.map(|(radiance, two_sided)| {
+        let offset = lights.len() as u32;
+        for t in &m.indices {
+            let p = t.map(|i| m.positions[i as usize]);
+            lights.push(Light::Triangle(TriangleLight::new(
+                m.prim_path.clone(),
+                p,
+                radiance.clone(),
+                two_sided,
+            )));
+        }
+        offset
+    });
+    Ok(Mesh {
+        prim_path: m.prim_path.clone(),
+        positions: m.positions.clone(),
+        indices: m.indices.clone(),
+        normals: m.normals.clone(),
+        uvs: m.uvs.clone(),
+        material,
+        light_offset,
+    })
+}
+
+/// The radiance of an emissive mesh (MeshLightAPI first, then the material's emissiveColor).
+fn mesh_emission(
+    desc: &SceneDescription,
+    m: &MeshDesc,
+) -> std::result::Result<Option<(Spectrum, bool)>, String> {
+    let area: f32 = m
+        .indices
+        .iter()
+        .map(|t| {
+            let p = t.map(|i| m.positions[i as usize]);
+            0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+        })
+        .sum();
+    let sides = if m.double_sided { 2.0 } else { 1.0 };
+    if let Some(e) = &m.light {
+        let geometry = Photometric {
+            area: Some(area),
+            flux_per_nit: Some(sides * PI * area),
+            intensity_per_nit: None,
+        };
+        return Ok(Some((emission::radiance(e, geometry)?, m.double_sided)));
+    }
+    let emissive = m
+        .material
+        .and_then(|i| desc.materials.get(i))
+        .and_then(|mat| mat.emission);
+    match emissive {
+        Some(rgb) if rgb.iter().any(|&c| c > 0.0) => {
+            let e = EmissionDesc {
+                color: rgb,
+                ..Default::default()
+            };
+            let geometry = Photometric {
+                area: Some(area),
+                flux_per_nit: None,
+                intensity_per_nit: None,
+            };
+            Ok(Some((emission::radiance(&e, geometry)?, m.double_sided)))
+        }
+        _ => Ok(None),
+    }
+}
+
+fn flatten_triangles(meshes: &[Mesh]) -> (Vec<TriRef>, Vec<[Vec3; 3]>) {
+    let mut refs = Vec::new();
+    let mut tris = Vec::new();
+    for (mi, m) in meshes.iter().enumerate() {
+        for (ti, t) in m.indices.iter().enumerate() {
+            refs.push(TriRef {
+                mesh: mi as u32,
+                tri: ti as u32,
+            });
+            tris.push(t.map(|i| m.positions[i as usize]));
+        }
+    }
+    (refs, tris)
+}
+
+fn bounding_sphere(bvh: &Bvh) -> (Vec3, f32) {
+    if bvh.triangle_count() == 0 {
+        return (Vec3::ZERO, 1.0);
+    }
+    let (lo, hi) = bvh.bounds();
+    let center = 0.5 * (lo + hi);
+    (center, (0.5f32 * (hi - lo).length()).max(1e-3))
+}
+
+/// Uniform scale factor of an affine transform (geometric mean of the axis lengths).
+fn uniform_scale(m: &Mat4) -> f32 {
+    let s = Vec3::new(
+        m.x_axis.truncate().length(),
+        m.y_axis.truncate().length(),
+        m.z_axis.truncate().length(),
+    );
+    (s.x * s.y * s.z).cbrt()
+}
+
+fn light(l: &LightDesc, warnings: &mut Vec<String>) -> std::result::Result<Option<Light>, String> {
+    let m = &l.to_world;
+    let path = l.prim_path.clone();
+    let light = match &l.kind {
+        LightKind::Rect { width, height } => {
+            let corner = m.transform_point3(Vec3::new(-0.5 * width, -0.5 * height, 0.0));
+            let eu = m.transform_vector3(Vec3::new(*width, 0.0, 0.0));
+            let ev = m.transform_vector3(Vec3::new(0.0, *height, 0.0));
+            let area = eu.cross(ev).length();
+            let g = Photometric {
+                area: Some(area),
+                flux_per_nit: Some(PI * area),
+                intensity_per_nit: Some(area),
+            };
+            let n = -eu.cross(ev);
+            Light::Rect(RectLight::new(
+                path,
+                corner,
+                eu,
+                ev,
+                n,
+                emission::radiance(&l.emission, g)?,
+            ))
+        }
+        LightKind::Disk { radius } => {
+            let r = radius * uniform_scale(m);
+            let area = PI * r * r;
+            let g = Photometric {
+                area: Some(area),
+                flux_per_nit: Some(PI * area),
+                intensity_per_nit: Some(area),
+            };
+            let n = -m.transform_vector3(Vec3::Z).normalize();
+            Light::Disk(DiskLight {
+                prim_path: path,
+                center: m.transform_point3(Vec3::ZERO),
+                frame: Frame::from_normal(n),
+                radius: r,
+                radiance: emission::radiance(&l.emission, g)?,
+            })
+        }
+        LightKind::Sphere { radius } => {
+            let r = (radius * uniform_scale(m)).max(1e-6);
+            let area = 4.0 * PI * r * r;
+            let g = Photometric {
+                area: Some(area),
+                flux_per_nit: Some(PI * area),
+                intensity_per_nit: Some(PI * r * r),
+            };
+            Light::Sphere(SphereLight {
+                prim_path: path,
+                center: m.transform_point3(Vec3::ZERO),
+                radius: r,
+                radiance: emission::radiance(&l.emission, g)?,
+            })
+        }
+        LightKind::Distant { angle_deg } => distant(l, *angle_deg)?,
+        LightKind::Dome { texture } => dome(l, texture.as_deref())?,
+        LightKind::Cylinder { .. } => {
+            warnings.push(format!(
+                "{}: CylinderLight not supported yet; ignored",
+                l.prim_path
+            ));
+            return Ok(None);
+        }
+    };
+    Ok(Some(light))
+}
+
+/// DistantLight with the UsdLux sizeFactor: normalize divides by π sin²θmax (θmax ≤ π/2) or
+/// (2 − sin²θmax) π beyond; θmax = 0 is a delta light whose luminance is the illuminance.
+fn distant(l: &LightDesc, angle_deg: f32) -> std::result::Result<Light, String> {
+    let theta_max = (0.5 * angle_deg).to_radians().clamp(0.0, PI);
+    let s2 = theta_max.sin().powi(2);
+    let size = if theta_max == 0.0 {
+        1.0
+    } else if theta_max <= 0.5 * PI {
+        PI * s2
+    } else {
+        (2.0 - s2) * PI
+    };
+    let g = Photometric {
+        area: Some(size),
+        flux_per_nit: None,
+        intensity_per_nit: None,
+    };
+    let radiance = emission::radiance(&l.emission, g)?;
+    let to_light = l.to_world.transform_vector3(Vec3::Z).normalize();
+    Ok(Light::Distant(DistantLight {
+        prim_path: l.prim_path.clone(),
+        to_light,
+        cos_theta_max: theta_max.cos(),
+        radiance,
+    }))
+}
+
+fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> std::result::Result<Light, String> {
+    let world_to_local = Mat3::from_mat4(l.to_world).inverse();
+    let g = Photometric {
+        area: None,
+        flux_per_nit: None,
+        intensity_per_nit: None,
+    };
+    let e = &l.emission;
+    let Some(path) = texture else {
+        return Ok(Light::Dome(DomeLight {
+            prim_path: l.prim_path.clone(),
+            world_to_local,
+            radiance: emission::radiance(e, g)?,
+            map: None,
+        }));
+    };
+    if e.spd.is_some() {
+        return Err("spectral:emission cannot be combined with a dome texture".into());
+    }
+    let img = imageio::read_rgb_linear(path)?;
+    let tint = e.color;
+    let texels: Vec<RgbIlluminantSpectrum> = img
+        .pixels
+        .iter()
+        .map(|p| RgbIlluminantSpectrum::new([p[0] * tint[0], p[1] * tint[1], p[2] * tint[2]]))
+        .collect();
+    let luminance: Vec<f32> = img
+        .pixels
+        .iter()
+        .map(|p| {
+            (0.2126 * p[0] * tint[0] + 0.7152 * p[1] * tint[1] + 0.0722 * p[2] * tint[2]).max(0.0)
+        })
+        .collect();
+    let weights: Vec<f32> = (0..img.height)
+        .flat_map(|y| {
+            let sin_theta = ((y as f32 + 0.5) / img.height as f32 * PI).sin();
+            luminance[y * img.width..(y + 1) * img.width]
+                .iter()
+                .map(move |&v| v * sin_theta)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let distribution = Distribution2D::new(&weights, img.width, img.height);
+    let scale = e.intensity * e.exposure.exp2();
+    let map = LatLong {
+        width: img.width,
+        height: img.height,
+        texels,
+        luminance,
+        distribution,
+    };
+    Ok(Light::Dome(DomeLight {
+        prim_path: l.prim_path.clone(),
+        world_to_local,
+        radiance: Spectrum::Constant(scale),
+        map: Some(map),
+    }))
+}
+
+/// The RenderSettings camera, else the first camera, else one framing the scene from +Z.
+fn camera(
+    desc: &SceneDescription,
+    resolution: Option<(u32, u32)>,
+    center: Vec3,
+    radius: f32,
+) -> Result<Camera> {
+    let chosen = match &desc.render.camera {
+        Some(path) => Some(
+            desc.cameras
+                .iter()
+                .find(|c| &c.prim_path == path)
+                .ok_or_else(|| {
+                    Error::prim(
+                        &desc.source,
+                        path,
+                        "RenderSettings names a camera that is not in the stage",
+                    )
+                })?,
+        ),
+        None => desc.cameras.first(),
+    };
+    let cam = chosen
+        .cloned()
+        .unwrap_or_else(|| default_camera(center, radius));
+    let (w, h) = resolution.or(desc.render.resolution).unwrap_or_else(|| {
+        let aspect = cam.horizontal_aperture / cam.vertical_aperture;
+        (
+            DEFAULT_WIDTH,
+            ((DEFAULT_WIDTH as f32 / aspect).round() as u32).max(1),
+        )
+    });
+    if w == 0 || h == 0 {
+        return Err(Error::file(
+            &desc.source,
+            format!("resolution {w}x{h} must be positive"),
+        ));
+    }
+    if !(cam.focal_length > 0.0 && cam.horizontal_aperture > 0.0 && cam.vertical_aperture > 0.0) {
+        return Err(Error::prim(
+            &desc.source,
+            &cam.prim_path,
+            "focalLength and apertures must be positive",
+        ));
+    }
+    Ok(Camera::new(&cam, w, h))
+}
+
+/// A 40° camera on +Z looking at the scene's bounding sphere.
+fn default_camera(center: Vec3, radius: f32) -> CameraDesc {
+    let dist = radius / (20.0f32).to_radians().sin();
+    CameraDesc {
+        prim_path: "(default camera)".into(),
+        to_world: Mat4::from_translation(center + Vec3::Z * dist),
+        focal_length: 50.0,
+        horizontal_aperture: 2.0 * 50.0 * (20.0f32).to_radians().tan(),
+        vertical_aperture: 2.0 * 50.0 * (20.0f32).to_radians().tan(),
+        clip_near: 1e-3 * dist,
+        clip_far: 10.0 * dist + 2.0 * radius,
+        f_stop: 0.0,
+        focus_distance: 0.0,
+        lens_radius: 0.0,
+        exposure: 0.0,
+    }
+}

@@ -1,0 +1,160 @@
+//! The immutable, `Sync` scene the integrators read: triangles behind the BVH, materials,
+//! lights with their sampler, the camera; plus closest-hit and shadow queries.
+
+use crate::accel::bvh::Bvh;
+use crate::geometry::triangle::hit_point_error;
+use crate::geometry::Ray;
+use crate::light::{Light, LightHit, LightSampler};
+use crate::material::Material;
+use crate::sensor::Camera;
+use glam::{Vec2, Vec3};
+use std::path::PathBuf;
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub prim_path: String,
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+    pub normals: Option<Vec<[Vec3; 3]>>,
+    pub uvs: Option<Vec<[Vec2; 3]>>,
+    pub material: u32,
+    /// Index of the light of this mesh's triangle 0 (triangle i is light `offset + i`).
+    pub light_offset: Option<u32>,
+}
+
+/// Which mesh and which of its triangles a BVH primitive is.
+#[derive(Clone, Copy, Debug)]
+pub struct TriRef {
+    pub mesh: u32,
+    pub tri: u32,
+}
+
+/// A ray's hit on a surface with a material.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    pub p: Vec3,
+    /// Absolute error bound of `p` (for robust ray spawning).
+    pub p_error: Vec3,
+    /// Unit geometric normal of the authored front face.
+    pub ng: Vec3,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    pub uv: Vec2,
+    pub t: f32,
+    pub material: u32,
+    /// The emissive triangle's light, if the surface is a mesh light.
+    pub light: Option<u32>,
+}
+
+/// What a ray met first.
+#[derive(Clone, Copy, Debug)]
+pub enum Hit {
+    Surface(SurfaceHit),
+    /// An analytic light shape (rect, disk, sphere): it emits and absorbs.
+    Light {
+        light: u32,
+        hit: LightHit,
+    },
+}
+
+/// Counts and notes for the one-line load summary.
+#[derive(Clone, Debug, Default)]
+pub struct Summary {
+    pub meshes: usize,
+    pub triangles: usize,
+    pub materials: usize,
+    pub lights: usize,
+    pub camera: String,
+    pub warnings: Vec<String>,
+}
+
+pub struct Scene {
+    pub source: PathBuf,
+    pub meshes: Vec<Mesh>,
+    pub tri_refs: Vec<TriRef>,
+    pub bvh: Bvh,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub light_sampler: LightSampler,
+    /// Indices of lights met by escaping rays.
+    pub infinite_lights: Vec<u32>,
+    /// Indices of lights that are analytic shapes.
+    pub shape_lights: Vec<u32>,
+    pub camera: Camera,
+    pub center: Vec3,
+    pub radius: f32,
+    pub summary: Summary,
+}
+
+impl Scene {
+    /// Closest hit with t in (0, t_max).
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let mut best = self
+            .bvh
+            .intersect(ray, t_max)
+            .map(|h| (h.hit.t, Hit::Surface(self.surface_hit(h.prim, &h.hit))));
+        for &li in &self.shape_lights {
+            let limit = best.as_ref().map_or(t_max, |b| b.0);
+            if let Some(hit) = self.lights[li as usize].intersect(ray.o, ray.d, limit) {
+                best = Some((hit.t, Hit::Light { light: li, hit }));
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// True when something blocks the ray before t_max; `skip` is the light being sampled
+    /// (its own shape must not shadow the point sampled on it).
+    pub fn occluded(&self, ray: &Ray, t_max: f32, skip: Option<u32>) -> bool {
+        if self.bvh.occluded(ray, t_max) {
+            return true;
+        }
+        self.shape_lights.iter().any(|&li| {
+            Some(li) != skip
+                && self.lights[li as usize]
+                    .intersect(ray.o, ray.d, t_max)
+                    .is_some()
+        })
+    }
+
+    fn surface_hit(&self, prim: u32, hit: &crate::geometry::triangle::TriangleHit) -> SurfaceHit {
+        let r = self.tri_refs[prim as usize];
+        let mesh = &self.meshes[r.mesh as usize];
+        let [i0, i1, i2] = mesh.indices[r.tri as usize];
+        let (p0, p1, p2) = (
+            mesh.positions[i0 as usize],
+            mesh.positions[i1 as usize],
+            mesh.positions[i2 as usize],
+        );
+        let p = hit.b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
+        let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let ns = match &mesh.normals {
+            Some(n) => {
+                let [n0, n1, n2] = n[r.tri as usize];
+                let ns = (hit.b0 * n0 + hit.b1 * n1 + hit.b2 * n2).normalize_or_zero();
+                if ns == Vec3::ZERO {
+                    ng
+                } else if ns.dot(ng) < 0.0 {
+                    -ns
+                } else {
+                    ns
+                }
+            }
+            None => ng,
+        };
+        let uv = mesh.uvs.as_ref().map_or(Vec2::new(hit.b1, hit.b2), |uv| {
+            let [a, b, c] = uv[r.tri as usize];
+            hit.b0 * a + hit.b1 * b + hit.b2 * c
+        });
+        SurfaceHit {
+            p,
+            p_error: hit_point_error(hit, p0, p1, p2),
+            ng,
+            ns,
+            uv,
+            t: hit.t,
+            material: mesh.material,
+            light: mesh.light_offset.map(|o| o + r.tri),
+        }
+    }
+}
