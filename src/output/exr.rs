@@ -1,1 +1,493 @@
-//! PLACEHOLDER — owned by the output helper; replaced wholesale.
+//! The calibrated EXR image: the renderer's primary output. The only module that names the
+//! `exr` crate.
+//!
+//! File layout (single part, scan lines of 16 rows, ZIP compression, so lossless; rows top to
+//! bottom, i.e. increasing y):
+//!
+//! | channel | content |
+//! |---|---|
+//! | `R`, `G`, `B` | float32, linear Rec.709 / sRGB primaries with D65 white, absolute: (1, 1, 1) is D65 white of luminance 1 cd/m² (DESIGN §2) |
+//! | `XYZ.X`, `XYZ.Y`, `XYZ.Z` | float32, CIE 1931 XYZ on the same absolute scale: `XYZ.Y` is luminance in cd/m² |
+//!
+//! | header attribute | type | value |
+//! |---|---|---|
+//! | `chromaticities` | chromaticities | Rec.709 primaries red (0.64, 0.33), green (0.30, 0.60), blue (0.15, 0.06); white as passed to [`write()`] |
+//! | `whiteLuminance` | float | 1.0: an RGB of (1, 1, 1) is 1 cd/m² |
+//! | `software` | string | `spectral-render <version>` |
+//! | `spectralRender:spp` | string | samples per pixel, decimal |
+//! | `spectralRender:integrator` | string | integrator name |
+//! | `spectralRender:seed` | string | sampler seed, decimal |
+//! | `spectralRender:wallTime` | string | render wall-clock time in seconds, shortest decimal that round-trips an f64 |
+//! | `spectralRender:version` | string | renderer version |
+//! | `spectralRender:scene` | string | the scene file, UTF-8 |
+//!
+//! All metadata is stored as `string` attributes: samples per pixel and the seed are 64-bit and
+//! EXR's only integer attribute type is 32-bit, and one type keeps readers (ours, `exrheader`)
+//! simple. Strings are written as UTF-8 bytes, as OpenEXR's C++ library does.
+//!
+//! [`read`] returns every channel as f32 by name and every header attribute as a string:
+//! strings verbatim, numbers in Rust's shortest round-trip notation (so `whiteLuminance` reads
+//! `"1"`), `chromaticities` as eight space-separated numbers `rx ry gx gy bx by wx wy`, other
+//! types in their `Debug` form.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{self, BufWriter, Cursor, Write};
+use std::path::Path;
+
+use exr::image::read::image::ReadLayers;
+use exr::image::read::layers::ReadChannels;
+use exr::image::read::read as read_exr;
+use exr::image::write::WritableImage;
+use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+use exr::math::Vec2;
+use exr::meta::attribute::{AttributeValue, Chromaticities, Text};
+use exr::meta::header::LayerAttributes;
+use exr::meta::MetaData;
+
+use super::atomic::write_atomically;
+
+/// Rec.709 / sRGB primaries (ITU-R BT.709-6, table 1 item 1.3) as CIE 1931 xy: red, green, blue.
+pub const REC709_PRIMARIES_XY: [[f32; 2]; 3] = [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]];
+
+/// Names of the metadata attributes written from [`ExrMetadata`].
+pub const SPP_ATTRIBUTE: &str = "spectralRender:spp";
+pub const INTEGRATOR_ATTRIBUTE: &str = "spectralRender:integrator";
+pub const SEED_ATTRIBUTE: &str = "spectralRender:seed";
+pub const WALL_TIME_ATTRIBUTE: &str = "spectralRender:wallTime";
+pub const VERSION_ATTRIBUTE: &str = "spectralRender:version";
+pub const SCENE_ATTRIBUTE: &str = "spectralRender:scene";
+
+/// The names of the six channels, in the order of `rgb` then `xyz` components.
+const CHANNEL_NAMES: [&str; 6] = ["R", "G", "B", "XYZ.X", "XYZ.Y", "XYZ.Z"];
+
+/// How the image was made; stored as string attributes (see the module docs).
+#[derive(Clone, Debug, Default)]
+pub struct ExrMetadata {
+    pub spp: u64,
+    pub integrator: String,
+    pub seed: u64,
+    pub wall_time_s: f64,
+    pub version: String,
+    pub scene: String,
+}
+
+/// An EXR file as read back: every channel by name (row-major, rows top to bottom) and every
+/// header attribute as a string (format in the module docs).
+#[derive(Clone, Debug)]
+pub struct ExrImage {
+    pub width: usize,
+    pub height: usize,
+    pub channels: BTreeMap<String, Vec<f32>>,
+    pub attributes: BTreeMap<String, String>,
+}
+
+/// Writes a float32 EXR with channels R, G, B and XYZ.X, XYZ.Y, XYZ.Z from the row-major
+/// (top row first) `rgb` and `xyz` buffers of `width * height` pixels, with the header
+/// described in the module docs; `white_xy` is the white point of the `chromaticities`
+/// attribute (D65 for our RGB).
+///
+/// The file is replaced atomically (see [`super::atomic`]). A NaN or infinite value is refused
+/// with an error naming the first such pixel, and nothing is written.
+pub fn write(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> Result<(), String> {
+    let fail = |reason: String| format!("cannot write EXR {}: {reason}", path.display());
+    check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
+    check_finite(width, rgb, xyz).map_err(fail)?;
+    if !white_xy.iter().all(|c| c.is_finite()) {
+        return Err(fail(format!("white point {white_xy:?} is not finite")));
+    }
+    let image = build_image(width, height, rgb, xyz, white_xy, meta);
+    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+}
+
+/// Reads an EXR file: all channels of its first layer by name, converted to f32, and all
+/// header attributes of its first part as strings.
+pub fn read(path: &Path) -> Result<ExrImage, String> {
+    let fail = |reason: String| format!("cannot read EXR {}: {reason}", path.display());
+    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+    let attributes = read_attributes(&bytes).map_err(fail)?;
+    let (width, height, channels) = read_channels(&bytes).map_err(fail)?;
+    Ok(ExrImage {
+        width,
+        height,
+        channels,
+        attributes,
+    })
+}
+
+type Channels = BTreeMap<String, Vec<f32>>;
+
+/// Every attribute of the first header, formatted as the module docs say.
+fn read_attributes(bytes: &[u8]) -> Result<BTreeMap<String, String>, String> {
+    let meta =
+        MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| e.to_string())?;
+    let header = meta.headers.first().ok_or("the file has no header")?;
+    let named = header.all_named_attributes();
+    Ok(named
+        .map(|(name, value)| (utf8(name), attribute_to_string(&value)))
+        .collect())
+}
+
+/// Width, height and the f32 samples of every channel of the first layer.
+fn read_channels(bytes: &[u8]) -> Result<(usize, usize, Channels), String> {
+    let image = read_exr()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
+    let layer = image.layer_data;
+    let channel = |c: &AnyChannel<FlatSamples>| {
+        (
+            utf8(c.name.as_slice()),
+            c.sample_data.values_as_f32().collect(),
+        )
+    };
+    let channels = layer.channel_data.list.iter().map(channel).collect();
+    Ok((layer.size.width(), layer.size.height(), channels))
+}
+
+fn check_sizes(width: usize, height: usize, rgb: usize, xyz: usize) -> Result<(), String> {
+    if width == 0 || height == 0 {
+        return Err(format!("the image is empty ({width}×{height} pixels)"));
+    }
+    let pixels = width
+        .checked_mul(height)
+        .ok_or("the image size overflows")?;
+    if rgb != pixels || xyz != pixels {
+        return Err(format!(
+            "{width}×{height} = {pixels} pixels, but {rgb} RGB and {xyz} XYZ values were given"
+        ));
+    }
+    Ok(())
+}
+
+/// Finds the first pixel (row-major; R, G, B, X, Y, Z within a pixel) with a NaN or Inf.
+fn check_finite(width: usize, rgb: &[[f32; 3]], xyz: &[[f32; 3]]) -> Result<(), String> {
+    for (index, (rgb, xyz)) in rgb.iter().zip(xyz).enumerate() {
+        let values = rgb.iter().chain(xyz);
+        if let Some((name, value)) = CHANNEL_NAMES
+            .iter()
+            .zip(values)
+            .find(|(_, v)| !v.is_finite())
+        {
+            let (x, y) = (index % width, index / width);
+            return Err(format!(
+                "pixel ({x}, {y}) has the non-finite value {value} in channel {name}; \
+                 refusing to write it"
+            ));
+        }
+    }
+    Ok(())
+}
+
+type FlatImage = Image<Layer<AnyChannels<FlatSamples>>>;
+
+fn build_image(
+    width: usize,
+    height: usize,
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> FlatImage {
+    let channel = |name: &str, pixels: &[[f32; 3]], component: usize| {
+        let samples = pixels.iter().map(|p| p[component]).collect();
+        // Luminance-like data for every channel (matters only to lossy B44 compression).
+        AnyChannel {
+            quantize_linearly: false,
+            ..AnyChannel::new(name, FlatSamples::F32(samples))
+        }
+    };
+    let list: Vec<_> = (0..3)
+        .map(|c| channel(CHANNEL_NAMES[c], rgb, c))
+        .chain((0..3).map(|c| channel(CHANNEL_NAMES[3 + c], xyz, c)))
+        .collect();
+    let layer = Layer::new(
+        (width, height),
+        layer_attributes(meta),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    let mut image = Image::from_layer(layer);
+    let [red, green, blue] = REC709_PRIMARIES_XY.map(|[x, y]| Vec2(x, y));
+    image.attributes.chromaticities = Some(Chromaticities {
+        red,
+        green,
+        blue,
+        white: Vec2(white_xy[0], white_xy[1]),
+    });
+    image
+}
+
+fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
+    let mut attributes = LayerAttributes {
+        white_luminance: Some(1.0),
+        software_name: Some(text(format!("spectral-render {}", meta.version).trim_end())),
+        ..LayerAttributes::default()
+    };
+    let strings = [
+        (SPP_ATTRIBUTE, meta.spp.to_string()),
+        (INTEGRATOR_ATTRIBUTE, meta.integrator.clone()),
+        (SEED_ATTRIBUTE, meta.seed.to_string()),
+        (WALL_TIME_ATTRIBUTE, meta.wall_time_s.to_string()),
+        (VERSION_ATTRIBUTE, meta.version.clone()),
+        (SCENE_ATTRIBUTE, meta.scene.clone()),
+    ];
+    for (name, value) in strings {
+        attributes
+            .other
+            .insert(text(name), AttributeValue::Text(text(&value)));
+    }
+    attributes
+}
+
+/// Encodes `image` into `file` through a buffer that is flushed explicitly, so that write
+/// errors are reported rather than lost when the buffer is dropped.
+fn encode(image: FlatImage, file: &mut File) -> io::Result<()> {
+    let mut buffered = BufWriter::new(file);
+    image
+        .write()
+        .to_buffered(&mut buffered)
+        .map_err(|e| io::Error::other(e.to_string()))?;
+    buffered.flush()
+}
+
+/// An EXR text holding the UTF-8 bytes of `s` (`Text::from` would panic outside Latin-1).
+fn text(s: &str) -> Text {
+    Text::from_slice_unchecked(s.as_bytes())
+}
+
+fn utf8(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn attribute_to_string(value: &AttributeValue) -> String {
+    match value {
+        AttributeValue::Text(text) => utf8(text.as_slice()),
+        AttributeValue::F32(v) => v.to_string(),
+        AttributeValue::F64(v) => v.to_string(),
+        AttributeValue::I32(v) => v.to_string(),
+        AttributeValue::Chromaticities(c) => [c.red, c.green, c.blue, c.white]
+            .iter()
+            .flat_map(|v| [v.x(), v.y()])
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
+        other => format!("{other:?}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs;
+    use std::path::PathBuf;
+
+    const D65_XY: [f32; 2] = [0.3127, 0.3290];
+
+    /// A fresh, empty directory unique to this test and process.
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("spectral-render-exr-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = fs::read_dir(dir)
+            .unwrap()
+            .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// A 3×2 image whose values exercise signs, subnormals, extremes and exact bit patterns.
+    fn test_image() -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+        let rgb = vec![
+            [0.0, 1.0, 0.5],
+            [-0.0, -2.5, 1e-40],
+            [f32::MAX, f32::MIN_POSITIVE, 1.0 / 3.0],
+            [0.1, 0.2, 0.3],
+            [123456.79, -7e-3, 2.0f32.powi(-20)],
+            [1.0, 1.0, 1.0],
+        ];
+        let xyz = rgb
+            .iter()
+            .map(|p| [p[2] * 0.9, p[0] + 1.0, -p[1]])
+            .collect();
+        (rgb, xyz)
+    }
+
+    fn test_meta() -> ExrMetadata {
+        ExrMetadata {
+            spp: 1 << 40,
+            integrator: "vcm".into(),
+            seed: u64::MAX,
+            wall_time_s: 12.345678901234567,
+            version: "0.1.0".into(),
+            scene: "scenes/Bühne – 場景.usda".into(),
+        }
+    }
+
+    fn component(pixels: &[[f32; 3]], c: usize) -> Vec<u32> {
+        pixels.iter().map(|p| p[c].to_bits()).collect()
+    }
+
+    fn bits(values: &[f32]) -> Vec<u32> {
+        values.iter().map(|v| v.to_bits()).collect()
+    }
+
+    #[test]
+    fn round_trip_is_bit_exact_in_all_six_channels() {
+        let dir = temp_dir("round-trip");
+        let path = dir.join("image.exr");
+        let (rgb, xyz) = test_image();
+        write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap();
+        let image = read(&path).unwrap();
+        assert_eq!((image.width, image.height), (3, 2));
+        let names: Vec<&str> = image.channels.keys().map(String::as_str).collect();
+        assert_eq!(names, ["B", "G", "R", "XYZ.X", "XYZ.Y", "XYZ.Z"]);
+        for c in 0..3 {
+            assert_eq!(bits(&image.channels[CHANNEL_NAMES[c]]), component(&rgb, c));
+            assert_eq!(
+                bits(&image.channels[CHANNEL_NAMES[3 + c]]),
+                component(&xyz, c)
+            );
+        }
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn header_carries_colorimetry_and_metadata() {
+        let dir = temp_dir("header");
+        let path = dir.join("image.exr");
+        let (rgb, xyz) = test_image();
+        write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap();
+        let attributes = read(&path).unwrap().attributes;
+        let chromaticities: Vec<f32> = attributes["chromaticities"]
+            .split(' ')
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(
+            chromaticities,
+            [0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290]
+        );
+        assert_eq!(attributes["whiteLuminance"], "1");
+        assert_eq!(attributes[SPP_ATTRIBUTE], "1099511627776");
+        assert_eq!(attributes[INTEGRATOR_ATTRIBUTE], "vcm");
+        assert_eq!(attributes[SEED_ATTRIBUTE], "18446744073709551615");
+        let wall_time: f64 = attributes[WALL_TIME_ATTRIBUTE].parse().unwrap();
+        assert_eq!(wall_time, 12.345678901234567);
+        assert_eq!(attributes[VERSION_ATTRIBUTE], "0.1.0");
+        assert_eq!(attributes[SCENE_ATTRIBUTE], "scenes/Bühne – 場景.usda");
+        assert_eq!(attributes["software"], "spectral-render 0.1.0");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Writes over an existing file with one bad value planted; nothing may change on disk.
+    fn assert_refused(name: &str, plant: impl FnOnce(&mut [[f32; 3]], &mut [[f32; 3]])) -> String {
+        let dir = temp_dir(name);
+        let path = dir.join("image.exr");
+        fs::write(&path, b"previous render").unwrap();
+        let (mut rgb, mut xyz) = test_image();
+        plant(&mut rgb, &mut xyz);
+        let error = write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap_err();
+        assert!(error.contains(&path.display().to_string()), "{error}");
+        assert!(!error.contains('\n'), "{error}");
+        assert_eq!(fs::read(&path).unwrap(), b"previous render");
+        assert_eq!(entries(&dir), ["image.exr"]);
+        fs::remove_dir_all(&dir).unwrap();
+        error
+    }
+
+    #[test]
+    fn nan_is_refused_naming_the_first_bad_pixel() {
+        let error = assert_refused("nan", |rgb, _| {
+            rgb[4][1] = f32::NAN;
+            rgb[5][0] = f32::NAN;
+        });
+        assert!(
+            error.contains("pixel (1, 1)") && error.contains("NaN in channel G"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn infinity_is_refused_naming_the_first_bad_pixel() {
+        let error = assert_refused("inf", |rgb, xyz| {
+            xyz[2][2] = f32::NEG_INFINITY;
+            rgb[3][0] = f32::INFINITY;
+        });
+        assert!(
+            error.contains("pixel (2, 0)") && error.contains("-inf in channel XYZ.Z"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn writing_over_an_existing_file_replaces_it_without_temp_files() {
+        let dir = temp_dir("replace");
+        let path = dir.join("image.exr");
+        let (rgb, xyz) = test_image();
+        write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap();
+        let doubled: Vec<[f32; 3]> = rgb.iter().map(|p| p.map(|v| v * 0.5)).collect();
+        write(&path, 3, 2, &doubled, &xyz, D65_XY, &ExrMetadata::default()).unwrap();
+        let image = read(&path).unwrap();
+        assert_eq!(bits(&image.channels["R"]), component(&doubled, 0));
+        assert_eq!(image.attributes[SPP_ATTRIBUTE], "0");
+        assert_eq!(image.attributes["software"], "spectral-render");
+        assert_eq!(entries(&dir), ["image.exr"]);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn missing_directory_is_an_error_naming_the_path() {
+        let dir = temp_dir("missing");
+        let path = dir.join("no-such-dir").join("image.exr");
+        let (rgb, xyz) = test_image();
+        let error = write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap_err();
+        assert!(error.contains(&path.display().to_string()), "{error}");
+        assert!(!error.contains('\n'), "{error}");
+        assert!(entries(&dir).is_empty());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn mismatched_buffer_sizes_are_refused() {
+        let dir = temp_dir("sizes");
+        let path = dir.join("image.exr");
+        let (rgb, xyz) = test_image();
+        let error = write(&path, 2, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap_err();
+        assert!(error.contains("4 pixels") && error.contains(&path.display().to_string()));
+        assert!(write(&path, 0, 6, &[], &[], D65_XY, &test_meta()).is_err());
+        assert!(entries(&dir).is_empty());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn reading_a_missing_or_foreign_file_is_an_error_naming_the_path() {
+        let dir = temp_dir("read-errors");
+        let path = dir.join("not-an.exr");
+        assert!(read(&path)
+            .unwrap_err()
+            .contains(&path.display().to_string()));
+        fs::write(&path, b"not an exr file").unwrap();
+        assert!(read(&path)
+            .unwrap_err()
+            .contains(&path.display().to_string()));
+        fs::remove_dir_all(&dir).unwrap();
+    }
+}
