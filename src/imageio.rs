@@ -1,6 +1,10 @@
-//! Reading raster images (lat-long dome textures; later material textures). The only
-//! module that names the `image` crate.
+//! Reading raster images (lat-long dome textures; later material textures) and encoding
+//! PNG. The only module that names the `image` crate (tests aside).
 
+use image::codecs::png::PngEncoder;
+use image::{ExtendedColorType, ImageEncoder};
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
 /// A decoded image as linear RGB, row-major, top row first.
@@ -33,17 +37,14 @@ pub fn read_rgb_linear(path: &Path) -> Result<RgbImage, String> {
     })
 }
 
-/// Writes 8-bit RGB as PNG to `path` (the caller handles atomicity).
-pub fn write_png_rgb8(path: &Path, width: usize, height: usize, data: &[u8]) -> Result<(), String> {
-    image::save_buffer_with_format(
-        path,
-        data,
-        width as u32,
-        height as u32,
-        image::ColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| format!("cannot write {}: {e}", path.display()))
+/// PNG-encodes 8-bit RGB `bytes` into `file`, flushing the buffer explicitly so that write
+/// errors are reported.
+pub fn encode_png_rgb8(file: &mut File, bytes: &[u8], width: u32, height: u32) -> io::Result<()> {
+    let mut buffered = BufWriter::new(file);
+    PngEncoder::new(&mut buffered)
+        .write_image(bytes, width, height, ExtendedColorType::Rgb8)
+        .map_err(|e| io::Error::other(e.to_string()))?;
+    buffered.flush()
 }
 
 /// The sRGB EOTF (IEC 61966-2-1).

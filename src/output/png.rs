@@ -1,19 +1,15 @@
 //! The 8-bit sRGB PNG preview: a quick look at a render, not a calibrated record (that is the
-//! EXR). The only module that names the `image` crate for writing.
+//! EXR). PNG encoding itself goes through `crate::imageio`, the one module naming `image`.
 //!
 //! Each linear Rec.709 component v becomes `round(255 · oetf(clamp(v · 2^exposure, 0, 1)))`
 //! with the sRGB OETF of IEC 61966-2-1 (piecewise: linear below 0.0031308, then a 1/2.4
 //! power). Clamping is a plain per-channel clip, no tone mapping; NaN is shown black and +Inf
 //! white. No colour-space chunk is written: PNG viewers assume sRGB.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
-use image::codecs::png::PngEncoder;
-use image::{ExtendedColorType, ImageEncoder};
-
 use super::atomic::write_atomically;
+use crate::imageio::encode_png_rgb8;
 
 /// Writes `rgb` (linear, row-major, top row first, `width * height` pixels) scaled by
 /// `2^exposure` as an 8-bit sRGB PNG, replacing `path` atomically (see [`super::atomic`]).
@@ -27,7 +23,7 @@ pub fn write_preview(
     let fail = |reason: String| format!("cannot write PNG {}: {reason}", path.display());
     let (w, h) = check_size(width, height, rgb.len()).map_err(fail)?;
     let bytes = encode_srgb8(rgb, exposure);
-    write_atomically(path, |file| encode_png(file, &bytes, w, h)).map_err(|e| fail(e.to_string()))
+    write_atomically(path, |file| encode_png_rgb8(file, &bytes, w, h)).map_err(|e| fail(e.to_string()))
 }
 
 /// Checks that `pixels` matches a non-empty `width × height` that PNG can hold (u32 sides).
@@ -72,16 +68,6 @@ fn srgb_oetf(v: f64) -> f64 {
     } else {
         1.055 * v.powf(1.0 / 2.4) - 0.055
     }
-}
-
-/// PNG-encodes 8-bit RGB `bytes` into `file`, flushing the buffer explicitly so that write
-/// errors are reported.
-fn encode_png(file: &mut File, bytes: &[u8], width: u32, height: u32) -> io::Result<()> {
-    let mut buffered = BufWriter::new(file);
-    PngEncoder::new(&mut buffered)
-        .write_image(bytes, width, height, ExtendedColorType::Rgb8)
-        .map_err(|e| io::Error::other(e.to_string()))?;
-    buffered.flush()
 }
 
 #[cfg(test)]
