@@ -1,0 +1,200 @@
+//! UsdGeomCamera and the UsdRender settings that name the camera and resolution.
+
+use glam::{DMat4, DVec3};
+use openusd::{sdf, usd};
+
+use super::values::{self, Ctx};
+use crate::scene::desc::{CameraDesc, RenderSettingsDesc};
+use crate::Result;
+
+/// Reads a camera. `local_to_world` is in stage space (units, up axis).
+pub(super) fn read_camera(
+    ctx: &mut Ctx,
+    prim: &usd::Prim,
+    local_to_world: DMat4,
+) -> Result<CameraDesc> {
+    let projection = ctx
+        .token(prim, "projection")?
+        .unwrap_or_else(|| "perspective".into());
+    if projection != "perspective" {
+        return Err(ctx.err(prim, format!("{projection} cameras are not supported")));
+    }
+    warn_aperture_offsets(ctx, prim)?;
+    let mpu = ctx.meters_per_unit;
+    let focal_length = positive(ctx, prim, "focalLength", 50.0)?;
+    let f_stop = ctx.f32_or(prim, "fStop", 0.0)?;
+    if f_stop < 0.0 {
+        return Err(ctx.err(prim, "fStop is negative"));
+    }
+    let (clip_near, clip_far) = clipping_range(ctx, prim)?;
+    let lens_radius = if f_stop > 0.0 {
+        f64::from(focal_length) * 0.1 * mpu / (2.0 * f64::from(f_stop))
+    } else {
+        0.0
+    };
+    Ok(CameraDesc {
+        prim_path: prim.path().as_str().to_string(),
+        to_world: rigid(ctx, prim, ctx.stage_to_world * local_to_world)?.as_mat4(),
+        focal_length,
+        horizontal_aperture: positive(ctx, prim, "horizontalAperture", 20.955)?,
+        vertical_aperture: positive(ctx, prim, "verticalAperture", 15.2908)?,
+        clip_near: (clip_near * mpu) as f32,
+        clip_far: (clip_far * mpu) as f32,
+        f_stop,
+        focus_distance: (f64::from(ctx.f32_or(prim, "focusDistance", 0.0)?.max(0.0)) * mpu) as f32,
+        lens_radius: lens_radius as f32,
+        exposure: exposure(ctx, prim)?,
+    })
+}
+
+/// The camera frame without scale (so that camera space is in metres, like the clipping
+/// range): the viewing direction -Z and the up vector +Y of `to_world` are kept exactly.
+fn rigid(ctx: &Ctx, prim: &usd::Prim, to_world: DMat4) -> Result<DMat4> {
+    let up = to_world.y_axis.truncate().normalize_or_zero();
+    let right = up.cross(to_world.z_axis.truncate()).normalize_or_zero();
+    if up == DVec3::ZERO || right == DVec3::ZERO {
+        return Err(ctx.err(prim, "degenerate camera transform (zero scale)"));
+    }
+    let back = right.cross(up);
+    Ok(DMat4::from_cols(
+        right.extend(0.0),
+        up.extend(0.0),
+        back.extend(0.0),
+        to_world.w_axis,
+    ))
+}
+
+/// A float attribute that must be positive.
+fn positive(ctx: &Ctx, prim: &usd::Prim, name: &str, default: f32) -> Result<f32> {
+    let value = ctx.f32_or(prim, name, default)?;
+    if value <= 0.0 {
+        return Err(ctx.err(prim, format!("{name} must be positive")));
+    }
+    Ok(value)
+}
+
+/// `clippingRange` in stage units (default (1, 1e6)), with 0 < near < far.
+fn clipping_range(ctx: &Ctx, prim: &usd::Prim) -> Result<(f64, f64)> {
+    let [near, far] = ctx.vec2(prim, "clippingRange")?.unwrap_or([1.0, 1e6]);
+    if !(near > 0.0 && far > near && far.is_finite()) {
+        return Err(ctx.err(
+            prim,
+            format!("clippingRange ({near}, {far}) must satisfy 0 < near < far"),
+        ));
+    }
+    Ok((near, far))
+}
+
+/// `exposure` plus the photographic exposure controls (UsdGeomCamera
+/// `ComputeLinearExposureScale`): log2(time * iso / 100 * responsivity / fStop^2).
+fn exposure(ctx: &Ctx, prim: &usd::Prim) -> Result<f32> {
+    let ev = ctx.f64(prim, "exposure")?.unwrap_or(0.0);
+    let iso = ctx.f64(prim, "exposure:iso")?.unwrap_or(100.0);
+    let time = ctx.f64(prim, "exposure:time")?.unwrap_or(1.0);
+    let f_stop = ctx.f64(prim, "exposure:fStop")?.unwrap_or(1.0);
+    let responsivity = ctx.f64(prim, "exposure:responsivity")?.unwrap_or(1.0);
+    let scale = time * iso / 100.0 * responsivity / (f_stop * f_stop);
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(ctx.err(
+            prim,
+            "exposure:iso/time/fStop/responsivity must be positive",
+        ));
+    }
+    Ok((ev + scale.log2()) as f32)
+}
+
+/// Lens shift is not modelled: warn when it is authored.
+fn warn_aperture_offsets(ctx: &mut Ctx, prim: &usd::Prim) -> Result<()> {
+    for name in ["horizontalApertureOffset", "verticalApertureOffset"] {
+        if ctx.f64(prim, name)?.is_some_and(|x| x != 0.0) {
+            ctx.warn(
+                prim,
+                format!("{name} (lens shift) is not supported; ignored"),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The render settings: the prim named by the stage's `renderSettingsPrimPath`, else the
+/// first RenderSettings prim. The first RenderProduct's resolution / camera override it.
+pub(super) fn read_render_settings(
+    ctx: &mut Ctx,
+    settings: &[sdf::Path],
+    cameras: &[CameraDesc],
+) -> Result<RenderSettingsDesc> {
+    let Some(path) = chosen_settings(ctx, settings)? else {
+        return Ok(RenderSettingsDesc::default());
+    };
+    let prim = ctx.stage.prim(path);
+    let mut desc = settings_of(ctx, &prim)?;
+    if let Some(product) = ctx.targets(&prim, "products")?.into_iter().next() {
+        let product = settings_of(ctx, &ctx.stage.prim(product))?;
+        desc.resolution = product.resolution.or(desc.resolution);
+        desc.camera = product.camera.or(desc.camera);
+    }
+    if let Some(camera) = &desc.camera {
+        if !cameras.iter().any(|c| &c.prim_path == camera) {
+            return Err(ctx.err(
+                &prim,
+                format!("camera targets <{camera}>, which is not a Camera on the stage"),
+            ));
+        }
+    }
+    Ok(desc)
+}
+
+/// Which RenderSettings prim applies.
+fn chosen_settings(ctx: &mut Ctx, settings: &[sdf::Path]) -> Result<Option<sdf::Path>> {
+    let named = ctx
+        .stage
+        .stage_metadata("renderSettingsPrimPath")
+        .map_err(|e| {
+            crate::Error::file(&ctx.file, format!("reading renderSettingsPrimPath: {e:#}"))
+        })?;
+    if let Some(named) = named
+        .as_ref()
+        .and_then(values::to_token)
+        .filter(|s| !s.is_empty())
+    {
+        return match settings.iter().find(|p| p.as_str() == named) {
+            Some(p) => Ok(Some(p.clone())),
+            None => Err(crate::Error::file(
+                &ctx.file,
+                format!("renderSettingsPrimPath <{named}> is not a RenderSettings prim"),
+            )),
+        };
+    }
+    if settings.len() > 1 {
+        let prim = ctx.stage.prim(settings[0].clone());
+        ctx.warn(
+            &prim,
+            "several RenderSettings prims and no renderSettingsPrimPath; using this one",
+        );
+    }
+    Ok(settings.first().cloned())
+}
+
+/// `resolution` and `camera` of a RenderSettings or RenderProduct prim.
+fn settings_of(ctx: &Ctx, prim: &usd::Prim) -> Result<RenderSettingsDesc> {
+    let resolution = match ctx.vec2(prim, "resolution")? {
+        None => None,
+        Some([w, h])
+            if w >= 1.0 && h >= 1.0 && w.fract() == 0.0 && h.fract() == 0.0 && w.max(h) < 1e6 =>
+        {
+            Some((w as u32, h as u32))
+        }
+        Some([w, h]) => {
+            return Err(ctx.err(
+                prim,
+                format!("resolution ({w}, {h}) must be positive integers"),
+            ))
+        }
+    };
+    let camera = ctx
+        .targets(prim, "camera")?
+        .into_iter()
+        .next()
+        .map(|p| p.as_str().to_string());
+    Ok(RenderSettingsDesc { resolution, camera })
+}

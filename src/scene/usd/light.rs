@@ -1,0 +1,341 @@
+//! UsdLux: the concrete light prims, the shared `LightAPI` emission inputs (plus the `spectral:`
+//! light vocabulary) and warnings for the light APIs that are not implemented yet.
+//!
+//! Every input is read as `inputs:<name>` and, when that is not authored, as the legacy
+//! un-prefixed `<name>` (pre-21.05 UsdLux); defaults are the UsdLux schema fallbacks.
+
+use glam::DMat4;
+use openusd::usd;
+
+use super::values::Ctx;
+use super::vocab;
+use crate::scene::desc::{EmissionDesc, LightDesc, LightKind, SpdDesc};
+use crate::Result;
+
+/// The concrete UsdLux light types that become a [`LightDesc`].
+const LIGHT_TYPES: [&str; 7] = [
+    "RectLight",
+    "DiskLight",
+    "SphereLight",
+    "CylinderLight",
+    "DistantLight",
+    "DomeLight",
+    "DomeLight_1",
+];
+
+/// UsdLux types that are recognised but not supported.
+const UNSUPPORTED_LIGHT_TYPES: [&str; 5] = [
+    "GeometryLight",
+    "PortalLight",
+    "PluginLight",
+    "LightFilter",
+    "PluginLightFilter",
+];
+
+/// The radius used for point-like spheres and line-like cylinders, in metres.
+const POINT_RADIUS_M: f64 = 1e-4;
+
+/// `true` for a concrete UsdLux light type.
+pub(super) fn is_light_type(type_name: &str) -> bool {
+    LIGHT_TYPES.contains(&type_name)
+}
+
+/// `true` for a UsdLux type this reader recognises but does not support.
+pub(super) fn is_unsupported_light_type(type_name: &str) -> bool {
+    UNSUPPORTED_LIGHT_TYPES.contains(&type_name)
+}
+
+/// `true` when the applied schemas make a geometric prim emissive.
+pub(super) fn has_light_api(apis: &[String]) -> bool {
+    apis.iter().any(|a| a == "MeshLightAPI" || a == "LightAPI")
+}
+
+/// Reads a concrete light. `local_to_world` is in stage space (units, up axis).
+pub(super) fn read_light(
+    ctx: &mut Ctx,
+    prim: &usd::Prim,
+    type_name: &str,
+    local_to_world: DMat4,
+) -> Result<LightDesc> {
+    let kind = match type_name {
+        "RectLight" => rect(ctx, prim)?,
+        "DiskLight" => LightKind::Disk {
+            radius: size(ctx, prim, "radius", 0.5)?,
+        },
+        "SphereLight" => LightKind::Sphere {
+            radius: round_radius(ctx, prim, "treatAsPoint")?,
+        },
+        "CylinderLight" => LightKind::Cylinder {
+            radius: round_radius(ctx, prim, "treatAsLine")?,
+            length: size(ctx, prim, "length", 1.0)?,
+        },
+        "DistantLight" => LightKind::Distant {
+            angle_deg: angle(ctx, prim)?,
+        },
+        _ => LightKind::Dome {
+            texture: dome_texture(ctx, prim)?,
+        },
+    };
+    let mut to_world = ctx.stage_to_world * local_to_world;
+    if type_name == "DomeLight_1" {
+        to_world *= dome_pole(ctx, prim)?;
+    }
+    warn_unsupported_inputs(ctx, prim)?;
+    let emission = read_emission(ctx, prim, default_intensity(type_name))?;
+    Ok(LightDesc {
+        prim_path: prim.path().as_str().to_string(),
+        kind,
+        to_world: to_world.as_mat4(),
+        emission,
+    })
+}
+
+/// The schema fallback of `inputs:intensity`: 50000 for a DistantLight (sunlight in lux),
+/// 1 for every other light.
+fn default_intensity(type_name: &str) -> f32 {
+    if type_name == "DistantLight" {
+        50_000.0
+    } else {
+        1.0
+    }
+}
+
+/// The attribute name to read for input `base`: `inputs:<base>` unless only the legacy
+/// `<base>` is authored.
+fn input_name(ctx: &Ctx, prim: &usd::Prim, base: &str) -> Result<String> {
+    let modern = format!("inputs:{base}");
+    if ctx.raw(prim, &modern)?.is_none() && ctx.raw(prim, base)?.is_some() {
+        return Ok(base.to_string());
+    }
+    Ok(modern)
+}
+
+/// A float input with its schema default.
+fn input_f32(ctx: &Ctx, prim: &usd::Prim, base: &str, default: f32) -> Result<f32> {
+    ctx.f32_or(prim, &input_name(ctx, prim, base)?, default)
+}
+
+/// A light dimension: finite and positive.
+fn size(ctx: &Ctx, prim: &usd::Prim, base: &str, default: f32) -> Result<f32> {
+    let value = input_f32(ctx, prim, base, default)?;
+    if value < 0.0 {
+        return Err(ctx.err(prim, format!("inputs:{base} is negative")));
+    }
+    if value == 0.0 {
+        return Err(ctx.err(prim, format!("zero-size light (inputs:{base} = 0)")));
+    }
+    Ok(value)
+}
+
+/// A RectLight; a texture on it is not supported (warned).
+fn rect(ctx: &mut Ctx, prim: &usd::Prim) -> Result<LightKind> {
+    let width = size(ctx, prim, "width", 1.0)?;
+    let height = size(ctx, prim, "height", 1.0)?;
+    let texture = input_name(ctx, prim, "texture:file")?;
+    if ctx.raw(prim, &texture)?.is_some() {
+        ctx.warn(
+            prim,
+            "textured RectLights are not supported yet; the texture is ignored",
+        );
+    }
+    Ok(LightKind::Rect { width, height })
+}
+
+/// The radius of a sphere or cylinder light (default 0.5). A zero radius or the
+/// `point_flag` (`treatAsPoint` / `treatAsLine`) gives a tiny radius of 0.1 mm, with a warning.
+fn round_radius(ctx: &mut Ctx, prim: &usd::Prim, point_flag: &str) -> Result<f32> {
+    let radius = input_f32(ctx, prim, "radius", 0.5)?;
+    if radius < 0.0 {
+        return Err(ctx.err(prim, "inputs:radius is negative"));
+    }
+    let flagged = ctx.bool_or(prim, point_flag, false)?;
+    if radius > 0.0 && !flagged {
+        return Ok(radius);
+    }
+    let why = if flagged {
+        format!("{point_flag} = true")
+    } else {
+        "inputs:radius = 0".to_string()
+    };
+    ctx.warn(
+        prim,
+        format!(
+            "{why}: modelled with a radius of {} mm",
+            POINT_RADIUS_M * 1e3
+        ),
+    );
+    Ok((POINT_RADIUS_M / ctx.meters_per_unit) as f32)
+}
+
+/// A DistantLight's angular diameter in degrees (default 0.53).
+fn angle(ctx: &Ctx, prim: &usd::Prim) -> Result<f32> {
+    let angle = input_f32(ctx, prim, "angle", 0.53)?;
+    if !(0.0..=360.0).contains(&angle) {
+        return Err(ctx.err(
+            prim,
+            format!("inputs:angle = {angle} is outside [0, 360] degrees"),
+        ));
+    }
+    Ok(angle)
+}
+
+/// A DomeLight's lat-long texture (absolute path), `None` for a constant dome.
+fn dome_texture(ctx: &Ctx, prim: &usd::Prim) -> Result<Option<std::path::PathBuf>> {
+    let format_name = input_name(ctx, prim, "texture:format")?;
+    let format = ctx
+        .token(prim, &format_name)?
+        .unwrap_or_else(|| "automatic".into());
+    if format != "automatic" && format != "latlong" {
+        return Err(ctx.err(
+            prim,
+            format!("texture format '{format}' is not supported (only latlong)"),
+        ));
+    }
+    ctx.asset(prim, &input_name(ctx, prim, "texture:file")?)
+}
+
+/// DomeLight_1's `poleAxis`: an extra rotation taking the dome's +Y pole to local +Z when
+/// the pole is Z (explicitly, or "scene" on a Z-up stage).
+fn dome_pole(ctx: &Ctx, prim: &usd::Prim) -> Result<DMat4> {
+    let pole = ctx
+        .token(prim, "poleAxis")?
+        .unwrap_or_else(|| "scene".into());
+    let z_pole = match pole.as_str() {
+        "Y" => false,
+        "Z" => true,
+        "scene" => ctx.z_up,
+        other => return Err(ctx.err(prim, format!("poleAxis '{other}' is not Y, Z or scene"))),
+    };
+    Ok(if z_pole {
+        DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2)
+    } else {
+        DMat4::IDENTITY
+    })
+}
+
+/// Warns about light inputs that are authored but not implemented (shaping, shadows,
+/// non-physical diffuse/specular multipliers, light filters).
+pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result<()> {
+    let names = ctx.property_names(prim)?;
+    let has = |prefix: &str| {
+        names
+            .iter()
+            .any(|n| n.starts_with(prefix) || n.starts_with(&format!("inputs:{prefix}")))
+    };
+    if has("shaping:") {
+        ctx.warn(
+            prim,
+            "ShapingAPI (shaping:*) is not supported yet; the light emits unshaped",
+        );
+    }
+    if has("shadow:") {
+        ctx.warn(
+            prim,
+            "ShadowAPI inputs (shadow:*) are not physical; ignored",
+        );
+    }
+    for base in ["diffuse", "specular"] {
+        if input_f32(ctx, prim, base, 1.0)? != 1.0 {
+            ctx.warn(
+                prim,
+                format!("inputs:{base} is a non-physical multiplier; ignored"),
+            );
+        }
+    }
+    if !ctx.targets(prim, "light:filters")?.is_empty() {
+        ctx.warn(prim, "light filters are not supported; ignored");
+    }
+    Ok(())
+}
+
+/// The LightAPI emission of a light or `MeshLightAPI` prim, with the `spectral:` vocabulary.
+/// `default_intensity` is the schema's fallback for `inputs:intensity`.
+pub(super) fn read_emission(
+    ctx: &Ctx,
+    prim: &usd::Prim,
+    default_intensity: f32,
+) -> Result<EmissionDesc> {
+    let intensity = input_f32(ctx, prim, "intensity", default_intensity)?;
+    if intensity < 0.0 {
+        return Err(ctx.err(prim, "inputs:intensity is negative"));
+    }
+    let color = ctx.rgb_or(prim, &input_name(ctx, prim, "color")?, [1.0; 3])?;
+    if color.iter().any(|&c| c < 0.0) {
+        return Err(ctx.err(prim, "inputs:color has a negative component"));
+    }
+    let (luminous_flux, luminous_intensity) = photometric(ctx, prim)?;
+    Ok(EmissionDesc {
+        color,
+        intensity,
+        exposure: input_f32(ctx, prim, "exposure", 0.0)?,
+        normalize: ctx.bool_or(prim, &input_name(ctx, prim, "normalize")?, false)?,
+        color_temperature: color_temperature(ctx, prim)?,
+        spd: spd(ctx, prim)?,
+        luminous_flux,
+        luminous_intensity,
+    })
+}
+
+/// `inputs:colorTemperature` (default 6500 K) when `inputs:enableColorTemperature` is on.
+fn color_temperature(ctx: &Ctx, prim: &usd::Prim) -> Result<Option<f32>> {
+    if !ctx.bool_or(
+        prim,
+        &input_name(ctx, prim, "enableColorTemperature")?,
+        false,
+    )? {
+        return Ok(None);
+    }
+    let kelvin = input_f32(ctx, prim, "colorTemperature", 6500.0)?;
+    if kelvin <= 0.0 {
+        return Err(ctx.err(prim, "inputs:colorTemperature must be positive"));
+    }
+    Ok(Some(kelvin))
+}
+
+/// `spectral:emission` (named SPD or blackbody with `spectral:temperature`) or
+/// `spectral:emission:samples`.
+fn spd(ctx: &Ctx, prim: &usd::Prim) -> Result<Option<SpdDesc>> {
+    let name = ctx.token(prim, vocab::EMISSION)?;
+    let samples = ctx.samples(prim, vocab::EMISSION_SAMPLES)?;
+    let temperature = ctx.f64(prim, vocab::TEMPERATURE)?;
+    let blackbody = name.as_deref() == Some("blackbody");
+    if temperature.is_some() && !blackbody {
+        return Err(ctx.err(
+            prim,
+            "spectral:temperature needs spectral:emission = \"blackbody\"",
+        ));
+    }
+    match (name, samples) {
+        (Some(_), Some(_)) => Err(ctx.err(
+            prim,
+            "give only one of spectral:emission, spectral:emission:samples",
+        )),
+        (Some(_), None) if blackbody => match temperature {
+            Some(t) if t > 0.0 => Ok(Some(SpdDesc::Blackbody(t as f32))),
+            Some(_) => Err(ctx.err(prim, "spectral:temperature must be positive")),
+            None => Err(ctx.err(
+                prim,
+                "spectral:emission = \"blackbody\" needs spectral:temperature",
+            )),
+        },
+        (Some(name), None) => Ok(Some(SpdDesc::Named(name))),
+        (None, Some(samples)) => Ok(Some(SpdDesc::Samples(samples))),
+        (None, None) => Ok(None),
+    }
+}
+
+/// `spectral:luminousFlux` (lm) and `spectral:luminousIntensity` (cd), at most one, non-negative.
+fn photometric(ctx: &Ctx, prim: &usd::Prim) -> Result<(Option<f32>, Option<f32>)> {
+    let flux = ctx.f64(prim, vocab::LUMINOUS_FLUX)?;
+    let intensity = ctx.f64(prim, vocab::LUMINOUS_INTENSITY)?;
+    if flux.is_some() && intensity.is_some() {
+        return Err(ctx.err(
+            prim,
+            "give only one of spectral:luminousFlux, spectral:luminousIntensity",
+        ));
+    }
+    if flux.or(intensity).is_some_and(|x| x < 0.0) {
+        return Err(ctx.err(prim, "photometric quantity is negative"));
+    }
+    Ok((flux.map(|x| x as f32), intensity.map(|x| x as f32)))
+}

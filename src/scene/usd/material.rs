@@ -1,0 +1,483 @@
+//! UsdShade: material binding resolution and surface shaders (`UsdPreviewSurface` and the
+//! `spectral:*` vocabulary of DESIGN.md §3).
+
+use openusd::{sdf, usd};
+
+use super::values::{self, Ctx};
+use super::vocab;
+use crate::scene::desc::{IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc};
+use crate::Result;
+
+/// How many connection hops (through NodeGraph / Material interfaces) are followed.
+const MAX_CONNECTION_DEPTH: usize = 32;
+
+/// The shader ids that may appear in a network feeding a surface (texture nodes and the like);
+/// they are recognised so that a connection to them warns instead of failing.
+const KNOWN_NODE_PREFIXES: [&str; 3] = ["UsdUVTexture", "UsdPrimvarReader_", "UsdTransform2d"];
+
+/// The UsdPreviewSurface inputs the renderer understands.
+const PREVIEW_INPUTS: [&str; 12] = [
+    "diffuseColor",
+    "emissiveColor",
+    "useSpecularWorkflow",
+    "specularColor",
+    "metallic",
+    "roughness",
+    "clearcoat",
+    "clearcoatRoughness",
+    "opacity",
+    "opacityThreshold",
+    "ior",
+    "opacityMode",
+];
+
+/// The Material bound to `prim`: direct bindings, purpose `full` before all-purpose,
+/// the closest prim winning unless an ancestor binds `strongerThanDescendants`.
+pub(super) fn bound_material(ctx: &Ctx, prim: &usd::Prim) -> Result<Option<sdf::Path>> {
+    for rel in ["material:binding:full", "material:binding"] {
+        if let Some(material) = bound_for_relationship(ctx, prim, rel)? {
+            return Ok(Some(material));
+        }
+    }
+    Ok(None)
+}
+
+/// Resolves one binding relationship name up the namespace hierarchy.
+fn bound_for_relationship(ctx: &Ctx, prim: &usd::Prim, rel: &str) -> Result<Option<sdf::Path>> {
+    let mut winner = None;
+    let mut current = Some(prim.path().clone());
+    while let Some(path) = current.filter(|p| !p.is_abs_root()) {
+        let holder = ctx.stage.prim(path.clone());
+        if let Some(target) = ctx.targets(&holder, rel)?.into_iter().next() {
+            let stronger = ctx
+                .attr_token_metadata(&holder, rel, "bindMaterialAs")?
+                .as_deref()
+                == Some("strongerThanDescendants");
+            if winner.is_none() || stronger {
+                winner = Some(checked_material(ctx, &holder, rel, target)?);
+            }
+        }
+        current = path.parent();
+    }
+    Ok(winner)
+}
+
+/// Checks that a binding `target` authored on `holder` is a Material prim.
+fn checked_material(
+    ctx: &Ctx,
+    holder: &usd::Prim,
+    rel: &str,
+    target: sdf::Path,
+) -> Result<sdf::Path> {
+    let material = ctx.stage.prim(target.clone());
+    let exists = material
+        .is_valid()
+        .map_err(|e| ctx.usd_err(holder, rel, e))?;
+    if !exists {
+        return Err(ctx.err(
+            holder,
+            format!("{rel} targets <{}>, which does not exist", target.as_str()),
+        ));
+    }
+    let type_name = ctx.type_name(&material)?;
+    if type_name != "Material" {
+        let reason = format!(
+            "{rel} targets <{}>, a '{type_name}' rather than a Material",
+            target.as_str()
+        );
+        return Err(ctx.err(holder, reason));
+    }
+    Ok(target)
+}
+
+/// Reads the Material prim at `path`; `None` (with a warning) when it has no surface shader.
+pub(super) fn read_material(ctx: &mut Ctx, path: &sdf::Path) -> Result<Option<MaterialDesc>> {
+    let material = ctx.stage.prim(path.clone());
+    let Some(shader) = surface_shader(ctx, &material)? else {
+        ctx.warn(
+            &material,
+            "no outputs:surface connection to a shader; bound meshes use the default material",
+        );
+        return Ok(None);
+    };
+    let (kind, emission) = read_surface(ctx, &shader)?;
+    Ok(Some(MaterialDesc {
+        prim_path: path.as_str().to_string(),
+        kind,
+        emission,
+    }))
+}
+
+/// Follows the material's `outputs:surface` (through NodeGraphs) to a Shader prim.
+fn surface_shader(ctx: &Ctx, material: &usd::Prim) -> Result<Option<usd::Prim>> {
+    let mut prim = material.clone();
+    let mut output = "outputs:surface".to_string();
+    for _ in 0..MAX_CONNECTION_DEPTH {
+        let Some(source) = ctx.connections(&prim, &output)?.into_iter().next() else {
+            return Ok(None);
+        };
+        let Some((source_prim, source_attr)) = source.split_property() else {
+            return Err(ctx.err(
+                &prim,
+                format!("{output} connects to <{}>, not an output", source.as_str()),
+            ));
+        };
+        let next = ctx.stage.prim(source_prim);
+        if ctx.type_name(&next)? == "Shader" {
+            return Ok(Some(next));
+        }
+        output = source_attr.to_string();
+        prim = next;
+    }
+    Err(ctx.err(
+        material,
+        "outputs:surface: connection chain too long (cycle?)",
+    ))
+}
+
+/// The material model of a surface shader, by `info:id`, and its emission.
+fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<(MaterialKind, Option<[f32; 3]>)> {
+    let Some(id) = ctx.token(shader, "info:id")? else {
+        return Err(ctx.err(
+            shader,
+            "surface shader has no info:id (only UsdPreviewSurface and spectral:* are supported)",
+        ));
+    };
+    if id == "UsdPreviewSurface" {
+        let preview = preview_surface(ctx, shader)?;
+        let emission = preview
+            .emissive_color
+            .iter()
+            .any(|&c| c != 0.0)
+            .then_some(preview.emissive_color);
+        return Ok((MaterialKind::PreviewSurface(preview), emission));
+    }
+    let Some(vocabulary) = vocab::shader_inputs(&id) else {
+        let reason = format!(
+            "unknown shader info:id '{id}' (supported: UsdPreviewSurface, spectral:diffuse, \
+             spectral:conductor, spectral:dielectric, spectral:plastic)"
+        );
+        return Err(ctx.err(shader, reason));
+    };
+    check_inputs(ctx, shader, &id, vocabulary)?;
+    Ok((spectral_material(ctx, shader, &id)?, None))
+}
+
+/// Fails on an authored `inputs:*` that the `spectral:*` shader `id` does not define.
+fn check_inputs(ctx: &Ctx, shader: &usd::Prim, id: &str, vocabulary: &[&str]) -> Result<()> {
+    for name in ctx.property_names(shader)? {
+        let Some(input) = name.strip_prefix("inputs:") else {
+            continue;
+        };
+        if !vocabulary.contains(&input) {
+            let known = vocabulary
+                .iter()
+                .map(|i| format!("inputs:{i}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            return Err(ctx.err(
+                shader,
+                format!("unknown input '{name}' for {id} (known: {known})"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A `spectral:*` material model.
+fn spectral_material(ctx: &mut Ctx, shader: &usd::Prim, id: &str) -> Result<MaterialKind> {
+    let mut inputs = Inputs { ctx, shader };
+    let roughness = inputs.f32("roughness")?.unwrap_or(0.0);
+    Ok(match id {
+        "spectral:diffuse" => MaterialKind::Diffuse {
+            reflectance: inputs.reflectance()?,
+            roughness,
+        },
+        "spectral:conductor" => {
+            let (eta, k) = inputs.conductor_spectra()?;
+            MaterialKind::Conductor { eta, k, roughness }
+        }
+        "spectral:dielectric" => MaterialKind::Dielectric {
+            ior: inputs.dielectric_ior()?,
+            roughness,
+            thin: inputs.bool("thin")?.unwrap_or(false),
+        },
+        _ => MaterialKind::Plastic {
+            reflectance: inputs.reflectance()?,
+            ior: inputs.positive("ior")?.unwrap_or(1.5),
+            roughness,
+        },
+    })
+}
+
+/// Reads a UsdPreviewSurface, warning about inputs it cannot honour.
+fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDesc> {
+    warn_unsupported_preview_inputs(ctx, shader)?;
+    let d = PreviewSurfaceDesc::default();
+    let mut inputs = Inputs { ctx, shader };
+    Ok(PreviewSurfaceDesc {
+        diffuse_color: inputs.rgb("diffuseColor")?.unwrap_or(d.diffuse_color),
+        emissive_color: inputs.rgb("emissiveColor")?.unwrap_or(d.emissive_color),
+        use_specular_workflow: inputs
+            .bool("useSpecularWorkflow")?
+            .unwrap_or(d.use_specular_workflow),
+        specular_color: inputs.rgb("specularColor")?.unwrap_or(d.specular_color),
+        metallic: inputs.f32("metallic")?.unwrap_or(d.metallic),
+        roughness: inputs.f32("roughness")?.unwrap_or(d.roughness),
+        clearcoat: inputs.f32("clearcoat")?.unwrap_or(d.clearcoat),
+        clearcoat_roughness: inputs
+            .f32("clearcoatRoughness")?
+            .unwrap_or(d.clearcoat_roughness),
+        opacity: inputs.f32("opacity")?.unwrap_or(d.opacity),
+        opacity_threshold: inputs
+            .f32("opacityThreshold")?
+            .unwrap_or(d.opacity_threshold),
+        ior: inputs.positive("ior")?.unwrap_or(d.ior),
+    })
+}
+
+/// Warns once per authored UsdPreviewSurface input that is ignored (normal, displacement, ...).
+fn warn_unsupported_preview_inputs(ctx: &mut Ctx, shader: &usd::Prim) -> Result<()> {
+    for name in ctx.property_names(shader)? {
+        let Some(input) = name.strip_prefix("inputs:") else {
+            continue;
+        };
+        if !PREVIEW_INPUTS.contains(&input) {
+            ctx.warn(
+                shader,
+                format!("UsdPreviewSurface input '{name}' is not supported; ignored"),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// What an input resolves to after following its connections.
+enum Resolved {
+    Unset,
+    Value(sdf::Value),
+    /// Connected to the output of another shader node (a texture, a primvar reader, ...).
+    Node(sdf::Path),
+}
+
+/// Typed access to a shader's inputs; texture connections warn and fall back to the default.
+struct Inputs<'a, 's> {
+    ctx: &'a mut Ctx<'s>,
+    shader: &'a usd::Prim,
+}
+
+impl Inputs<'_, '_> {
+    /// The value of `inputs:<name>`, following interface connections; `None` when unset or
+    /// connected to a node (which is warned about).
+    fn value(&mut self, name: &str) -> Result<Option<sdf::Value>> {
+        match resolve_input(self.ctx, self.shader, &format!("inputs:{name}"))? {
+            Resolved::Unset => Ok(None),
+            Resolved::Value(v) => Ok(Some(v)),
+            Resolved::Node(node) => {
+                self.warn_node(name, &node)?;
+                Ok(None)
+            }
+        }
+    }
+
+    /// Warns that `inputs:<name>` is driven by a shader node, or fails if that node is unknown.
+    fn warn_node(&mut self, name: &str, node: &sdf::Path) -> Result<()> {
+        let node_prim = self.ctx.stage.prim(node.clone());
+        let id = self.ctx.token(&node_prim, "info:id")?.unwrap_or_default();
+        if !KNOWN_NODE_PREFIXES.iter().any(|p| id.starts_with(p)) {
+            return Err(self
+                .ctx
+                .err(&node_prim, format!("unknown shader info:id '{id}'")));
+        }
+        let message = format!(
+            "inputs:{name} is connected to <{}> ({id}): texture inputs not supported yet, using the default",
+            node.as_str()
+        );
+        self.ctx.warn(self.shader, message);
+        Ok(())
+    }
+
+    /// Converts `inputs:<name>` with `convert`, failing with `expected` on a type mismatch.
+    fn typed<T>(
+        &mut self,
+        name: &str,
+        expected: &str,
+        convert: impl Fn(&sdf::Value) -> Option<T>,
+    ) -> Result<Option<T>> {
+        let Some(value) = self.value(name)? else {
+            return Ok(None);
+        };
+        match convert(&value) {
+            Some(t) => Ok(Some(t)),
+            None => {
+                let reason = format!(
+                    "'inputs:{name}' is {}, expected {expected}",
+                    values::kind(&value)
+                );
+                Err(self.ctx.err(self.shader, reason))
+            }
+        }
+    }
+
+    /// A finite float.
+    fn f32(&mut self, name: &str) -> Result<Option<f32>> {
+        let value = self.typed(name, "a float", values::to_f64)?;
+        if value.is_some_and(|x| !x.is_finite()) {
+            return Err(self
+                .ctx
+                .err(self.shader, format!("'inputs:{name}' is not finite")));
+        }
+        Ok(value.map(|x| x as f32))
+    }
+
+    /// A float that must be positive (an index of refraction).
+    fn positive(&mut self, name: &str) -> Result<Option<f32>> {
+        let value = self.f32(name)?;
+        if value.is_some_and(|x| x <= 0.0) {
+            return Err(self
+                .ctx
+                .err(self.shader, format!("'inputs:{name}' must be positive")));
+        }
+        Ok(value)
+    }
+
+    /// A bool (ints 0/1 accepted).
+    fn bool(&mut self, name: &str) -> Result<Option<bool>> {
+        self.typed(name, "a bool", values::to_bool)
+    }
+
+    /// A token.
+    fn token(&mut self, name: &str) -> Result<Option<String>> {
+        self.typed(name, "a token", values::to_token)
+    }
+
+    /// A finite 3-vector.
+    fn vec3(&mut self, name: &str) -> Result<Option<[f32; 3]>> {
+        let value = self.typed(name, "a 3-vector", values::to_vec3)?;
+        if value.is_some_and(|v| v.iter().any(|x| !x.is_finite())) {
+            return Err(self
+                .ctx
+                .err(self.shader, format!("'inputs:{name}' is not finite")));
+        }
+        Ok(value.map(|v| v.map(|x| x as f32)))
+    }
+
+    /// An RGB colour.
+    fn rgb(&mut self, name: &str) -> Result<Option<[f32; 3]>> {
+        self.vec3(name)
+    }
+
+    /// `(nm, value)` samples from a `float2[]`.
+    fn samples(&mut self, name: &str) -> Result<Option<Vec<(f32, f32)>>> {
+        let Some(pairs) = self.typed(name, "float2[]", values::to_vec2_array)? else {
+            return Ok(None);
+        };
+        let samples = values::validate_samples(&pairs).map_err(|reason| {
+            self.ctx
+                .err(self.shader, format!("'inputs:{name}': {reason}"))
+        })?;
+        Ok(Some(samples))
+    }
+
+    /// Fails when more than one of the mutually exclusive inputs `names` is authored.
+    fn exclusive(&mut self, names: &[&str]) -> Result<()> {
+        let mut authored = Vec::new();
+        for name in names {
+            let attr = format!("inputs:{name}");
+            let has_value = self.ctx.raw(self.shader, &attr)?.is_some();
+            if has_value || !self.ctx.connections(self.shader, &attr)?.is_empty() {
+                authored.push(attr);
+            }
+        }
+        if authored.len() > 1 {
+            let reason = format!("give only one of {}", authored.join(", "));
+            return Err(self.ctx.err(self.shader, reason));
+        }
+        Ok(())
+    }
+
+    /// `inputs:reflectance` (color3f) or `:spectrum` (token) or `:samples` (float2[]);
+    /// default RGB 0.5.
+    fn reflectance(&mut self) -> Result<SpectrumDesc> {
+        self.exclusive(&["reflectance", "reflectance:spectrum", "reflectance:samples"])?;
+        if let Some(rgb) = self.rgb("reflectance")? {
+            return Ok(SpectrumDesc::Rgb(rgb));
+        }
+        if let Some(name) = self.token("reflectance:spectrum")? {
+            return Ok(SpectrumDesc::Named(name));
+        }
+        if let Some(samples) = self.samples("reflectance:samples")? {
+            return Ok(SpectrumDesc::Samples(samples));
+        }
+        Ok(SpectrumDesc::Rgb([0.5; 3]))
+    }
+
+    /// A conductor's (eta, k): from `inputs:metal` ("Au" -> "metal/Au" for both), or from
+    /// `inputs:eta:spectrum` + `inputs:k:spectrum`; copper when neither is given (as pbrt-v4).
+    fn conductor_spectra(&mut self) -> Result<(SpectrumDesc, SpectrumDesc)> {
+        self.exclusive(&["metal", "eta:spectrum"])?;
+        self.exclusive(&["metal", "k:spectrum"])?;
+        if let Some(metal) = self.token("metal")? {
+            let name = format!("metal/{metal}");
+            return Ok((SpectrumDesc::Named(name.clone()), SpectrumDesc::Named(name)));
+        }
+        match (self.token("eta:spectrum")?, self.token("k:spectrum")?) {
+            (Some(eta), Some(k)) => Ok((SpectrumDesc::Named(eta), SpectrumDesc::Named(k))),
+            (None, None) => Ok((
+                SpectrumDesc::Named("metal/Cu".into()),
+                SpectrumDesc::Named("metal/Cu".into()),
+            )),
+            _ => Err(self.ctx.err(
+                self.shader,
+                "inputs:eta:spectrum and inputs:k:spectrum must be given together",
+            )),
+        }
+    }
+
+    /// A dielectric's IOR: `inputs:ior`, `inputs:glass` or Sellmeier B and C; default 1.5.
+    fn dielectric_ior(&mut self) -> Result<IorDesc> {
+        self.exclusive(&["ior", "glass", "sellmeierB"])?;
+        self.exclusive(&["ior", "glass", "sellmeierC"])?;
+        if let Some(ior) = self.positive("ior")? {
+            return Ok(IorDesc::Constant(ior));
+        }
+        if let Some(glass) = self.token("glass")? {
+            return Ok(IorDesc::Glass(glass));
+        }
+        match (self.vec3("sellmeierB")?, self.vec3("sellmeierC")?) {
+            (Some(b), Some(c)) => Ok(IorDesc::Sellmeier { b, c }),
+            (None, None) => Ok(IorDesc::Constant(1.5)),
+            _ => Err(self.ctx.err(
+                self.shader,
+                "inputs:sellmeierB and inputs:sellmeierC must be given together",
+            )),
+        }
+    }
+}
+
+/// Follows the connections of attribute `attr` on `prim` through Material / NodeGraph
+/// interface inputs to a value or to a shader node's output.
+fn resolve_input(ctx: &Ctx, prim: &usd::Prim, attr: &str) -> Result<Resolved> {
+    let mut prim = prim.clone();
+    let mut attr = attr.to_string();
+    for _ in 0..MAX_CONNECTION_DEPTH {
+        let Some(source) = ctx.connections(&prim, &attr)?.into_iter().next() else {
+            return Ok(ctx
+                .raw(&prim, &attr)?
+                .map_or(Resolved::Unset, Resolved::Value));
+        };
+        let Some((source_prim, source_attr)) = source.split_property() else {
+            return Err(ctx.err(
+                &prim,
+                format!("{attr} connects to <{}>, not an attribute", source.as_str()),
+            ));
+        };
+        let next = ctx.stage.prim(source_prim.clone());
+        if ctx.type_name(&next)? == "Shader" {
+            return Ok(Resolved::Node(source_prim));
+        }
+        attr = source_attr.to_string();
+        prim = next;
+    }
+    Err(ctx.err(&prim, format!("{attr}: connection chain too long (cycle?)")))
+}

@@ -1,0 +1,116 @@
+//! Opening a stage and reading its metadata (units, up axis, time).
+
+use glam::{DMat4, DVec3, DVec4};
+use openusd::{usd, usda};
+use std::path::Path;
+
+use super::values;
+use crate::{Error, Result};
+
+/// `metersPerUnit` when the stage does not author it (USD's fallback: centimetres).
+const DEFAULT_METERS_PER_UNIT: f64 = 0.01;
+
+/// Opens the stage at `path`, turning every failure into a one-line [`Error::file`].
+pub(super) fn open(path: &Path) -> Result<usd::Stage> {
+    if !path.exists() {
+        return Err(Error::file(path, "no such file"));
+    }
+    if !path.is_file() {
+        return Err(Error::file(path, "not a file"));
+    }
+    let absolute = std::fs::canonicalize(path).map_err(|e| Error::file(path, e.to_string()))?;
+    let Some(name) = absolute.to_str() else {
+        return Err(Error::file(path, "the path is not valid UTF-8"));
+    };
+    usd::Stage::open(name).map_err(|e| Error::file(path, open_failure(&absolute, &e)))
+}
+
+/// Describes why opening failed; for a text layer the parser is re-run to locate the line.
+fn open_failure(path: &Path, e: &dyn std::fmt::Display) -> String {
+    let message = format!("{e:#}");
+    match parse_error_location(path) {
+        Some(location) => format!("{location}: {message}"),
+        None => message,
+    }
+}
+
+/// "line L column C" of the first syntax error when `path` is a `.usda` text layer.
+fn parse_error_location(path: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(path).ok()?;
+    if !text.starts_with("#usda") {
+        return None;
+    }
+    let mut parser = usda::parser::Parser::new(&text);
+    if parser.parse().is_ok() {
+        return None;
+    }
+    let highlight = parser.last_error_highlight()?;
+    Some(format!(
+        "line {} column {}",
+        highlight.line, highlight.column
+    ))
+}
+
+/// Composition problems (unresolved or malformed references, cycles): the stage is incomplete,
+/// so the first one is an error.
+pub(super) fn check_composition(path: &Path, stage: &usd::Stage) -> Result<()> {
+    match stage.composition_errors().first() {
+        Some(e) => Err(Error::file(path, format!("composition error: {e}"))),
+        None => Ok(()),
+    }
+}
+
+/// The stage's `metersPerUnit`, positive and finite.
+pub(super) fn meters_per_unit(path: &Path, stage: &usd::Stage) -> Result<f64> {
+    let value = stage
+        .stage_metadata("metersPerUnit")
+        .map_err(|e| Error::file(path, format!("reading metersPerUnit: {e:#}")))?;
+    let Some(value) = value else {
+        return Ok(DEFAULT_METERS_PER_UNIT);
+    };
+    match values::to_f64(&value) {
+        Some(m) if m.is_finite() && m > 0.0 => Ok(m),
+        _ => Err(Error::file(
+            path,
+            format!("metersPerUnit must be a positive number, got {value:?}"),
+        )),
+    }
+}
+
+/// The stage's up axis: `true` for Z up, `false` for Y up (the default).
+pub(super) fn z_up(path: &Path, stage: &usd::Stage) -> Result<bool> {
+    let value = stage
+        .stage_metadata("upAxis")
+        .map_err(|e| Error::file(path, format!("reading upAxis: {e:#}")))?;
+    match value.as_ref().and_then(values::to_token).as_deref() {
+        None if value.is_none() => Ok(false),
+        Some("Y") => Ok(false),
+        Some("Z") => Ok(true),
+        _ => Err(Error::file(
+            path,
+            format!("upAxis must be \"Y\" or \"Z\", got {value:?}"),
+        )),
+    }
+}
+
+/// Stage space to world space (metres, Y up): `S(metersPerUnit) * R_up`, where a Z-up stage
+/// is rotated so that (x, y, z) becomes (x, z, -y).
+pub(super) fn stage_to_world(meters_per_unit: f64, z_up: bool) -> DMat4 {
+    // Exact columns (images of X, Y, Z) rather than a rotation with cos(pi/2) round-off.
+    let up = if z_up {
+        DMat4::from_cols(DVec4::X, DVec4::NEG_Z, DVec4::Y, DVec4::W)
+    } else {
+        DMat4::IDENTITY
+    };
+    DMat4::from_scale(DVec3::splat(meters_per_unit)) * up
+}
+
+/// The time values are read at: the stage's `startTimeCode` when it authors a time range,
+/// else the earliest time sample (a default value is used when there are no samples).
+pub(super) fn read_time(stage: &usd::Stage) -> usd::TimeCode {
+    if stage.has_authored_time_code_range() {
+        usd::TimeCode::new(stage.start_time_code())
+    } else {
+        usd::TimeCode::EARLIEST
+    }
+}

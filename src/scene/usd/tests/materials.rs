@@ -1,0 +1,281 @@
+//! Material bindings, UsdPreviewSurface and the `spectral:*` shaders.
+
+use super::*;
+use crate::scene::desc::{IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc};
+
+/// A Material `name` whose surface is a Shader with `id` and the `inputs` lines.
+fn material(name: &str, id: &str, inputs: &str) -> String {
+    format!(
+        r#"def Material "{name}" {{
+    token outputs:surface.connect = </Looks/{name}/S.outputs:surface>
+    def Shader "S" {{
+        uniform token info:id = "{id}"
+        {inputs}
+        token outputs:surface
+    }}
+}}
+"#
+    )
+}
+
+/// A triangle mesh `name` bound to `/Looks/<material>` (no binding when empty).
+fn bound_mesh(name: &str, material: &str) -> String {
+    let binding = if material.is_empty() {
+        String::new()
+    } else {
+        format!("rel material:binding = </Looks/{material}>")
+    };
+    format!(
+        r#"def Mesh "{name}" {{
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    {binding}
+}}
+"#
+    )
+}
+
+/// The material bound to mesh `/<name>`.
+fn material_of<'a>(desc: &'a SceneDescription, name: &str) -> &'a MaterialDesc {
+    let index = mesh(desc, &format!("/{name}")).material.expect("bound");
+    &desc.materials[index]
+}
+
+/// Loads `/Looks/<name>` materials (`id`, `inputs`) each bound to a mesh `/<name>`.
+fn load_materials(materials: &[(&str, &str, &str)]) -> SceneDescription {
+    let looks: String = materials
+        .iter()
+        .map(|(n, id, inputs)| material(n, id, inputs))
+        .collect();
+    let meshes: String = materials.iter().map(|(n, ..)| bound_mesh(n, n)).collect();
+    load_body(&format!("def Scope \"Looks\" {{\n{looks}}}\n{meshes}"))
+}
+
+#[test]
+fn spectral_material_vocabulary() {
+    let desc = load_materials(&[
+        (
+            "DarkSkin",
+            "spectral:diffuse",
+            r#"token inputs:reflectance:spectrum = "colorchecker/dark_skin"
+        float inputs:roughness = 0.2"#,
+        ),
+        ("DefaultDiffuse", "spectral:diffuse", ""),
+        (
+            "Rgb",
+            "spectral:diffuse",
+            "color3f inputs:reflectance = (0.1, 0.2, 0.3)",
+        ),
+        (
+            "Gold",
+            "spectral:conductor",
+            r#"token inputs:metal = "Au"
+        float inputs:roughness = 0.1"#,
+        ),
+        (
+            "Custom",
+            "spectral:conductor",
+            r#"token inputs:eta:spectrum = "metal/Ag-eta"
+        token inputs:k:spectrum = "metal/Ag-k""#,
+        ),
+        (
+            "Bk7",
+            "spectral:dielectric",
+            r#"token inputs:glass = "BK7"
+        bool inputs:thin = 1"#,
+        ),
+        (
+            "Sellmeier",
+            "spectral:dielectric",
+            r#"float3 inputs:sellmeierB = (1.03961212, 0.231792344, 1.01046945)
+        float3 inputs:sellmeierC = (0.00600069867, 0.0200179144, 103.560653)"#,
+        ),
+        ("Water", "spectral:dielectric", "float inputs:ior = 1.33"),
+        ("Glass", "spectral:dielectric", ""),
+        (
+            "Plastic",
+            "spectral:plastic",
+            r#"float2[] inputs:reflectance:samples = [(400, 0.1), (700, 0.9)]
+        float inputs:ior = 1.4
+        float inputs:roughness = 0.3"#,
+        ),
+        ("DefaultPlastic", "spectral:plastic", ""),
+    ]);
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let kind = |name: &str| material_of(&desc, name).kind.clone();
+    assert!(
+        matches!(kind("DarkSkin"), MaterialKind::Diffuse { reflectance: SpectrumDesc::Named(n), roughness }
+        if n == "colorchecker/dark_skin" && roughness == 0.2)
+    );
+    assert!(
+        matches!(kind("DefaultDiffuse"), MaterialKind::Diffuse { reflectance: SpectrumDesc::Rgb([0.5, 0.5, 0.5]), roughness }
+        if roughness == 0.0)
+    );
+    assert!(matches!(
+        kind("Rgb"),
+        MaterialKind::Diffuse {
+            reflectance: SpectrumDesc::Rgb([0.1, 0.2, 0.3]),
+            ..
+        }
+    ));
+    assert!(
+        matches!(kind("Gold"), MaterialKind::Conductor { eta: SpectrumDesc::Named(e), k: SpectrumDesc::Named(k), roughness }
+        if e == "metal/Au" && k == "metal/Au" && roughness == 0.1)
+    );
+    assert!(
+        matches!(kind("Custom"), MaterialKind::Conductor { eta: SpectrumDesc::Named(e), k: SpectrumDesc::Named(k), .. }
+        if e == "metal/Ag-eta" && k == "metal/Ag-k")
+    );
+    assert!(
+        matches!(kind("Bk7"), MaterialKind::Dielectric { ior: IorDesc::Glass(g), thin: true, .. } if g == "BK7")
+    );
+    assert!(
+        matches!(kind("Sellmeier"), MaterialKind::Dielectric { ior: IorDesc::Sellmeier { b, c }, thin: false, .. }
+        if (b[0] - 1.039_612).abs() < 1e-6 && (c[2] - 103.560_65).abs() < 1e-4)
+    );
+    assert!(
+        matches!(kind("Water"), MaterialKind::Dielectric { ior: IorDesc::Constant(x), .. } if x == 1.33)
+    );
+    assert!(
+        matches!(kind("Glass"), MaterialKind::Dielectric { ior: IorDesc::Constant(x), roughness, thin: false }
+        if x == 1.5 && roughness == 0.0)
+    );
+    assert!(
+        matches!(kind("Plastic"), MaterialKind::Plastic { reflectance: SpectrumDesc::Samples(s), ior, roughness }
+        if s == vec![(400.0, 0.1), (700.0, 0.9)] && ior == 1.4 && roughness == 0.3)
+    );
+    assert!(
+        matches!(kind("DefaultPlastic"), MaterialKind::Plastic { reflectance: SpectrumDesc::Rgb([0.5, 0.5, 0.5]), ior, .. }
+        if ior == 1.5)
+    );
+}
+
+#[test]
+fn preview_surface_inputs_and_emission() {
+    let desc = load_materials(&[
+        (
+            "Lamp",
+            "UsdPreviewSurface",
+            r#"color3f inputs:diffuseColor = (0.2, 0.3, 0.4)
+        color3f inputs:emissiveColor = (10, 9, 8)
+        float inputs:metallic = 1
+        float inputs:roughness = 0.25
+        float inputs:clearcoat = 0.5
+        float inputs:clearcoatRoughness = 0.1
+        float inputs:opacity = 0.9
+        float inputs:opacityThreshold = 0.2
+        float inputs:ior = 1.7
+        int inputs:useSpecularWorkflow = 1
+        color3f inputs:specularColor = (0.5, 0.5, 0.5)"#,
+        ),
+        ("Default", "UsdPreviewSurface", ""),
+    ]);
+    let lamp = material_of(&desc, "Lamp");
+    assert_eq!(lamp.emission, Some([10.0, 9.0, 8.0]));
+    let expected = PreviewSurfaceDesc {
+        diffuse_color: [0.2, 0.3, 0.4],
+        emissive_color: [10.0, 9.0, 8.0],
+        use_specular_workflow: true,
+        specular_color: [0.5; 3],
+        metallic: 1.0,
+        roughness: 0.25,
+        clearcoat: 0.5,
+        clearcoat_roughness: 0.1,
+        opacity: 0.9,
+        opacity_threshold: 0.2,
+        ior: 1.7,
+    };
+    assert!(matches!(&lamp.kind, MaterialKind::PreviewSurface(p) if *p == expected));
+    let default = material_of(&desc, "Default");
+    assert_eq!(default.emission, None);
+    assert!(
+        matches!(&default.kind, MaterialKind::PreviewSurface(p) if *p == PreviewSurfaceDesc::default())
+    );
+}
+
+#[test]
+fn texture_inputs_warn_and_use_defaults_interface_inputs_resolve() {
+    let desc = load_body(
+        r#"def Scope "Looks" {
+    def Material "Wood" {
+        color3f inputs:tint = (0.7, 0.6, 0.5)
+        token outputs:surface.connect = </Looks/Wood/S.outputs:surface>
+        def Shader "S" {
+            uniform token info:id = "UsdPreviewSurface"
+            color3f inputs:diffuseColor.connect = </Looks/Wood/Tex.outputs:rgb>
+            color3f inputs:specularColor.connect = </Looks/Wood.inputs:tint>
+            token outputs:surface
+        }
+        def Shader "Tex" {
+            uniform token info:id = "UsdUVTexture"
+            asset inputs:file = @wood.png@
+            float3 outputs:rgb
+        }
+    }
+}
+def Mesh "Wood" {
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    rel material:binding = </Looks/Wood>
+}
+"#,
+    );
+    let wood = material_of(&desc, "Wood");
+    let MaterialKind::PreviewSurface(p) = &wood.kind else {
+        panic!("preview surface")
+    };
+    assert_eq!(p.diffuse_color, PreviewSurfaceDesc::default().diffuse_color);
+    assert_eq!(p.specular_color, [0.7, 0.6, 0.5]);
+    assert_warned(
+        &desc,
+        &["/Looks/Wood/S", "texture inputs not supported yet"],
+    );
+}
+
+#[test]
+fn bindings_are_inherited_deduplicated_and_optional() {
+    let desc = load_body(&format!(
+        r#"def Scope "Looks" {{
+{}{}}}
+def Xform "Group" {{
+    rel material:binding = </Looks/A>
+    {}{}
+    def Xform "Strong" {{
+        rel material:binding = </Looks/B>
+        {}
+    }}
+}}
+def Xform "Forced" {{
+    rel material:binding = </Looks/A> (
+        bindMaterialAs = "strongerThanDescendants"
+    )
+    {}
+}}
+{}"#,
+        material("A", "spectral:diffuse", ""),
+        material("B", "spectral:plastic", ""),
+        bound_mesh("One", ""),
+        bound_mesh("Two", ""),
+        bound_mesh("Three", ""),
+        bound_mesh("Four", "B"),
+        bound_mesh("Unbound", ""),
+    ));
+    let index = |path: &str| mesh(&desc, path).material;
+    assert_eq!(desc.materials.len(), 2);
+    assert_eq!(index("/Group/One"), index("/Group/Two"));
+    assert_eq!(
+        desc.materials[index("/Group/One").expect("A")].prim_path,
+        "/Looks/A"
+    );
+    assert_eq!(
+        desc.materials[index("/Group/Strong/Three").expect("B")].prim_path,
+        "/Looks/B"
+    );
+    assert_eq!(
+        desc.materials[index("/Forced/Four").expect("A")].prim_path,
+        "/Looks/A"
+    );
+    assert_eq!(index("/Unbound"), None);
+}
