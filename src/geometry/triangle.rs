@@ -1,1 +1,706 @@
-//! PLACEHOLDER — owned by the BVH helper; replaced wholesale.
+//! Watertight ray–triangle intersection and the error bound of the hit point.
+//!
+//! The test is Woop, Benthin and Wald 2013, "Watertight Ray/Triangle Intersection" (JCGT 2(1)),
+//! as written in PBR 4ed §6.5.3: the vertices are translated to the ray origin, the axes permuted
+//! so that the ray's largest direction component is z, and sheared so that the ray becomes the +z
+//! axis; the hit is then a 2D point-in-triangle test at the origin using the three edge functions.
+//! A shared vertex or edge of two triangles transforms to bit-identical values in both, and the
+//! edge function of a shared edge is the exact negation of its twin, so a ray through the interior
+//! of a closed mesh cannot slip between triangles (PBR 4ed §6.8.4).
+//!
+//! Deviations from pbrt-v4, for precision (same watertight edge test):
+//! - the edge functions are evaluated in f64, where the products of two f32 are exact and the
+//!   difference is rounded once, so their signs are those of the exactly evaluated edge functions
+//!   of the transformed vertices (pbrt falls back to f64 only when an f32 edge function is zero);
+//! - t comes from the plane equation in f64 with a forward error bound that certifies t > 0
+//!   (`plane_t`) instead of Woop's t with pbrt's δt bound (PBR 4ed §6.8.7), which rejects valid
+//!   hits on slivers and at grazing angles.
+//!
+//! Barycentric convention: `p = b0 p0 + b1 p1 + b2 p2`, `b0 + b1 + b2 = 1`, `bi ≥ 0`.
+
+use glam::Vec3;
+
+use super::offset::gamma;
+use super::ray::Ray;
+
+/// A ray–triangle hit: ray parameter `t` and barycentrics (`p = b0 p0 + b1 p1 + b2 p2`).
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleHit {
+    pub t: f32,
+    pub b0: f32,
+    pub b1: f32,
+    pub b2: f32,
+}
+
+impl TriangleHit {
+    /// The hit point interpolated from the vertices, evaluated exactly as the error bound of
+    /// [`hit_point_error`] assumes.
+    #[inline]
+    pub fn point(&self, p0: Vec3, p1: Vec3, p2: Vec3) -> Vec3 {
+        self.b0 * p0 + self.b1 * p1 + self.b2 * p2
+    }
+}
+
+/// True when the triangle can never be hit: zero area (`(p1 − p0) × (p2 − p0) = 0`, as pbrt-v4
+/// tests it) or a non-finite vertex.
+#[inline]
+pub fn is_degenerate(p0: Vec3, p1: Vec3, p2: Vec3) -> bool {
+    let finite = p0.is_finite() && p1.is_finite() && p2.is_finite();
+    !finite || (p1 - p0).cross(p2 - p0) == Vec3::ZERO
+}
+
+/// Per-ray part of the watertight test (axis permutation and shear, PBR 4ed §6.5.3), computed once
+/// per ray and reused for every triangle the ray is tested against.
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightRay {
+    o: Vec3,
+    d: Vec3,
+    /// Axis indices: the ray's largest |d| component becomes z.
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    /// Shear taking the permuted direction to (0, 0, 1): x' = x + sx z, y' = y + sy z, z' = sz z.
+    sx: f32,
+    sy: f32,
+    sz: f32,
+}
+
+impl WatertightRay {
+    /// None for a zero or non-finite direction or a non-finite origin (such a ray hits nothing).
+    #[inline]
+    pub fn new(ray: &Ray) -> Option<WatertightRay> {
+        if !(ray.o.is_finite() && ray.d.is_finite()) {
+            return None;
+        }
+        let kz = ray.d.abs().max_position();
+        let kx = if kz == 2 { 0 } else { kz + 1 };
+        let ky = if kx == 2 { 0 } else { kx + 1 };
+        let dz = ray.d[kz];
+        if dz == 0.0 {
+            return None;
+        }
+        Some(WatertightRay {
+            o: ray.o,
+            d: ray.d,
+            kx,
+            ky,
+            kz,
+            sx: -ray.d[kx] / dz,
+            sy: -ray.d[ky] / dz,
+            sz: 1.0 / dz,
+        })
+    }
+
+    /// Translates, permutes and shears a vertex; z is scaled by `sz` (a vertex's t is its z).
+    #[inline]
+    fn transform(&self, p: Vec3) -> Vec3 {
+        let p = p - self.o;
+        let (x, y, z) = (p[self.kx], p[self.ky], p[self.kz]);
+        Vec3::new(x + self.sx * z, y + self.sy * z, z * self.sz)
+    }
+}
+
+/// Watertight ray–triangle test (Woop, Benthin, Wald 2013; PBR 4ed §6.5.3) with a conservative
+/// bound so that hits at t ≤ 0 are rejected (see `plane_t` in the source). `t_max` is
+/// exclusive. Returns None for degenerate (zero-area) triangles and never a NaN.
+#[inline]
+pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3, t_max: f32) -> Option<TriangleHit> {
+    intersect_prepared(&WatertightRay::new(ray)?, p0, p1, p2, t_max)
+}
+
+/// [`intersect`] with the per-ray transform precomputed.
+#[inline]
+pub fn intersect_prepared(
+    ray: &WatertightRay,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
+        return None;
+    }
+    intersect_non_degenerate(ray, p0, p1, p2, t_max)
+}
+
+/// [`intersect_prepared`] for triangles already known not to be degenerate (the BVH filters them
+/// at build time). A degenerate triangle still never hits here, through the zero plane normal.
+#[inline]
+pub(crate) fn intersect_non_degenerate(
+    ray: &WatertightRay,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let (a, b, c) = (ray.transform(p0), ray.transform(p1), ray.transform(p2));
+    let e = [
+        edge_function(b, c),
+        edge_function(c, a),
+        edge_function(a, b),
+    ];
+    let has_neg = e[0] < 0.0 || e[1] < 0.0 || e[2] < 0.0;
+    let has_pos = e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0;
+    if has_neg && has_pos {
+        return None;
+    }
+    let det = e[0] + e[1] + e[2];
+    if det == 0.0 {
+        return None;
+    }
+    let t = plane_t(ray, p0, p1, p2)? as f32;
+    // Written so that a NaN rejects the hit.
+    if !(t > 0.0 && t < t_max) {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    Some(TriangleHit {
+        t,
+        b0: (e[0] * inv_det) as f32,
+        b1: (e[1] * inv_det) as f32,
+        b2: (e[2] * inv_det) as f32,
+    })
+}
+
+/// Edge function `u.x v.y − u.y v.x` of the transformed vertices. Both products of f32 are exact
+/// in f64 and the difference is rounded once, so the sign is exact and swapping `u` and `v`
+/// negates the value exactly (the watertightness argument of PBR 4ed §6.8.4).
+#[inline]
+fn edge_function(u: Vec3, v: Vec3) -> f64 {
+    u.x as f64 * v.y as f64 - u.y as f64 * v.x as f64
+}
+
+/// γ(n) in f64 arithmetic (unit roundoff 2⁻⁵³), PBR 4ed §6.8.1.
+const fn gamma64(n: i32) -> f64 {
+    let ne = n as f64 * (f64::EPSILON * 0.5);
+    ne / (1.0 - ne)
+}
+
+/// The ray parameter of the hit once the edge test has accepted the triangle:
+/// t = n·(p0 − o) / n·d with n = (p1 − p0) × (p2 − p0), all in f64, or None unless t > 0 is
+/// certain. Forward error bound (standard model of PBR 4ed §6.8.1; Higham 2002, §3.1 for the
+/// dot products): each normal component carries |δn_k| ≤ γ(5)·N_k with N_k the sum of the
+/// magnitudes of its two products, so |δ(n·v)| ≤ 2γ(12)·Σ N_k |v_k| for v = p0 − o and v = d.
+/// The hit is kept only if both numerator and denominator exceed their bounds and agree in sign.
+///
+/// Deviation from pbrt-v4 (which bounds the error of Woop's t from the sheared coordinates,
+/// PBR 4ed §6.8.7): that bound grows with the vertices' distance from the ray axis divided by the
+/// triangle's projected area, so it rejects valid hits on slivers (area 1e-12) and at grazing
+/// angles; the f64 plane equation is accurate to ~1e-15 relative in both cases.
+#[inline]
+fn plane_t(ray: &WatertightRay, p0: Vec3, p1: Vec3, p2: Vec3) -> Option<f64> {
+    let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+    let (q0, q1, q2, o, d) = (f(p0), f(p1), f(p2), f(ray.o), f(ray.d));
+    let e1 = [q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]];
+    let e2 = [q2[0] - q0[0], q2[1] - q0[1], q2[2] - q0[2]];
+    let v = [q0[0] - o[0], q0[1] - o[1], q0[2] - o[2]];
+    let (mut num, mut den, mut num_err, mut den_err) = (0.0, 0.0, 0.0, 0.0);
+    for k in 0..3 {
+        let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+        let (x, y) = (e1[i] * e2[j], e1[j] * e2[i]);
+        let n_k = x - y;
+        let mag_k = x.abs() + y.abs();
+        num += n_k * v[k];
+        den += n_k * d[k];
+        num_err += mag_k * v[k].abs();
+        den_err += mag_k * d[k].abs();
+    }
+    let g = 2.0 * gamma64(12);
+    let certain = num.abs() > g * num_err && den.abs() > g * den_err;
+    let t = num / den;
+    (certain && t > 0.0).then_some(t)
+}
+
+/// Absolute error bound of [`TriangleHit::point`]: γ(7)·(|b0 p0| + |b1 p1| + |b2 p2|) per axis
+/// (PBR 4ed §6.8.5, "Bounding Intersection Point Error", triangles; pbrt-v4
+/// `Triangle::InteractionFromIntersection`).
+///
+/// The box `p ± error` contains a point of the triangle, which is what ray offsetting needs
+/// (the barycentrics always lie in the simplex; the bound covers rounding in the interpolation
+/// and in the barycentrics' sum). It does not bound the distance *along* the surface to the
+/// exact ray hit, which grows as the triangle seen along the ray thins out (slivers, grazing
+/// rays) — harmless for offsetting, and far below shading scales.
+#[inline]
+pub fn hit_point_error(hit: &TriangleHit, p0: Vec3, p1: Vec3, p2: Vec3) -> Vec3 {
+    let abs_sum = (hit.b0 * p0).abs() + (hit.b1 * p1).abs() + (hit.b2 * p2).abs();
+    gamma(7) * abs_sum
+}
+
+/// A small deterministic generator for the geometry and BVH tests (SplitMix64, Steele et al. 2014).
+#[cfg(test)]
+pub(crate) mod test_rng {
+    use glam::Vec3;
+
+    pub struct Rng(u64);
+
+    impl Rng {
+        pub fn new(seed: u64) -> Rng {
+            Rng(seed)
+        }
+
+        pub fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^ (z >> 31)
+        }
+
+        /// Uniform in [0, 1).
+        pub fn f32(&mut self) -> f32 {
+            (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        }
+
+        pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.f32()
+        }
+
+        pub fn below(&mut self, n: usize) -> usize {
+            (self.next_u64() % n as u64) as usize
+        }
+
+        pub fn vec3(&mut self, lo: f32, hi: f32) -> Vec3 {
+            Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+        }
+
+        /// Uniform on the unit sphere.
+        pub fn unit_vector(&mut self) -> Vec3 {
+            let z = self.range(-1.0, 1.0);
+            let phi = self.range(0.0, std::f32::consts::TAU);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_rng::Rng;
+    use super::*;
+
+    fn ray(o: Vec3, d: Vec3) -> Ray {
+        Ray::new(o, d)
+    }
+
+    fn check_hit(h: &TriangleHit) {
+        assert!(h.t.is_finite() && h.t > 0.0, "{h:?}");
+        for b in [h.b0, h.b1, h.b2] {
+            assert!(b.is_finite() && (0.0..=1.0).contains(&b), "{h:?}");
+        }
+        assert!((h.b0 + h.b1 + h.b2 - 1.0).abs() < 1e-5, "{h:?}");
+    }
+
+    const P0: Vec3 = Vec3::new(0.0, 0.0, 0.0);
+    const P1: Vec3 = Vec3::new(1.0, 0.0, 0.0);
+    const P2: Vec3 = Vec3::new(0.0, 1.0, 0.0);
+
+    #[test]
+    fn simple_hit_t_and_barycentrics() {
+        let r = ray(Vec3::new(0.25, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0));
+        let h = intersect(&r, P0, P1, P2, f32::INFINITY).expect("hit");
+        check_hit(&h);
+        assert!((h.t - 2.0).abs() < 1e-6);
+        assert!((h.b1 - 0.25).abs() < 1e-6 && (h.b2 - 0.5).abs() < 1e-6);
+        assert!((h.point(P0, P1, P2) - Vec3::new(0.25, 0.5, 0.0)).length() < 1e-6);
+        // Both sides hit (no culling).
+        let r = ray(Vec3::new(0.25, 0.5, -3.0), Vec3::new(0.0, 0.0, 2.0));
+        let h = intersect(&r, P0, P1, P2, f32::INFINITY).expect("hit from below");
+        assert!((h.t - 1.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn misses_outside_behind_and_beyond_t_max() {
+        let down = Vec3::new(0.0, 0.0, -1.0);
+        let outside = ray(Vec3::new(0.75, 0.5, 2.0), down);
+        assert!(intersect(&outside, P0, P1, P2, f32::INFINITY).is_none());
+        let behind = ray(Vec3::new(0.25, 0.25, -1.0), down);
+        assert!(intersect(&behind, P0, P1, P2, f32::INFINITY).is_none());
+        let r = ray(Vec3::new(0.25, 0.25, 2.0), down);
+        assert!(
+            intersect(&r, P0, P1, P2, 2.0).is_none(),
+            "t_max is exclusive"
+        );
+        assert!(intersect(&r, P0, P1, P2, 2.0f32.next_up()).is_some());
+        assert!(intersect(&r, P0, P1, P2, 1.5).is_none());
+        let zero_dir = ray(Vec3::new(0.25, 0.25, 0.0), Vec3::ZERO);
+        assert!(intersect(&zero_dir, P0, P1, P2, f32::INFINITY).is_none());
+        let nan_dir = ray(Vec3::new(0.25, 0.25, 1.0), Vec3::new(0.0, f32::NAN, -1.0));
+        assert!(intersect(&nan_dir, P0, P1, P2, f32::INFINITY).is_none());
+    }
+
+    /// A displaced height field: `n × n` cells, two triangles each, vertices shared bit-exactly.
+    struct Grid {
+        n: usize,
+        verts: Vec<Vec3>,
+    }
+
+    impl Grid {
+        /// Displacement amplitude 0.05 against cells of about 0.4.
+        fn new(n: usize, rng: &mut Rng) -> Grid {
+            Grid::with_amplitude(n, 0.05, rng)
+        }
+
+        fn with_amplitude(n: usize, amplitude: f32, rng: &mut Rng) -> Grid {
+            let mut verts = Vec::with_capacity((n + 1) * (n + 1));
+            // A tilted frame with "ugly" coordinates, so nothing is exactly representable.
+            let (u, v, w) = (
+                Vec3::new(0.8, 0.1, -0.3).normalize() * 0.37,
+                Vec3::new(-0.2, 0.9, 0.35).normalize() * 0.41,
+                Vec3::new(0.3, -0.4, 0.85).normalize(),
+            );
+            let origin = Vec3::new(3.3, -1.7, 2.9);
+            for j in 0..=n {
+                for i in 0..=n {
+                    let h = rng.range(-amplitude, amplitude);
+                    verts.push(origin + u * i as f32 + v * j as f32 + w * h);
+                }
+            }
+            Grid { n, verts }
+        }
+
+        fn vert(&self, i: usize, j: usize) -> Vec3 {
+            self.verts[j * (self.n + 1) + i]
+        }
+
+        /// The two triangles of cell (i, j), consistently wound.
+        fn cell(&self, i: usize, j: usize) -> [[Vec3; 3]; 2] {
+            let (a, b) = (self.vert(i, j), self.vert(i + 1, j));
+            let (c, d) = (self.vert(i, j + 1), self.vert(i + 1, j + 1));
+            [[a, b, d], [a, d, c]]
+        }
+
+        /// Triangles of the cells around grid point (i, j).
+        fn around(&self, i: usize, j: usize) -> Vec<[Vec3; 3]> {
+            let mut tris = Vec::new();
+            for cj in j.saturating_sub(1)..(j + 1).min(self.n) {
+                for ci in i.saturating_sub(1)..(i + 1).min(self.n) {
+                    tris.extend(self.cell(ci, cj));
+                }
+            }
+            tris
+        }
+
+        fn all(&self) -> Vec<[Vec3; 3]> {
+            let cells = (0..self.n).flat_map(|j| (0..self.n).map(move |i| (i, j)));
+            cells.flat_map(|(i, j)| self.cell(i, j)).collect()
+        }
+
+        fn normal(&self) -> Vec3 {
+            let (a, b, c) = (self.vert(0, 0), self.vert(self.n, 0), self.vert(0, self.n));
+            (b - a).cross(c - a).normalize()
+        }
+    }
+
+    fn count_hits(r: &Ray, tris: &[[Vec3; 3]]) -> usize {
+        let mut hits = 0;
+        for t in tris {
+            if let Some(h) = intersect(r, t[0], t[1], t[2], f32::INFINITY) {
+                check_hit(&h);
+                hits += 1;
+            }
+        }
+        hits
+    }
+
+    /// True when every triangle faces the same way as seen along `d`: the local patch is then a
+    /// single sheet in the ray's projection, so a ray through it must hit. (At a silhouette
+    /// fold a ray passing a rounding error beside the shared edge legitimately misses.)
+    fn no_silhouette(d: Vec3, tris: &[[Vec3; 3]]) -> bool {
+        let side = |t: &[Vec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).dot(d) > 0.0;
+        let first = side(&tris[0]);
+        tris.iter().all(|t| side(t) == first)
+    }
+
+    /// A random origin on the side `side` (±1) of the grid, at a polar angle up to `max_deg`.
+    fn origin_towards(rng: &mut Rng, target: Vec3, normal: Vec3, side: f32, max_deg: f32) -> Vec3 {
+        loop {
+            let dir = rng.unit_vector();
+            let cos = dir.dot(normal) * side;
+            if cos > max_deg.to_radians().cos() {
+                return target + dir * rng.range(0.05, 20.0);
+            }
+        }
+    }
+
+    #[test]
+    fn watertight_grid_vertices_edges_and_interior() {
+        let mut rng = Rng::new(7);
+        let grid = Grid::new(24, &mut rng);
+        let normal = grid.normal();
+        let (mut rays, mut misses) = (0, 0);
+        for k in 0..125_000 {
+            // Interior grid point (i, j), so the whole 1-ring exists.
+            let (i, j) = (1 + rng.below(grid.n - 1), 1 + rng.below(grid.n - 1));
+            let p = grid.vert(i, j);
+            let target = match k % 4 {
+                0 => p,                                      // a shared vertex
+                1 => 0.5 * (p + grid.vert(i + 1, j)),        // a shared edge
+                2 => 0.5 * (p + grid.vert(i + 1, j + 1)),    // the cell diagonal
+                _ => p.lerp(grid.vert(i, j + 1), rng.f32()), // anywhere on an edge
+            };
+            let side = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
+            let o = origin_towards(&mut rng, target, normal, side, 80.0);
+            let r = ray(o, target - o);
+            let local = grid.around(i, j);
+            if !no_silhouette(r.d, &local) {
+                continue;
+            }
+            rays += 1;
+            if count_hits(&r, &local) == 0 {
+                misses += 1;
+            }
+        }
+        assert!(rays > 100_000, "only {rays} rays tested");
+        assert_eq!(misses, 0, "{misses} of {rays} rays fell through the mesh");
+    }
+
+    #[test]
+    fn watertight_fan_around_a_vertex() {
+        let mut rng = Rng::new(11);
+        let center = Vec3::new(0.3137, -2.6093, 1.3271);
+        let (u, v) = (
+            Vec3::new(1.0, 0.2, 0.1).normalize(),
+            Vec3::new(-0.1, 0.3, 1.0).normalize(),
+        );
+        let normal = u.cross(v).normalize();
+        // 48 spokes at random angles, slightly off-plane: a non-planar closed fan.
+        // Stratified angles, so no spoke gap is tiny or exceeds π.
+        let angles: Vec<f32> = (0..48)
+            .map(|k| (k as f32 + rng.range(0.1, 0.9)) * std::f32::consts::TAU / 48.0)
+            .collect();
+        let rim: Vec<Vec3> = angles
+            .iter()
+            .map(|a| {
+                center
+                    + (u * a.cos() + v * a.sin()) * rng.range(0.5, 1.5)
+                    + normal * rng.range(-0.005, 0.005)
+            })
+            .collect();
+        let fan: Vec<[Vec3; 3]> = (0..rim.len())
+            .map(|k| [center, rim[k], rim[(k + 1) % rim.len()]])
+            .collect();
+        let (mut rays, mut misses) = (0, 0);
+        for k in 0..40_000 {
+            let target = match k % 2 {
+                0 => center,
+                _ => center.lerp(rim[rng.below(rim.len())], rng.range(0.0, 0.9)),
+            };
+            let side = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
+            let o = origin_towards(&mut rng, target, normal, side, 70.0);
+            if !no_silhouette(target - o, &fan) {
+                continue;
+            }
+            rays += 1;
+            if count_hits(&ray(o, target - o), &fan) == 0 {
+                misses += 1;
+            }
+        }
+        assert!(rays > 30_000, "only {rays} rays tested");
+        assert_eq!(misses, 0, "{misses} of {rays} rays fell through the fan");
+    }
+
+    #[test]
+    fn degenerate_triangles_never_hit() {
+        let mut rng = Rng::new(3);
+        // Exactly representable, so exactly collinear in f32.
+        let a = Vec3::new(0.125, 0.25, 0.375);
+        let b = a + Vec3::new(1.0, 2.0, 3.0) * 0.5;
+        let c = a + Vec3::new(1.0, 2.0, 3.0) * 1.5;
+        let degenerate = [
+            [a, b, c], // collinear
+            [a, a, b], // repeated vertex
+            [a, b, b],
+            [a, a, a],
+            [Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+            [Vec3::new(f32::NAN, 0.0, 0.0), Vec3::X, Vec3::Y],
+            [Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X, Vec3::Y],
+            [Vec3::new(0.0, 0.0, f32::NEG_INFINITY), Vec3::X, Vec3::Y],
+        ];
+        for tri in &degenerate {
+            assert!(is_degenerate(tri[0], tri[1], tri[2]), "{tri:?}");
+            for _ in 0..2000 {
+                // Rays aimed at points on the degenerate segment from every direction.
+                let target = a.lerp(b, rng.range(-0.5, 1.5));
+                let o = target + rng.unit_vector() * rng.range(0.01, 10.0);
+                for r in [ray(o, target - o), ray(o, rng.unit_vector())] {
+                    assert!(intersect(&r, tri[0], tri[1], tri[2], f32::INFINITY).is_none());
+                }
+            }
+        }
+        // Rays along the degenerate line itself.
+        let along = ray(a - (b - a), b - a);
+        assert!(intersect(&along, a, b, c, f32::INFINITY).is_none());
+    }
+
+    #[test]
+    fn sliver_triangles_hit_where_they_should() {
+        // Width 2e-12 over length 1: area 1e-12.
+        let (p0, p1, p2) = (Vec3::ZERO, Vec3::X, Vec3::new(0.5, 2e-12, 0.0));
+        assert!(!is_degenerate(p0, p1, p2));
+        let down = Vec3::new(0.0, 0.0, -1.0);
+        let inside = ray(Vec3::new(0.5, 1e-12, 1.0), down);
+        let h = intersect(&inside, p0, p1, p2, f32::INFINITY).expect("sliver hit");
+        check_hit(&h);
+        assert!((h.t - 1.0).abs() < 1e-6);
+        for y in [3e-12, -1e-12, 1e-6] {
+            assert!(intersect(
+                &ray(Vec3::new(0.5, y, 1.0), down),
+                p0,
+                p1,
+                p2,
+                f32::INFINITY
+            )
+            .is_none());
+        }
+        // Oblique rays through random interior points of random slivers hit; NaN never appears.
+        let mut rng = Rng::new(5);
+        let mut hits = 0;
+        for _ in 0..20_000 {
+            let a = rng.vec3(-1.0, 1.0);
+            let axis = rng.unit_vector() * rng.range(0.1, 1.0);
+            let bump = rng.unit_vector().cross(axis).normalize_or_zero() * 1e-5;
+            let (q0, q1, q2) = (a, a + axis, a + 0.5 * axis + bump);
+            if is_degenerate(q0, q1, q2) {
+                continue;
+            }
+            // An interior point, away from the edges in barycentric terms.
+            let (u, v) = (rng.range(0.2, 0.4), rng.range(0.2, 0.4));
+            let target = q0 * (1.0 - u - v) + q1 * u + q2 * v;
+            let n = (q1 - q0).cross(q2 - q0).normalize();
+            let o = target + (n + rng.unit_vector() * 0.5).normalize() * rng.range(0.1, 10.0);
+            if let Some(h) = intersect(&ray(o, target - o), q0, q1, q2, f32::INFINITY) {
+                check_hit(&h);
+                hits += 1;
+            }
+        }
+        assert!(hits > 19_000, "only {hits} sliver hits");
+    }
+
+    #[test]
+    fn grazing_rays_consistent_and_finite() {
+        // A planar (up to vertex rounding) but not axis-aligned tessellated quad: no silhouettes.
+        let mut rng = Rng::new(13);
+        let grid = Grid::with_amplitude(16, 0.0, &mut rng);
+        let normal = grid.normal();
+        let tangent = (grid.vert(grid.n, 0) - grid.vert(0, 0)).normalize();
+        let tangent = (tangent - normal * normal.dot(tangent)).normalize();
+        let elevation = (90.0f32 - 89.99).to_radians();
+        let all = grid.all();
+        let mut misses = 0;
+        for _ in 0..20_000 {
+            let (i, j) = (2 + rng.below(grid.n - 4), 2 + rng.below(grid.n - 4));
+            let target = grid.vert(i, j).lerp(grid.vert(i + 1, j + 1), rng.f32());
+            let side = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
+            let azimuth = rng.range(0.0, std::f32::consts::TAU);
+            let t_dir = glam::Quat::from_axis_angle(normal, azimuth) * tangent;
+            let dir = (t_dir * elevation.cos() - normal * side * elevation.sin()).normalize();
+            let o = target - dir * rng.range(0.01, 0.3);
+            let r = ray(o, dir);
+            if count_hits(&r, &grid.around(i, j)) == 0 && count_hits(&r, &all) == 0 {
+                misses += 1;
+            }
+        }
+        assert_eq!(misses, 0);
+        // Same triangle, same ray, repeated: identical answers; a ray exactly in a plane misses.
+        let (a, b, c) = (
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(0.0, 4.0, 0.0),
+        );
+        let in_plane = ray(Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 0.1, 0.0));
+        assert!(intersect(&in_plane, a, b, c, f32::INFINITY).is_none());
+        for k in 0..1000 {
+            let e = (1e-4 * (k + 1) as f32).to_radians();
+            let r = ray(Vec3::new(-1.0, 1.0, e.tan()), Vec3::new(1.0, 0.0, -e.tan()));
+            let h = intersect(&r, a, b, c, f32::INFINITY).expect("grazing hit");
+            check_hit(&h);
+            assert!((h.t - 1.0).abs() < 1e-3, "{h:?} at {e}");
+        }
+    }
+
+    /// What ray spawning relies on (PBR 4ed §6.8.5–6): the triangle's plane passes through the box
+    /// `p ± hit_point_error`, i.e. |n̂·(p − p0)| ≤ |n̂|·err, checked in f64 at every scale. The
+    /// point is also close to the exact ray–plane intersection (the barycentrics are accurate up
+    /// to the foreshortening of the triangle seen along the ray).
+    #[test]
+    fn hit_point_error_box_contains_the_surface() {
+        let mut rng = Rng::new(17);
+        let mut tested = 0;
+        for scale in [1e-4f32, 1e-2, 1.0, 1e2, 1e5] {
+            for _ in 0..20_000 {
+                let offset = rng.vec3(-10.0, 10.0) * scale;
+                let p = [0, 1, 2].map(|_| offset + rng.vec3(-1.0, 1.0) * scale);
+                if is_degenerate(p[0], p[1], p[2]) {
+                    continue;
+                }
+                let (u, v) = (rng.range(0.0, 0.5), rng.range(0.0, 0.5));
+                let target = p[0] + (p[1] - p[0]) * u + (p[2] - p[0]) * v;
+                let o = target + rng.unit_vector() * scale * rng.range(0.1, 10.0);
+                let r = ray(o, target - o);
+                let Some(h) = intersect(&r, p[0], p[1], p[2], f32::INFINITY) else {
+                    continue;
+                };
+                tested += 1;
+                let hp = h.point(p[0], p[1], p[2]);
+                let err = hit_point_error(&h, p[0], p[1], p[2]);
+                let (n, dist) = plane_distance(&p, hp);
+                let allowed: f64 = (0..3).map(|k| n[k].abs() * err[k] as f64).sum();
+                assert!(dist <= allowed, "scale {scale}: {dist} > {allowed}");
+                // Woop's barycentrics come from the projection along the ray, so their error
+                // grows as the projected triangle thins out: 1/cos θ.
+                let d = f64x3(r.d);
+                let d_len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                let cos = ((0..3).map(|k| n[k] * d[k]).sum::<f64>() / d_len).abs();
+                let exact = exact_plane_hit(&r, &p);
+                for k in 0..3 {
+                    let dev = (hp[k] as f64 - exact[k]).abs();
+                    assert!(
+                        dev <= 1e-5 * scale as f64 / cos,
+                        "scale {scale}: axis {k} off by {dev}; {p:?} {r:?} {h:?}"
+                    );
+                }
+            }
+        }
+        assert!(tested > 90_000, "{tested}");
+    }
+
+    fn f64x3(a: Vec3) -> [f64; 3] {
+        [a.x as f64, a.y as f64, a.z as f64]
+    }
+
+    /// Unit normal of the triangle and the distance of `q` from its plane, in f64.
+    fn plane_distance(p: &[Vec3; 3], q: Vec3) -> ([f64; 3], f64) {
+        let (a, b, c, q) = (f64x3(p[0]), f64x3(p[1]), f64x3(p[2]), f64x3(q));
+        let (u, v) = (
+            [0, 1, 2].map(|k| b[k] - a[k]),
+            [0, 1, 2].map(|k| c[k] - a[k]),
+        );
+        let n = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let n = n.map(|x| x / len);
+        let dist: f64 = (0..3).map(|k| n[k] * (q[k] - a[k])).sum();
+        (n, dist.abs())
+    }
+
+    /// Intersection of the ray with the triangle's plane in f64.
+    fn exact_plane_hit(r: &Ray, p: &[Vec3; 3]) -> [f64; 3] {
+        let v = |a: Vec3| [a.x as f64, a.y as f64, a.z as f64];
+        let (o, d, a, b, c) = (v(r.o), v(r.d), v(p[0]), v(p[1]), v(p[2]));
+        let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+        let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+        let cross = |x: [f64; 3], y: [f64; 3]| {
+            [
+                x[1] * y[2] - x[2] * y[1],
+                x[2] * y[0] - x[0] * y[2],
+                x[0] * y[1] - x[1] * y[0],
+            ]
+        };
+        let n = cross(sub(b, a), sub(c, a));
+        let t = dot(n, sub(a, o)) / dot(n, d);
+        [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]]
+    }
+}
