@@ -9,6 +9,7 @@ pub mod color;
 pub mod data;
 pub mod dense;
 pub mod sampled;
+pub mod sellmeier;
 pub mod spectrum;
 pub mod uplift;
 pub mod wavelengths;
