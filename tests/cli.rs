@@ -8,7 +8,11 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn spectral_render(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_spectral-render")).args(args).current_dir(cwd).output().expect("run spectral-render")
+    Command::new(env!("CARGO_BIN_EXE_spectral-render"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("run spectral-render")
 }
 
 fn stderr(o: &Output) -> String {
@@ -28,9 +32,23 @@ fn small_stage() -> String {
 fn renders_an_exr_with_calibrated_channels_and_a_preview() {
     let dir = temp_dir("cli-render");
     write(&dir, "small.usda", &small_stage());
-    let o = spectral_render(&["small.usda", "--spp", "4", "--resolution", "8x6", "--preview", "p.png"], &dir);
+    let o = spectral_render(
+        &[
+            "small.usda",
+            "--spp",
+            "4",
+            "--resolution",
+            "8x6",
+            "--preview",
+            "p.png",
+        ],
+        &dir,
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!stderr(&o).contains('\u{1b}'), "progress bar drawn although stderr is not a terminal");
+    assert!(
+        !stderr(&o).contains('\u{1b}'),
+        "progress bar drawn although stderr is not a terminal"
+    );
     let img = spectral_render::output::exr::read(&dir.join("small.exr")).unwrap();
     assert_eq!((img.width, img.height), (8, 6));
     for ch in ["R", "G", "B", "XYZ.X", "XYZ.Y", "XYZ.Z"] {
@@ -39,7 +57,10 @@ fn renders_an_exr_with_calibrated_channels_and_a_preview() {
         assert!(values.iter().all(|v| v.is_finite() && *v > 0.0), "{ch}");
     }
     assert!(dir.join("p.png").exists());
-    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
     assert_eq!(leftovers.len(), 3, "unexpected files: {leftovers:?}");
 }
 
@@ -47,9 +68,24 @@ fn renders_an_exr_with_calibrated_channels_and_a_preview() {
 fn renders_the_peers_cornell_box() {
     let dir = temp_dir("cli-cbox");
     let cbox = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda");
-    let o = spectral_render(&[cbox.to_str().unwrap(), "-o", "c.exr", "--spp", "2", "--resolution", "16x16"], &dir);
+    let o = spectral_render(
+        &[
+            cbox.to_str().unwrap(),
+            "-o",
+            "c.exr",
+            "--spp",
+            "2",
+            "--resolution",
+            "16x16",
+        ],
+        &dir,
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("loaded"), "no load summary: {}", stderr(&o));
+    assert!(
+        stderr(&o).contains("loaded"),
+        "no load summary: {}",
+        stderr(&o)
+    );
     assert!(dir.join("c.exr").exists());
 }
 
@@ -79,7 +115,11 @@ fn missing_file() {
 
 #[test]
 fn malformed_usda() {
-    assert_clean_error("broken.usda", Some("#usda 1.0\ndef Xform \"A\"\n{\n    float x = (1, \n"), &["broken.usda"]);
+    assert_clean_error(
+        "broken.usda",
+        Some("#usda 1.0\ndef Xform \"A\"\n{\n    float x = (1, \n"),
+        &["broken.usda"],
+    );
 }
 
 #[test]
@@ -93,19 +133,38 @@ fn mesh_with_out_of_range_indices() {
 
 #[test]
 fn unknown_spectral_attribute() {
-    let s = format!("{}def RectLight \"Lamp\"\n{{\n    float spectral:brightness = 3\n}}\n", header());
-    assert_clean_error("attr.usda", Some(&s), &["attr.usda", "/Lamp", "spectral:brightness"]);
+    let s = format!(
+        "{}def RectLight \"Lamp\"\n{{\n    float spectral:brightness = 3\n}}\n",
+        header()
+    );
+    assert_clean_error(
+        "attr.usda",
+        Some(&s),
+        &["attr.usda", "/Lamp", "spectral:brightness"],
+    );
 }
 
 #[test]
 fn unknown_shader_id() {
-    let s = format!("{}def Scope \"Looks\"\n{{\n{}}}\n{}", header(), material("M", "spectral:velvet", ""), quad("Q", 0.0, 1.0, &binding("M"), "\"MaterialBindingAPI\""));
-    assert_clean_error("shader.usda", Some(&s), &["shader.usda", "/Looks/M", "spectral:velvet"]);
+    let s = format!(
+        "{}def Scope \"Looks\"\n{{\n{}}}\n{}",
+        header(),
+        material("M", "spectral:velvet", ""),
+        quad("Q", 0.0, 1.0, &binding("M"), "\"MaterialBindingAPI\"")
+    );
+    assert_clean_error(
+        "shader.usda",
+        Some(&s),
+        &["shader.usda", "/Looks/M", "spectral:velvet"],
+    );
 }
 
 #[test]
 fn unknown_emission_spectrum() {
-    let s = format!("{}def SphereLight \"Bulb\"\n{{\n    token spectral:emission = \"CIE-Q7\"\n}}\n", header());
+    let s = format!(
+        "{}def SphereLight \"Bulb\"\n{{\n    token spectral:emission = \"CIE-Q7\"\n}}\n",
+        header()
+    );
     assert_clean_error("spd.usda", Some(&s), &["spd.usda", "/Bulb", "CIE-Q7"]);
 }
 
@@ -113,7 +172,11 @@ fn unknown_emission_spectrum() {
 fn bad_options_are_rejected() {
     let dir = temp_dir("cli-opts");
     write(&dir, "small.usda", &small_stage());
-    for args in [["small.usda", "--spp", "0"], ["small.usda", "--resolution", "0x5"], ["small.usda", "--integrator", "magic"]] {
+    for args in [
+        ["small.usda", "--spp", "0"],
+        ["small.usda", "--resolution", "0x5"],
+        ["small.usda", "--integrator", "magic"],
+    ] {
         let o = spectral_render(&args, &dir);
         assert!(!o.status.success(), "{args:?} accepted");
         assert!(!stderr(&o).contains("panicked"));

@@ -9,10 +9,30 @@ use std::process::Command;
 
 /// colour-science's patch order, row by row from the top left (scenes/colorchecker.usda).
 const PATCHES: [&str; 24] = [
-    "dark_skin", "light_skin", "blue_sky", "foliage", "blue_flower", "bluish_green",
-    "orange", "purplish_blue", "moderate_red", "purple", "yellow_green", "orange_yellow",
-    "blue", "green", "red", "yellow", "magenta", "cyan",
-    "white_9_5", "neutral_8", "neutral_6_5", "neutral_5", "neutral_3_5", "black_2",
+    "dark_skin",
+    "light_skin",
+    "blue_sky",
+    "foliage",
+    "blue_flower",
+    "bluish_green",
+    "orange",
+    "purplish_blue",
+    "moderate_red",
+    "purple",
+    "yellow_green",
+    "orange_yellow",
+    "blue",
+    "green",
+    "red",
+    "yellow",
+    "magenta",
+    "cyan",
+    "white_9_5",
+    "neutral_8",
+    "neutral_6_5",
+    "neutral_5",
+    "neutral_3_5",
+    "black_2",
 ];
 /// Dome luminance authored in the scene (cd/m²).
 const DOME_NITS: f64 = 100.0;
@@ -42,10 +62,19 @@ fn patch_xyz(xyz: &[[f32; 3]], i: usize) -> [f64; 3] {
 #[test]
 fn colorchecker_matches_colour_science_within_delta_e_1() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let status = Command::new("bash").arg(root.join("tools/venv.sh")).status().expect("run tools/venv.sh");
+    let status = Command::new("bash")
+        .arg(root.join("tools/venv.sh"))
+        .status()
+        .expect("run tools/venv.sh");
     assert!(status.success(), "tools/venv.sh failed");
 
-    let out = render_file(&root.join("scenes/colorchecker.usda"), (WIDTH as u32, HEIGHT as u32), 64, 5, None);
+    let out = render_file(
+        &root.join("scenes/colorchecker.usda"),
+        (WIDTH as u32, HEIGHT as u32),
+        64,
+        5,
+        None,
+    );
     let patches: Vec<String> = PATCHES
         .iter()
         .enumerate()
@@ -54,13 +83,27 @@ fn colorchecker_matches_colour_science_within_delta_e_1() {
             format!("\"{name}\": [{x}, {y}, {z}]")
         })
         .collect();
-    let json = format!("{{\"luminance\": {DOME_NITS}, \"patches\": {{{}}}}}", patches.join(", "));
+    let json = format!(
+        "{{\"luminance\": {DOME_NITS}, \"patches\": {{{}}}}}",
+        patches.join(", ")
+    );
     let dir = temp_dir("colorchecker");
     let json_path = write(&dir, "patches.json", &json);
 
     let python = root.join(".venv/bin/python");
-    let check = Command::new(python).arg(root.join("tools/check_colorchecker.py")).arg(&json_path).output().expect("run check_colorchecker.py");
-    let report = format!("{}{}", String::from_utf8_lossy(&check.stdout), String::from_utf8_lossy(&check.stderr));
+    let check = Command::new(python)
+        .arg(root.join("tools/check_colorchecker.py"))
+        .arg(&json_path)
+        .output()
+        .expect("run check_colorchecker.py");
+    let report = format!(
+        "{}{}",
+        String::from_utf8_lossy(&check.stdout),
+        String::from_utf8_lossy(&check.stderr)
+    );
     println!("{report}");
-    assert!(check.status.success(), "ColorChecker check failed:\n{report}");
+    assert!(
+        check.status.success(),
+        "ColorChecker check failed:\n{report}"
+    );
 }

@@ -36,12 +36,15 @@ fn white_furnace_reads_le_over_one_minus_albedo() {
     let le = 2.0f32;
     let dir = temp_dir("furnace");
     let path = write(&dir, "furnace.usda", &furnace_stage(le));
-    let out = render_file(&path, (16, 16), 64, 10_000, None);
+    let out = render_file(&path, (16, 16), 1024, 10_000, None);
     let expected = le as f64 / (1.0 - 0.8);
     let (mean, sem) = mean_and_sem(out.xyz.iter().map(|p| p[1]));
     // The bound is 1 %; the statistical error of this mean must be far below it.
     assert!(sem / expected < 2e-3, "too noisy to judge: sem {sem}");
-    assert!((mean / expected - 1.0).abs() < 0.01, "furnace Y = {mean}, expected {expected}");
+    assert!(
+        (mean / expected - 1.0).abs() < 0.01,
+        "furnace Y = {mean}, expected {expected}"
+    );
 }
 
 /// A Lambertian plane with `inputs` under a constant dome of `l` nits, seen head-on.
@@ -52,7 +55,13 @@ fn dome_plane_stage(shader_id: &str, inputs: &str, l: f32) -> String {
     s += "def Scope \"Looks\"\n{\n";
     s += &material("Paint", shader_id, inputs);
     s += "}\n\n";
-    s += &quad("Plane", 0.0, 1.0, &binding("Paint"), "\"MaterialBindingAPI\"");
+    s += &quad(
+        "Plane",
+        0.0,
+        1.0,
+        &binding("Paint"),
+        "\"MaterialBindingAPI\"",
+    );
     s
 }
 
@@ -60,15 +69,30 @@ fn dome_plane_stage(shader_id: &str, inputs: &str, l: f32) -> String {
 fn preview_surface_colour_round_trips_under_d65() {
     let l = 50.0f32;
     let dir = temp_dir("roundtrip");
-    for c in [[0.8f32, 0.2, 0.1], [0.1, 0.6, 0.3], [0.5, 0.5, 0.5], [0.05, 0.1, 0.9]] {
-        let inputs = format!("        color3f inputs:diffuseColor = ({}, {}, {})\n", c[0], c[1], c[2]);
-        let path = write(&dir, "plane.usda", &dome_plane_stage("UsdPreviewSurface", &inputs, l));
+    for c in [
+        [0.8f32, 0.2, 0.1],
+        [0.1, 0.6, 0.3],
+        [0.5, 0.5, 0.5],
+        [0.05, 0.1, 0.9],
+    ] {
+        let inputs = format!(
+            "        color3f inputs:diffuseColor = ({}, {}, {})\n",
+            c[0], c[1], c[2]
+        );
+        let path = write(
+            &dir,
+            "plane.usda",
+            &dome_plane_stage("UsdPreviewSurface", &inputs, l),
+        );
         let out = render_file(&path, (24, 24), 64, 7, None);
         for ch in 0..3 {
             let (mean, sem) = mean_and_sem(out.rgb.iter().map(|p| p[ch]));
             let expected = (l * c[ch]) as f64;
             let tol = 1e-3 * expected + 5.0 * sem;
-            assert!((mean - expected).abs() < tol, "colour {c:?} channel {ch}: {mean} vs {expected} (sem {sem})");
+            assert!(
+                (mean - expected).abs() < tol,
+                "colour {c:?} channel {ch}: {mean} vs {expected} (sem {sem})"
+            );
         }
     }
 }
@@ -78,13 +102,24 @@ fn one_and_two_threads_give_bit_identical_images() {
     let cbox = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda");
     let scene = spectral_render::scene::load(&cbox, Some((32, 32))).unwrap();
     let run = |threads| {
-        let opts = spectral_render::render::RenderOptions { spp: Some(8), seed: 3, threads: Some(threads), ..Default::default() };
+        let opts = spectral_render::render::RenderOptions {
+            spp: Some(8),
+            seed: 3,
+            threads: Some(threads),
+            ..Default::default()
+        };
         let out = spectral_render::render::render(&scene, &opts).unwrap();
         assert_finite(&out);
         out
     };
     let (a, b) = (run(1), run(2));
-    let bits = |o: &spectral_render::render::RenderOutput| o.xyz.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let bits = |o: &spectral_render::render::RenderOutput| {
+        o.xyz
+            .iter()
+            .flatten()
+            .map(|v| v.to_bits())
+            .collect::<Vec<_>>()
+    };
     assert_eq!(bits(&a), bits(&b));
     assert!(a.xyz.iter().any(|p| p[1] > 0.0), "the image is black");
 }

@@ -23,7 +23,8 @@ pub fn write_preview(
     let fail = |reason: String| format!("cannot write PNG {}: {reason}", path.display());
     let (w, h) = check_size(width, height, rgb.len()).map_err(fail)?;
     let bytes = encode_srgb8(rgb, exposure);
-    write_atomically(path, |file| encode_png_rgb8(file, &bytes, w, h)).map_err(|e| fail(e.to_string()))
+    write_atomically(path, |file| encode_png_rgb8(file, &bytes, w, h))
+        .map_err(|e| fail(e.to_string()))
 }
 
 /// Checks that `pixels` matches a non-empty `width × height` that PNG can hold (u32 sides).

@@ -11,7 +11,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 pub fn temp_dir(name: &str) -> PathBuf {
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
     let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir = std::env::temp_dir().join(format!("spectral-render-test-{}-{}-{}", std::process::id(), name, n));
+    let dir = std::env::temp_dir().join(format!(
+        "spectral-render-test-{}-{}-{}",
+        std::process::id(),
+        name,
+        n
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -24,9 +29,21 @@ pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 /// Loads and renders a stage with the path tracer.
-pub fn render_file(path: &Path, resolution: (u32, u32), spp: u32, max_depth: u32, threads: Option<usize>) -> RenderOutput {
+pub fn render_file(
+    path: &Path,
+    resolution: (u32, u32),
+    spp: u32,
+    max_depth: u32,
+    threads: Option<usize>,
+) -> RenderOutput {
     let scene = scene::load(path, Some(resolution)).unwrap_or_else(|e| panic!("{e}"));
-    let opts = RenderOptions { spp: Some(spp), seed: 7, threads, max_depth, ..Default::default() };
+    let opts = RenderOptions {
+        spp: Some(spp),
+        seed: 7,
+        threads,
+        max_depth,
+        ..Default::default()
+    };
     let out = render::render(&scene, &opts).unwrap();
     assert_finite(&out);
     out
@@ -35,7 +52,14 @@ pub fn render_file(path: &Path, resolution: (u32, u32), spp: u32, max_depth: u32
 /// Every test image must be free of NaN and Inf, with no sample dropped.
 pub fn assert_finite(out: &RenderOutput) {
     assert_eq!(out.dropped_samples, 0, "non-finite samples were dropped");
-    assert!(out.xyz.iter().chain(&out.rgb).flatten().all(|v| v.is_finite()), "NaN or Inf in the image");
+    assert!(
+        out.xyz
+            .iter()
+            .chain(&out.rgb)
+            .flatten()
+            .all(|v| v.is_finite()),
+        "NaN or Inf in the image"
+    );
 }
 
 /// Mean and standard error of the mean of a channel over a set of pixels.
