@@ -3,6 +3,7 @@
 
 pub mod accel;
 pub mod bxdf;
+pub mod cli;
 pub mod error;
 pub mod geometry;
 pub mod imageio;

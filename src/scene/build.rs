@@ -397,7 +397,9 @@ fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> std::result::Result
     let texels: Vec<RgbIlluminantSpectrum> = img
         .pixels
         .iter()
-        .map(|p| RgbIlluminantSpectrum::new([p[0] * tint[0], p[1] * tint[1], p[2] * tint[2]]))
+        .map(|p| {
+            RgbIlluminantSpectrum::new_lookup([p[0] * tint[0], p[1] * tint[1], p[2] * tint[2]])
+        })
         .collect();
     let luminance: Vec<f32> = img
         .pixels

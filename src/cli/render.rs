@@ -1,0 +1,166 @@
+//! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
+
+use crate::integrator::IntegratorKind;
+use crate::output::{exr, png};
+use crate::render::{self, RenderOptions};
+use crate::{scene, spectral};
+use clap::Parser;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+
+/// Render a USD stage spectrally into a linear, absolutely calibrated EXR
+/// (1.0 = 1 cd/m² of D65 white).
+#[derive(Parser, Debug)]
+#[command(name = "spectral-render", version, about)]
+struct RenderArgs {
+    /// The stage to render (.usda, .usdc or .usdz).
+    scene: PathBuf,
+    /// Output EXR (default: the stage's name with .exr, in the current directory).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Samples per pixel (default 64, or unlimited with --time).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Render until this many seconds have passed, then write the result.
+    #[arg(long = "time")]
+    time: Option<f64>,
+    /// Seed of the deterministic sampler.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Image size WxH, overriding RenderSettings.
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
+    /// Maximum number of scattering events (pbrt's maxdepth; Mitsuba's max_depth − 1).
+    #[arg(long = "max-depth", default_value_t = 7)]
+    max_depth: u32,
+    /// Light-transport algorithm.
+    #[arg(long, default_value = "path", value_parser = parse_integrator)]
+    integrator: IntegratorKind,
+    /// Also write an 8-bit sRGB PNG preview.
+    #[arg(long)]
+    preview: Option<PathBuf>,
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or("expected WxH, e.g. 640x480")?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("bad width '{w}'"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("bad height '{h}'"))?;
+    if w == 0 || h == 0 || w > 65536 || h > 65536 {
+        return Err("width and height must be between 1 and 65536".into());
+    }
+    Ok((w, h))
+}
+
+fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
+    match s {
+        "path" => Ok(IntegratorKind::Path),
+        other => Err(format!("unknown integrator '{other}' (available: path)")),
+    }
+}
+
+/// Parses the arguments (clap exits with its usage message on bad ones) and renders.
+pub fn main(argv: Vec<OsString>) -> Result<(), String> {
+    run(&RenderArgs::parse_from(argv))
+}
+
+fn run(args: &RenderArgs) -> Result<(), String> {
+    validate(args)?;
+    let scene = scene::load(&args.scene, args.resolution).map_err(|e| e.to_string())?;
+    print_summary(&scene);
+    let opts = RenderOptions {
+        spp: args.spp,
+        time_budget: args.time,
+        seed: args.seed,
+        threads: args.threads,
+        max_depth: args.max_depth,
+        integrator: args.integrator,
+        progress: true,
+    };
+    let out = render::render(&scene, &opts)?;
+    if out.dropped_samples > 0 {
+        eprintln!(
+            "warning: {} samples had a non-finite value and were dropped",
+            out.dropped_samples
+        );
+    }
+    let path = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(&args.scene));
+    let meta = exr::ExrMetadata {
+        spp: out.spp,
+        integrator: opts.integrator.name().into(),
+        seed: opts.seed,
+        wall_time_s: out.wall_time_s,
+        version: env!("CARGO_PKG_VERSION").into(),
+        scene: args.scene.display().to_string(),
+    };
+    let white = spectral::color::white_xy().map(|c| c as f32);
+    exr::write(
+        &path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
+    )?;
+    if let Some(preview) = &args.preview {
+        png::write_preview(preview, out.width, out.height, &out.rgb, 0.0)?;
+    }
+    let rate = (out.width * out.height) as f64 * out.spp as f64 / out.wall_time_s.max(1e-9);
+    eprintln!(
+        "wrote {} ({}x{}, {} spp, {:.2} s, {:.2} Msamples/s)",
+        path.display(),
+        out.width,
+        out.height,
+        out.spp,
+        out.wall_time_s,
+        rate * 1e-6
+    );
+    Ok(())
+}
+
+fn validate(args: &RenderArgs) -> Result<(), String> {
+    if args.spp == Some(0) {
+        return Err("--spp must be at least 1".into());
+    }
+    if let Some(t) = args.time {
+        if !(t.is_finite() && t > 0.0) {
+            return Err("--time must be a positive number of seconds".into());
+        }
+    }
+    if args.threads == Some(0) {
+        return Err("--threads must be at least 1".into());
+    }
+    Ok(())
+}
+
+/// `stage.usda` → `./stage.exr`.
+fn default_output(scene: &Path) -> PathBuf {
+    let stem = scene
+        .file_stem()
+        .map(|s| s.to_os_string())
+        .unwrap_or_else(|| "render".into());
+    PathBuf::from(stem).with_extension("exr")
+}
+
+/// The one-line summary every command that reads a scene prints.
+pub fn print_summary(scene: &scene::Scene) {
+    let s = &scene.summary;
+    eprintln!(
+        "loaded {}: {} meshes ({} triangles), {} materials, {} lights, camera {}, {}x{}{}",
+        scene.source.display(),
+        s.meshes,
+        s.triangles,
+        s.materials,
+        s.lights,
+        s.camera,
+        scene.camera.width,
+        scene.camera.height,
+        if s.warnings.is_empty() {
+            String::new()
+        } else {
+            format!("; ignored: {}", s.warnings.join("; "))
+        }
+    );
+}
