@@ -100,6 +100,9 @@ impl StackSize {
 /// watertightness at leaf boundaries.
 /// (The body of obvhs's `build_cwbvh_from_tris`, minus its debug-build validation, which asserts
 /// a depth below 32 and absolute 1e-5 box tolerances that large scenes exceed.)
+/// Triangles per leaf.
+const LEAF_SIZE: u32 = 3;
+
 fn build_cwbvh(triangles: &[Triangle]) -> CwBvh {
     let indices = (0..triangles.len() as u32).collect();
     let mut bvh2 = PlocBuilder::with_capacity(triangles.len()).build(
@@ -110,7 +113,7 @@ fn build_cwbvh(triangles: &[Triangle]) -> CwBvh {
         3,
     );
     ReinsertionOptimizer::default().run(&mut bvh2, 0.05, None);
-    bvh2_to_cwbvh(&bvh2, 3, true, false)
+    bvh2_to_cwbvh(&bvh2, LEAF_SIZE, true, false)
 }
 
 impl Bvh {

@@ -94,8 +94,10 @@ impl WatertightRay {
     /// Translates, permutes and shears a vertex; z is scaled by `sz` (a vertex's t is its z).
     #[inline]
     fn transform(&self, p: Vec3) -> Vec3 {
-        let p = p - self.o;
-        let (x, y, z) = (p[self.kx], p[self.ky], p[self.kz]);
+        // A 4-array indexed with `k & 3` needs no bounds check (glam's `Index` is a match with
+        // a panic arm, ~1/3 of this test's instructions before).
+        let p = (p - self.o).extend(0.0).to_array();
+        let (x, y, z) = (p[self.kx & 3], p[self.ky & 3], p[self.kz & 3]);
         Vec3::new(x + self.sx * z, y + self.sy * z, z * self.sz)
     }
 }
