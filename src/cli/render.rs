@@ -42,6 +42,14 @@ struct RenderArgs {
     /// Also write an 8-bit sRGB PNG preview.
     #[arg(long)]
     preview: Option<PathBuf>,
+    /// Exposure of the preview in stops (the EXR stays absolute): the preview shows
+    /// RGB × 2^EV, so −6.6 maps 100 cd/m² white to 1.
+    #[arg(
+        long = "preview-exposure",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    preview_exposure: f32,
 }
 
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
@@ -105,7 +113,13 @@ fn run(args: &RenderArgs) -> Result<(), String> {
         &path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
     )?;
     if let Some(preview) = &args.preview {
-        png::write_preview(preview, out.width, out.height, &out.rgb, 0.0)?;
+        png::write_preview(
+            preview,
+            out.width,
+            out.height,
+            &out.rgb,
+            args.preview_exposure,
+        )?;
     }
     let rate = (out.width * out.height) as f64 * out.spp as f64 / out.wall_time_s.max(1e-9);
     eprintln!(
