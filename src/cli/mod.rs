@@ -2,6 +2,7 @@
 //! subcommand runs that instead (DESIGN.md §1). Errors are printed as one line
 //! `error: FILE: PRIM: reason` with exit code 1; clap's usage errors exit with 2.
 
+pub mod lights;
 pub mod render;
 
 use std::ffi::OsString;
@@ -11,7 +12,7 @@ use std::process::ExitCode;
 type Command = fn(Vec<OsString>) -> Result<(), String>;
 
 /// Subcommands by name (each lives in its own file of this module).
-const SUBCOMMANDS: &[(&str, Command)] = &[];
+const SUBCOMMANDS: &[(&str, Command)] = &[("lights", lights::main)];
 
 fn subcommand(name: &str) -> Option<Command> {
     SUBCOMMANDS

@@ -1,6 +1,7 @@
 //! UsdLux DiskLight: a one-sided disk emitting along its local −Z, sampled uniformly by area
 //! with the concentric map (PBR 4ed §6.2.3 / §A.5.1).
 
+use super::shaping::{self, Shaping};
 use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
 use crate::math::Frame;
 use crate::sampling::warp::concentric_disk;
@@ -16,6 +17,8 @@ pub struct DiskLight {
     pub frame: Frame,
     pub radius: f32,
     pub radiance: Spectrum,
+    /// UsdLux ShapingAPI, if any.
+    pub shaping: Option<Shaping>,
 }
 
 impl DiskLight {
@@ -40,7 +43,7 @@ impl DiskLight {
             return None;
         }
         Some(LightLiSample {
-            l: self.radiance.sample(lambda),
+            l: shaping::shape(&self.shaping, -wi, self.radiance.sample(lambda), lambda),
             wi,
             pdf_w,
             p_light: p,
@@ -58,7 +61,7 @@ impl DiskLight {
         if self.frame.n.dot(w) <= 0.0 {
             return SampledSpectrum::ZERO;
         }
-        self.radiance.sample(lambda)
+        shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
     }
 
     pub fn intersect(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<LightHit> {
@@ -81,7 +84,9 @@ impl DiskLight {
         })
     }
 
+    /// Φv = π A Lv, or the shaped integral.
     pub fn luminous_power(&self) -> f32 {
-        PI * self.area() * xyz::luminance(&self.radiance.to_dense()) as f32
+        let lv = xyz::luminance(&self.radiance.to_dense()) as f32;
+        shaping::luminous_power(&self.shaping, PI * self.area(), lv)
     }
 }

@@ -6,7 +6,7 @@
 
 use super::{LightLiSample, LightSampleContext};
 use crate::math::Frame;
-use crate::sampling::warp::{uniform_cone, uniform_cone_pdf};
+use crate::sampling::warp::uniform_cone;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -18,6 +18,10 @@ pub struct DistantLight {
     pub to_light: Vec3,
     /// cos θmax; 1 for a delta light.
     pub cos_theta_max: f32,
+    /// 1 − cos θmax = 2 sin²(θmax/2), computed from θmax: for the sun's 0.27° the f32
+    /// difference 1 − cos θmax would be off by up to 0.3%, and so would the pdf and the
+    /// illuminance.
+    pub one_minus_cos: f32,
     /// Radiance inside the cone, or irradiance (per unit area) for a delta light.
     pub radiance: Spectrum,
 }
@@ -47,7 +51,7 @@ impl DistantLight {
             });
         }
         let wi = Frame::from_normal(self.to_light).to_world(uniform_cone(u, self.cos_theta_max));
-        let pdf_w = uniform_cone_pdf(self.cos_theta_max);
+        let pdf_w = self.cone_pdf();
         Some(LightLiSample {
             l: self.radiance.sample(lambda),
             wi,
@@ -63,7 +67,17 @@ impl DistantLight {
         if self.is_delta() || wi.dot(self.to_light) < self.cos_theta_max {
             return 0.0;
         }
-        uniform_cone_pdf(self.cos_theta_max)
+        self.cone_pdf()
+    }
+
+    /// Uniform pdf over the cone, 1 / (2π (1 − cos θmax)).
+    fn cone_pdf(&self) -> f32 {
+        1.0 / (2.0 * PI * self.one_minus_cos)
+    }
+
+    /// sin²θmax, from the accurate 1 − cos θmax.
+    pub fn sin2_theta_max(&self) -> f32 {
+        self.one_minus_cos * (2.0 - self.one_minus_cos)
     }
 
     pub fn le(&self, d: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
@@ -79,8 +93,45 @@ impl DistantLight {
         let e = if self.is_delta() {
             lv
         } else {
-            lv * PI * (1.0 - self.cos_theta_max * self.cos_theta_max)
+            lv * PI * self.sin2_theta_max()
         };
         e * PI * scene_radius * scene_radius
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sun (0.53°) with normalize: L = E / (π sin²θmax), and light sampling gives back E.
+    #[test]
+    fn sun_disk_irradiance_is_exact() {
+        let theta = (0.5f32 * 0.53).to_radians();
+        let e_lux = 1000.0;
+        let l = e_lux / (PI * theta.sin().powi(2));
+        let sun = DistantLight {
+            prim_path: "/Sun".into(),
+            to_light: Vec3::Y,
+            cos_theta_max: theta.cos(),
+            one_minus_cos: 2.0 * (0.5 * theta).sin().powi(2),
+            radiance: Spectrum::Constant(l),
+        };
+        let ctx = LightSampleContext {
+            p: Vec3::ZERO,
+            n: Vec3::Y,
+        };
+        let lambda = SampledWavelengths::sample_visible(0.5);
+        let n = 32;
+        let mut e = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
+                let ls = sun.sample_li(&ctx, u, &lambda).unwrap();
+                e += (ls.l[0] * ls.wi.dot(ctx.n) / ls.pdf_w) as f64;
+            }
+        }
+        e /= (n * n) as f64;
+        assert!((e / e_lux as f64 - 1.0).abs() < 1e-4, "{e}");
+        assert!((sun.sin2_theta_max() / theta.sin().powi(2) - 1.0).abs() < 1e-5);
     }
 }

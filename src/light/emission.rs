@@ -6,7 +6,9 @@
 //!   Every shape is normalised so that white (or the named SPD) has a luminance of 1 cd/m².
 //! - The luminance is `intensity · 2^exposure` nits, divided by the world-space area when
 //!   `normalize` is on (OpenUSD UsdLux "Quantities and Units"); `spectral:luminousFlux` or
-//!   `spectral:luminousIntensity`, when given, set it from the light's geometry instead.
+//!   `spectral:luminousIntensity`, when given, set it from the light's geometry instead
+//!   (and from its ShapingAPI distribution: the scene builder integrates the shaping factor
+//!   over directions, `light::shaping`).
 
 use crate::scene::desc::{EmissionDesc, SpdDesc};
 use crate::spectral::uplift::RgbIlluminantSpectrum;
@@ -14,14 +16,18 @@ use crate::spectral::{blackbody, color, data, xyz, DenseSpectrum, Spectrum};
 use std::sync::Arc;
 
 /// How a light's luminance relates to its photometric output, for `spectral:luminousFlux`
-/// and `spectral:luminousIntensity`.
+/// and `spectral:luminousIntensity`. "Luminance" is the base luminance L₀ before shaping; a
+/// shaped light's factors include its shaping distribution s_v(ω):
+/// flux = L₀ ∫ s_v(ω) P(ω) dω, peak intensity = L₀ max_ω s_v(ω) P(ω), P the projected area.
 #[derive(Clone, Copy, Debug)]
 pub struct Photometric {
     /// World-space emitting area (m²) for `normalize`; None for lights without one.
     pub area: Option<f32>,
-    /// Luminous flux (lm) per cd/m² of luminance (π·A for a one-sided flat Lambertian emitter).
+    /// Luminous flux (lm) per cd/m² of luminance: π·A for a one-sided flat Lambertian emitter
+    /// (∫ cos θ dω = π), π·4πr² for a sphere, π·2πrℓ for a cylinder's side.
     pub flux_per_nit: Option<f32>,
-    /// Peak luminous intensity (cd) per cd/m² of luminance (A for a flat emitter).
+    /// Peak luminous intensity (cd) per cd/m² of luminance: the largest projected area
+    /// (A for a flat emitter, πr² for a sphere, 2rℓ for a cylinder seen broadside).
     pub intensity_per_nit: Option<f32>,
 }
 
@@ -63,8 +69,8 @@ fn luminance_nits(e: &EmissionDesc, g: Photometric) -> Result<f32, String> {
     Ok(l)
 }
 
-/// The spectral shape with a luminance of 1 cd/m² for white.
-fn unit_shape(e: &EmissionDesc) -> Result<Spectrum, String> {
+/// The spectral shape with a luminance of 1 cd/m² for white (or the named SPD).
+pub fn unit_shape(e: &EmissionDesc) -> Result<Spectrum, String> {
     match &e.spd {
         Some(spd) => normalized_spd(spd),
         None => {

@@ -2,22 +2,29 @@
 //! inputs exactly as DESIGN.md §2 says (see `emission.rs`). One kind per file, dispatched
 //! through the closed [`Light`] enum.
 //!
-//! Area-like lights (rect, disk, sphere) are analytic shapes: visible to camera and BSDF
-//! rays, opaque to shadow rays, and they do not reflect. Mesh lights are triangles of real
-//! geometry (in the BVH) that also carry their material.
+//! Area-like lights (rect, disk, sphere, cylinder) are analytic shapes: visible to camera and
+//! BSDF rays, opaque to shadow rays, and they do not reflect. Mesh lights are triangles of real
+//! geometry (in the BVH) that also carry their material. UsdLux ShapingAPI (`shaping.rs`, with
+//! IES profiles from `ies.rs`) scales the radiance of the analytic area lights per direction.
+//! `report.rs` computes the photometric report of `spectral-render lights`.
 
+pub mod cylinder;
 pub mod disk;
 pub mod distant;
 pub mod dome;
 pub mod emission;
+pub mod ies;
 pub mod rect;
+pub mod report;
 pub mod sampler;
+pub mod shaping;
 pub mod sphere;
 pub mod triangle;
 
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
 
+pub use cylinder::CylinderLight;
 pub use disk::DiskLight;
 pub use distant::DistantLight;
 pub use dome::DomeLight;
@@ -65,6 +72,7 @@ pub enum Light {
     Rect(RectLight),
     Disk(DiskLight),
     Sphere(SphereLight),
+    Cylinder(CylinderLight),
     Distant(DistantLight),
     Dome(DomeLight),
 }
@@ -83,6 +91,7 @@ impl Light {
             Light::Rect(l) => l.sample_li(ctx, u, lambda),
             Light::Disk(l) => l.sample_li(ctx, u, lambda),
             Light::Sphere(l) => l.sample_li(ctx, u, lambda),
+            Light::Cylinder(l) => l.sample_li(ctx, u, lambda),
             Light::Distant(l) => l.sample_li(ctx, u, lambda),
             Light::Dome(l) => l.sample_li(ctx, u, lambda),
         }
@@ -97,6 +106,7 @@ impl Light {
             Light::Rect(l) => l.pdf_li(ctx, wi, hit),
             Light::Disk(l) => l.pdf_li(ctx, wi, hit),
             Light::Sphere(l) => l.pdf_li(ctx, wi, hit),
+            Light::Cylinder(l) => l.pdf_li(ctx, wi, hit),
             Light::Distant(l) => l.pdf_li(wi),
             Light::Dome(l) => l.pdf_li(wi),
         }
@@ -109,7 +119,8 @@ impl Light {
             Light::Triangle(l) => l.l(hit.n, w, lambda),
             Light::Rect(l) => l.l(hit.n, w, lambda),
             Light::Disk(l) => l.l(hit.n, w, lambda),
-            Light::Sphere(l) => l.l(lambda),
+            Light::Sphere(l) => l.l(w, lambda),
+            Light::Cylinder(l) => l.l(hit.n, w, lambda),
             Light::Distant(_) | Light::Dome(_) => SampledSpectrum::ZERO,
         }
     }
@@ -131,6 +142,7 @@ impl Light {
             Light::Rect(l) => l.intersect(o, d, t_max),
             Light::Disk(l) => l.intersect(o, d, t_max),
             Light::Sphere(l) => l.intersect(o, d, t_max),
+            Light::Cylinder(l) => l.intersect(o, d, t_max),
             _ => None,
         }
     }
@@ -140,7 +152,10 @@ impl Light {
     }
 
     pub fn is_analytic_shape(&self) -> bool {
-        matches!(self, Light::Rect(_) | Light::Disk(_) | Light::Sphere(_))
+        matches!(
+            self,
+            Light::Rect(_) | Light::Disk(_) | Light::Sphere(_) | Light::Cylinder(_)
+        )
     }
 
     /// Luminous flux in lm, the light sampler's weight (PBR 4ed §12.6.1 uses power);
@@ -151,6 +166,7 @@ impl Light {
             Light::Rect(l) => l.luminous_power(),
             Light::Disk(l) => l.luminous_power(),
             Light::Sphere(l) => l.luminous_power(),
+            Light::Cylinder(l) => l.luminous_power(),
             Light::Distant(l) => l.luminous_power(scene_radius),
             Light::Dome(l) => l.luminous_power(scene_radius),
         }
@@ -163,6 +179,7 @@ impl Light {
             Light::Rect(l) => &l.prim_path,
             Light::Disk(l) => &l.prim_path,
             Light::Sphere(l) => &l.prim_path,
+            Light::Cylinder(l) => &l.prim_path,
             Light::Distant(l) => &l.prim_path,
             Light::Dome(l) => &l.prim_path,
         }

@@ -1,6 +1,7 @@
 //! UsdLux RectLight: a one-sided rectangle emitting along its local −Z, sampled uniformly by
 //! area (PBR 4ed §12.5 for area lights; the pdf conversion is eq. 4.9).
 
+use super::shaping::{self, Shaping};
 use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
@@ -17,6 +18,8 @@ pub struct RectLight {
     pub n: Vec3,
     pub area: f32,
     pub radiance: Spectrum,
+    /// UsdLux ShapingAPI, if any.
+    pub shaping: Option<Shaping>,
 }
 
 impl RectLight {
@@ -37,7 +40,13 @@ impl RectLight {
             n: n.normalize_or_zero(),
             area,
             radiance,
+            shaping: None,
         }
+    }
+
+    /// The light with ShapingAPI `shaping`.
+    pub fn with_shaping(self, shaping: Option<Shaping>) -> RectLight {
+        RectLight { shaping, ..self }
     }
 
     pub fn sample_li(
@@ -56,7 +65,7 @@ impl RectLight {
             return None;
         }
         Some(LightLiSample {
-            l: self.radiance.sample(lambda),
+            l: shaping::shape(&self.shaping, -wi, self.radiance.sample(lambda), lambda),
             wi,
             pdf_w,
             p_light: p,
@@ -77,7 +86,7 @@ impl RectLight {
         if self.n.dot(w) <= 0.0 {
             return SampledSpectrum::ZERO;
         }
-        self.radiance.sample(lambda)
+        shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
     }
 
     /// Ray–parallelogram test (plane hit, then the two edge coordinates in [0,1]).
@@ -111,7 +120,9 @@ impl RectLight {
         })
     }
 
+    /// Φv = π A Lv, or the shaped integral.
     pub fn luminous_power(&self) -> f32 {
-        PI * self.area * xyz::luminance(&self.radiance.to_dense()) as f32
+        let lv = xyz::luminance(&self.radiance.to_dense()) as f32;
+        shaping::luminous_power(&self.shaping, PI * self.area, lv)
     }
 }

@@ -1,9 +1,15 @@
 //! UsdLux SphereLight: a sphere emitting outwards. Seen from outside it is sampled uniformly
 //! in the cone it subtends (PBR 4ed §6.2.4); from inside, uniformly by area.
+//!
+//! The cone is handled through 1 − cos θmax = sin²θmax / (1 + cos θmax), sin²θmax = r²/d²,
+//! never as the f32 difference 1 − cos θmax: for a 2 mm sphere seen from 2 m that difference
+//! is 5e-7, below the f32 spacing near 1, and the pdf would be off by percents (PBR 4ed
+//! §6.2.4 handles small cones with a Taylor expansion for the same reason).
 
+use super::shaping::{self, Shaping};
 use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
 use crate::math::{safe_sqrt, Frame};
-use crate::sampling::warp::{uniform_cone, uniform_cone_pdf, uniform_sphere};
+use crate::sampling::warp::uniform_sphere;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -14,6 +20,8 @@ pub struct SphereLight {
     pub center: Vec3,
     pub radius: f32,
     pub radiance: Spectrum,
+    /// UsdLux ShapingAPI, if any (relative to the light's local −Z axis).
+    pub shaping: Option<Shaping>,
 }
 
 impl SphereLight {
@@ -21,14 +29,21 @@ impl SphereLight {
         4.0 * PI * self.radius * self.radius
     }
 
-    /// cos θmax of the cone subtended at `p`, or None when `p` is inside the sphere.
-    fn cos_theta_max(&self, p: Vec3) -> Option<f32> {
+    /// 1 − cos θmax of the cone subtended at `p`, or None when `p` is inside the sphere.
+    fn one_minus_cos_theta_max(&self, p: Vec3) -> Option<f32> {
         let dist2 = (p - self.center).length_squared();
         let r2 = self.radius * self.radius;
         if dist2 <= r2 * 1.0001 {
             return None;
         }
-        Some(safe_sqrt(1.0 - r2 / dist2))
+        let sin2 = r2 / dist2;
+        Some(sin2 / (1.0 + safe_sqrt(1.0 - sin2)))
+    }
+
+    /// Uniform pdf over a cone with 1 − cos θmax = `omc`.
+    #[inline]
+    fn cone_pdf(omc: f32) -> f32 {
+        1.0 / (2.0 * PI * omc)
     }
 
     pub fn sample_li(
@@ -37,11 +52,17 @@ impl SphereLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let Some(cos_max) = self.cos_theta_max(ctx.p) else {
+        let Some(omc) = self.one_minus_cos_theta_max(ctx.p) else {
             return self.sample_li_inside(ctx, u, lambda);
         };
+        // Uniform in the cone: 1 − cos θ = u·omc, sin²θ = (1 − cos θ)(1 + cos θ).
+        let one_minus_cos = u[0] * omc;
+        let cos_theta = 1.0 - one_minus_cos;
+        let sin_theta = safe_sqrt(one_minus_cos * (2.0 - one_minus_cos));
+        let (sin_phi, cos_phi) = (2.0 * PI * u[1]).sin_cos();
+        let local = Vec3::new(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta);
         let axis = (self.center - ctx.p).normalize();
-        let wi = Frame::from_normal(axis).to_world(uniform_cone(u, cos_max));
+        let wi = Frame::from_normal(axis).to_world(local).normalize();
         // The point where wi meets the sphere (nearest root); tangent rays graze it.
         let hit = self
             .intersect(ctx.p, wi, f32::INFINITY)
@@ -50,12 +71,12 @@ impl SphereLight {
                 n: (ctx.p - self.center).normalize(),
                 t: (self.center - ctx.p).length(),
             });
-        let pdf_w = uniform_cone_pdf(cos_max);
+        let pdf_w = Self::cone_pdf(omc);
         if !pdf_w.is_finite() {
             return None;
         }
         Some(LightLiSample {
-            l: self.radiance.sample(lambda),
+            l: shaping::shape(&self.shaping, -wi, self.radiance.sample(lambda), lambda),
             wi,
             pdf_w,
             p_light: hit.p,
@@ -79,7 +100,7 @@ impl SphereLight {
             return None;
         }
         Some(LightLiSample {
-            l: self.radiance.sample(lambda),
+            l: shaping::shape(&self.shaping, -wi, self.radiance.sample(lambda), lambda),
             wi,
             pdf_w,
             p_light: p,
@@ -90,14 +111,15 @@ impl SphereLight {
     }
 
     pub fn pdf_li(&self, ctx: &LightSampleContext, _wi: Vec3, hit: &LightHit) -> f32 {
-        match self.cos_theta_max(ctx.p) {
-            Some(cos_max) => uniform_cone_pdf(cos_max),
+        match self.one_minus_cos_theta_max(ctx.p) {
+            Some(omc) => Self::cone_pdf(omc),
             None => area_to_solid_angle(1.0 / self.area(), ctx.p, hit.p, hit.n),
         }
     }
 
-    pub fn l(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
-        self.radiance.sample(lambda)
+    /// Radiance towards `w` (pointing away from the sphere).
+    pub fn l(&self, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
+        shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
     }
 
     /// Nearest ray–sphere hit with t in (0, t_max), on the side facing the ray origin
@@ -131,8 +153,50 @@ impl SphereLight {
         })
     }
 
-    /// Φv = π · 4πr² · Lv.
+    /// Φv = π · 4πr² · Lv, or the shaped integral.
     pub fn luminous_power(&self) -> f32 {
-        PI * self.area() * xyz::luminance(&self.radiance.to_dense()) as f32
+        let lv = xyz::luminance(&self.radiance.to_dense()) as f32;
+        shaping::luminous_power(&self.shaping, PI * self.area(), lv)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// E at a point facing a sphere of radiance L: π L sin²α = π L r²/d², estimated with
+    /// stratified light samples (the integrand is constant over the cone, so the estimate is
+    /// exact up to the pdf's rounding).
+    #[test]
+    fn small_distant_sphere_gives_the_exact_irradiance() {
+        for (r, d) in [(0.002f32, 2.0f32), (0.5, 0.7), (1e-4, 30.0)] {
+            let s = SphereLight {
+                prim_path: "/S".into(),
+                center: Vec3::ZERO,
+                radius: r,
+                radiance: Spectrum::Constant(1.0),
+                shaping: None,
+            };
+            let ctx = LightSampleContext {
+                p: Vec3::new(0.0, 0.0, d),
+                n: Vec3::NEG_Z,
+            };
+            let lambda = SampledWavelengths::sample_visible(0.5);
+            let n = 64;
+            let mut e = 0.0f64;
+            for i in 0..n {
+                for j in 0..n {
+                    let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
+                    let ls = s.sample_li(&ctx, u, &lambda).unwrap();
+                    e += (ls.l[0] * ls.wi.dot(ctx.n) / ls.pdf_w) as f64;
+                }
+            }
+            e /= (n * n) as f64;
+            let expected = std::f64::consts::PI * (r as f64 / d as f64).powi(2);
+            assert!(
+                (e / expected - 1.0).abs() < 1e-4,
+                "r {r} d {d}: {e} vs {expected}"
+            );
+        }
     }
 }

@@ -7,6 +7,9 @@ use crate::accel::bvh::Bvh;
 use crate::imageio;
 use crate::light::dome::LatLong;
 use crate::light::emission::{self, Photometric};
+use crate::light::ies::IesProfile;
+use crate::light::report;
+use crate::light::shaping::Shaping;
 use crate::light::*;
 use crate::material::Material;
 use crate::math::Frame;
@@ -47,11 +50,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
     let bvh = Bvh::build(&triangles);
     let (center, radius) = bounding_sphere(&bvh);
     for l in &desc.lights {
-        if let Some(light) =
-            light(l, &mut warnings).map_err(|r| Error::prim(file, &l.prim_path, r))?
-        {
-            lights.push(light);
-        }
+        lights.push(light(l).map_err(|r| Error::prim(file, &l.prim_path, r))?);
     }
     let camera = camera(desc, resolution, center, radius)?;
     let light_sampler = LightSampler::new(&lights, radius);
@@ -218,7 +217,7 @@ fn mesh_emission(
         let geometry = Photometric {
             area: Some(area),
             flux_per_nit: Some(sides * PI * area),
-            intensity_per_nit: None,
+            intensity_per_nit: e.luminous_intensity.map(|_| mesh_peak_projected_area(m)),
         };
         return Ok(Some((emission::radiance(e, geometry)?, m.double_sided)));
     }
@@ -241,6 +240,20 @@ fn mesh_emission(
         }
         _ => Ok(None),
     }
+}
+
+/// The largest projected area of a mesh light (for `spectral:luminousIntensity`).
+fn mesh_peak_projected_area(m: &MeshDesc) -> f32 {
+    let patches: Vec<(Vec3, f32)> = m
+        .indices
+        .iter()
+        .map(|t| {
+            let p = t.map(|i| m.positions[i as usize]);
+            let c = (p[1] - p[0]).cross(p[2] - p[0]);
+            (c.normalize_or_zero(), 0.5 * c.length())
+        })
+        .collect();
+    report::peak_projected_area(&patches, m.double_sided)
 }
 
 fn flatten_triangles(meshes: &[Mesh]) -> (Vec<TriRef>, Vec<[Vec3; 3]>) {
@@ -277,73 +290,144 @@ fn uniform_scale(m: &Mat4) -> f32 {
     (s.x * s.y * s.z).cbrt()
 }
 
-fn light(l: &LightDesc, warnings: &mut Vec<String>) -> std::result::Result<Option<Light>, String> {
-    let m = &l.to_world;
-    let path = l.prim_path.clone();
-    let light = match &l.kind {
-        LightKind::Rect { width, height } => {
-            let corner = m.transform_point3(Vec3::new(-0.5 * width, -0.5 * height, 0.0));
-            let eu = m.transform_vector3(Vec3::new(*width, 0.0, 0.0));
-            let ev = m.transform_vector3(Vec3::new(0.0, *height, 0.0));
-            let area = eu.cross(ev).length();
-            let g = Photometric {
-                area: Some(area),
-                flux_per_nit: Some(PI * area),
-                intensity_per_nit: Some(area),
-            };
-            let n = -eu.cross(ev);
-            Light::Rect(RectLight::new(
-                path,
-                corner,
-                eu,
-                ev,
-                n,
-                emission::radiance(&l.emission, g)?,
-            ))
-        }
-        LightKind::Disk { radius } => {
-            let r = radius * uniform_scale(m);
-            let area = PI * r * r;
-            let g = Photometric {
-                area: Some(area),
-                flux_per_nit: Some(PI * area),
-                intensity_per_nit: Some(area),
-            };
-            let n = -m.transform_vector3(Vec3::Z).normalize();
-            Light::Disk(DiskLight {
-                prim_path: path,
-                center: m.transform_point3(Vec3::ZERO),
-                frame: Frame::from_normal(n),
-                radius: r,
-                radiance: emission::radiance(&l.emission, g)?,
-            })
-        }
-        LightKind::Sphere { radius } => {
-            let r = (radius * uniform_scale(m)).max(1e-6);
-            let area = 4.0 * PI * r * r;
-            let g = Photometric {
-                area: Some(area),
-                flux_per_nit: Some(PI * area),
-                intensity_per_nit: Some(PI * r * r),
-            };
-            Light::Sphere(SphereLight {
-                prim_path: path,
-                center: m.transform_point3(Vec3::ZERO),
-                radius: r,
-                radiance: emission::radiance(&l.emission, g)?,
-            })
-        }
+/// A UsdLux light in absolute units, with its shaping.
+fn light(l: &LightDesc) -> std::result::Result<Light, String> {
+    Ok(match &l.kind {
+        LightKind::Rect { width, height } => rect(l, *width, *height)?,
+        LightKind::Disk { radius } => disk(l, *radius)?,
+        LightKind::Sphere { radius } => sphere(l, *radius)?,
+        LightKind::Cylinder { radius, length } => cylinder(l, *radius, *length)?,
         LightKind::Distant { angle_deg } => distant(l, *angle_deg)?,
         LightKind::Dome { texture } => dome(l, texture.as_deref())?,
-        LightKind::Cylinder { .. } => {
-            warnings.push(format!(
-                "{}: CylinderLight not supported yet; ignored",
-                l.prim_path
-            ));
-            return Ok(None);
-        }
+    })
+}
+
+/// RectLight: the rectangle's corner and edges in world space, emitting along world −Z of
+/// the light (−(edge_u × edge_v)).
+fn rect(l: &LightDesc, width: f32, height: f32) -> std::result::Result<Light, String> {
+    let m = &l.to_world;
+    let corner = m.transform_point3(Vec3::new(-0.5 * width, -0.5 * height, 0.0));
+    let eu = m.transform_vector3(Vec3::new(width, 0.0, 0.0));
+    let ev = m.transform_vector3(Vec3::new(0.0, height, 0.0));
+    let area = eu.cross(ev).length();
+    let n = (-eu.cross(ev)).normalize_or_zero();
+    let flat = Photometric {
+        area: Some(area),
+        flux_per_nit: Some(PI * area),
+        intensity_per_nit: Some(area),
     };
-    Ok(Some(light))
+    let (shaping, g) = shaped(l, flat, |w| area * n.dot(w).max(0.0))?;
+    let radiance = emission::radiance(&l.emission, g)?;
+    Ok(Light::Rect(
+        RectLight::new(l.prim_path.clone(), corner, eu, ev, n, radiance).with_shaping(shaping),
+    ))
+}
+
+/// DiskLight: radius scaled by the transform's uniform scale, emitting along local −Z.
+fn disk(l: &LightDesc, radius: f32) -> std::result::Result<Light, String> {
+    let m = &l.to_world;
+    let r = radius * uniform_scale(m);
+    let area = PI * r * r;
+    let n = -m.transform_vector3(Vec3::Z).normalize();
+    let flat = Photometric {
+        area: Some(area),
+        flux_per_nit: Some(PI * area),
+        intensity_per_nit: Some(area),
+    };
+    let (shaping, g) = shaped(l, flat, |w| area * n.dot(w).max(0.0))?;
+    Ok(Light::Disk(DiskLight {
+        prim_path: l.prim_path.clone(),
+        center: m.transform_point3(Vec3::ZERO),
+        frame: Frame::from_normal(n),
+        radius: r,
+        radiance: emission::radiance(&l.emission, g)?,
+        shaping,
+    }))
+}
+
+/// SphereLight: Φ = π · 4πr² · L, projected area πr² in every direction.
+fn sphere(l: &LightDesc, radius: f32) -> std::result::Result<Light, String> {
+    let m = &l.to_world;
+    let r = (radius * uniform_scale(m)).max(1e-6);
+    let area = 4.0 * PI * r * r;
+    let round = Photometric {
+        area: Some(area),
+        flux_per_nit: Some(PI * area),
+        intensity_per_nit: Some(PI * r * r),
+    };
+    let (shaping, g) = shaped(l, round, |_| PI * r * r)?;
+    Ok(Light::Sphere(SphereLight {
+        prim_path: l.prim_path.clone(),
+        center: m.transform_point3(Vec3::ZERO),
+        radius: r,
+        radiance: emission::radiance(&l.emission, g)?,
+        shaping,
+    }))
+}
+
+/// CylinderLight along local X: the length scales with the X axis, the radius with the
+/// geometric mean of the Y and Z scales (exact for transforms that keep the cross-section
+/// round). Φ = π · 2πrℓ · L; projected area 2rℓ sin β at angle β from the axis.
+fn cylinder(l: &LightDesc, radius: f32, length: f32) -> std::result::Result<Light, String> {
+    let m = &l.to_world;
+    let axis = m.transform_vector3(Vec3::X);
+    let ry = m.transform_vector3(Vec3::Y).length();
+    let rz = m.transform_vector3(Vec3::Z).length();
+    let len = length * axis.length();
+    let r = (radius * (ry * rz).sqrt()).max(1e-6);
+    let light = CylinderLight {
+        prim_path: l.prim_path.clone(),
+        center: m.transform_point3(Vec3::ZERO),
+        frame: Frame::from_normal(axis.normalize()),
+        radius: r,
+        length: len,
+        radiance: Spectrum::Constant(0.0),
+        shaping: None,
+    };
+    let area = light.area();
+    let tube = Photometric {
+        area: Some(area),
+        flux_per_nit: Some(PI * area),
+        intensity_per_nit: Some(2.0 * r * len),
+    };
+    let (shaping, g) = shaped(l, tube, |w| light.projected_area(w))?;
+    Ok(Light::Cylinder(CylinderLight {
+        radiance: emission::radiance(&l.emission, g)?,
+        shaping,
+        ..light
+    }))
+}
+
+/// The light's ShapingAPI (if any) and its photometric factors with it: flux and peak
+/// intensity per nit integrated over directions with `projected_area(ω)` (m², world ω).
+fn shaped(
+    l: &LightDesc,
+    unshaped: Photometric,
+    projected_area: impl Fn(Vec3) -> f32,
+) -> std::result::Result<(Option<Shaping>, Photometric), String> {
+    let Some(desc) = &l.shaping else {
+        return Ok((None, unshaped));
+    };
+    let ies = match &desc.ies {
+        Some(i) => Some(Arc::new(IesProfile::read(&i.file)?)),
+        None => None,
+    };
+    let base = emission::unit_shape(&l.emission)?;
+    let mut shaping = Shaping::new(desc, &l.to_world, &base, ies)?;
+    shaping.photometry = shaping.integrate(projected_area);
+    let d = shaping.photometry;
+    let dark = |x: f32| x.is_nan() || x <= 0.0;
+    if (l.emission.luminous_flux.is_some() && dark(d.flux_per_nit))
+        || (l.emission.luminous_intensity.is_some() && dark(d.peak_per_nit))
+    {
+        return Err("the shaping emits no light, so it cannot reach the given spectral:luminousFlux / spectral:luminousIntensity".into());
+    }
+    let g = Photometric {
+        area: unshaped.area,
+        flux_per_nit: Some(d.flux_per_nit),
+        intensity_per_nit: Some(d.peak_per_nit),
+    };
+    Ok((Some(shaping), g))
 }
 
 /// DistantLight with the UsdLux sizeFactor: normalize divides by π sin²θmax (θmax ≤ π/2) or
@@ -369,6 +453,7 @@ fn distant(l: &LightDesc, angle_deg: f32) -> std::result::Result<Light, String> 
         prim_path: l.prim_path.clone(),
         to_light,
         cos_theta_max: theta_max.cos(),
+        one_minus_cos: 2.0 * (0.5 * theta_max).sin().powi(2),
         radiance,
     }))
 }

@@ -190,6 +190,47 @@ pub struct LightDesc {
     /// Light-to-world transform in metres, Y up. UsdLux lights emit along their local -Z.
     pub to_world: Mat4,
     pub emission: EmissionDesc,
+    /// UsdLux ShapingAPI inputs, when the light has any (rect, disk, sphere, cylinder).
+    pub shaping: Option<ShapingDesc>,
+}
+
+/// The UsdLux ShapingAPI inputs of a light (`inputs:shaping:*`), with the schema's meaning:
+/// all angles are measured from the light's emission axis, local −Z.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapingDesc {
+    /// `shaping:cone:angle` in degrees; 180 or more means no cone.
+    pub cone_angle_deg: f32,
+    /// `shaping:cone:softness`, clamped to [0, 1].
+    pub cone_softness: f32,
+    /// `shaping:focus`; 0 (or negative, which the schema ignores) means no focus.
+    pub focus: f32,
+    /// `shaping:focusTint`, linear Rec.709.
+    pub focus_tint: [f32; 3],
+    pub ies: Option<IesDesc>,
+}
+
+impl Default for ShapingDesc {
+    /// Shaping that changes nothing.
+    fn default() -> Self {
+        ShapingDesc {
+            cone_angle_deg: 180.0,
+            cone_softness: 0.0,
+            focus: 0.0,
+            focus_tint: [0.0; 3],
+            ies: None,
+        }
+    }
+}
+
+/// `shaping:ies:*`: an LM-63 profile that scales the emitted luminance per direction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IesDesc {
+    /// Absolute path of the `.ies` file.
+    pub file: PathBuf,
+    /// `shaping:ies:angleScale`.
+    pub angle_scale: f32,
+    /// `shaping:ies:normalize`.
+    pub normalize: bool,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -3,15 +3,20 @@
 /// Spectral radiance of a blackbody at `lambda_nm` and `kelvin`, in W·m⁻²·sr⁻¹·nm⁻¹:
 /// L = 2hc² / (λ⁵ (exp(hc/(λ k T)) − 1)) (Planck 1901; PBR 4ed §4.4.1 eq. 4.17).
 pub fn planck(lambda_nm: f32, kelvin: f32) -> f32 {
+    planck_f64(lambda_nm as f64, kelvin as f64) as f32
+}
+
+/// [`planck`] in double precision (for tables such as the Planckian locus).
+pub fn planck_f64(lambda_nm: f64, kelvin: f64) -> f64 {
     if kelvin <= 0.0 {
         return 0.0;
     }
     const H: f64 = 6.626_070_15e-34;
     const C: f64 = 299_792_458.0;
     const KB: f64 = 1.380_649e-23;
-    let l = lambda_nm as f64 * 1e-9;
-    let le = 2.0 * H * C * C / (l.powi(5) * ((H * C / (l * KB * kelvin as f64)).exp() - 1.0));
-    (le * 1e-9) as f32
+    let l = lambda_nm * 1e-9;
+    let le = 2.0 * H * C * C / (l.powi(5) * (H * C / (l * KB * kelvin)).exp_m1());
+    le * 1e-9
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@ pub mod blackbody;
 pub mod color;
 pub mod data;
 pub mod dense;
+pub mod photometry;
 pub mod sampled;
 pub mod sellmeier;
 pub mod spectrum;

@@ -1,5 +1,14 @@
 //! UsdLux: the concrete light prims, the shared `LightAPI` emission inputs (plus the `spectral:`
-//! light vocabulary) and warnings for the light APIs that are not implemented yet.
+//! light vocabulary), the `ShapingAPI` inputs, and warnings for the light APIs that are not
+//! implemented yet.
+//!
+//! ShapingAPI is read on rect, disk, sphere and cylinder lights when the prim applies
+//! `ShapingAPI` or authors any `shaping:*` input. Unauthored inputs take the schema fallbacks
+//! (focus 0, focusTint black, softness 0, angleScale 0, normalize off), except the cone angle:
+//! its fallback of 90° applies when `ShapingAPI` is applied, as Hydra delegates see it; when a
+//! prim only authors some `shaping:*` inputs without applying the API, the cone is off (180°),
+//! so that e.g. a focused SphereLight still emits behind itself as the `shaping:focus` doc
+//! describes. On distant, dome and mesh lights shaping is ignored with a warning.
 //!
 //! Every input is read as `inputs:<name>` and, when that is not authored, as the legacy
 //! un-prefixed `<name>` (pre-21.05 UsdLux); defaults are the UsdLux schema fallbacks.
@@ -9,7 +18,7 @@ use openusd::usd;
 
 use super::values::Ctx;
 use super::vocab;
-use crate::scene::desc::{EmissionDesc, LightDesc, LightKind, SpdDesc};
+use crate::scene::desc::{EmissionDesc, IesDesc, LightDesc, LightKind, ShapingDesc, SpdDesc};
 use crate::Result;
 
 /// The concrete UsdLux light types that become a [`LightDesc`].
@@ -31,6 +40,9 @@ const UNSUPPORTED_LIGHT_TYPES: [&str; 5] = [
     "LightFilter",
     "PluginLightFilter",
 ];
+
+/// The light types ShapingAPI applies to.
+const SHAPED_TYPES: [&str; 4] = ["RectLight", "DiskLight", "SphereLight", "CylinderLight"];
 
 /// The radius used for point-like spheres and line-like cylinders, in metres.
 const POINT_RADIUS_M: f64 = 1e-4;
@@ -82,11 +94,17 @@ pub(super) fn read_light(
     }
     warn_unsupported_inputs(ctx, prim)?;
     let emission = read_emission(ctx, prim, default_intensity(type_name))?;
+    let shaping = if SHAPED_TYPES.contains(&type_name) {
+        read_shaping(ctx, prim)?
+    } else {
+        None
+    };
     Ok(LightDesc {
         prim_path: prim.path().as_str().to_string(),
         kind,
         to_world: to_world.as_mat4(),
         emission,
+        shaping,
     })
 }
 
@@ -213,8 +231,8 @@ fn dome_pole(ctx: &Ctx, prim: &usd::Prim) -> Result<DMat4> {
     })
 }
 
-/// Warns about light inputs that are authored but not implemented (shaping, shadows,
-/// non-physical diffuse/specular multipliers, light filters).
+/// Warns about light inputs that are authored but not implemented (shaping on lights it does
+/// not apply to, shadows, non-physical diffuse/specular multipliers, light filters).
 pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result<()> {
     let names = ctx.property_names(prim)?;
     let has = |prefix: &str| {
@@ -222,10 +240,19 @@ pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result
             .iter()
             .any(|n| n.starts_with(prefix) || n.starts_with(&format!("inputs:{prefix}")))
     };
-    if has("shaping:") {
+    let type_name = ctx.type_name(prim)?;
+    if has("shaping:") && !SHAPED_TYPES.contains(&type_name.as_str()) {
         ctx.warn(
             prim,
-            "ShapingAPI (shaping:*) is not supported yet; the light emits unshaped",
+            format!(
+                "ShapingAPI (shaping:*) applies to rect, disk, sphere and cylinder lights; \
+                 ignored on this {}",
+                if type_name.is_empty() {
+                    "prim"
+                } else {
+                    &type_name
+                }
+            ),
         );
     }
     if has("shadow:") {
@@ -246,6 +273,71 @@ pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result
         ctx.warn(prim, "light filters are not supported; ignored");
     }
     Ok(())
+}
+
+/// The ShapingAPI inputs of a light, or None when it has none (module docs: the defaults).
+fn read_shaping(ctx: &mut Ctx, prim: &usd::Prim) -> Result<Option<ShapingDesc>> {
+    let applied = ctx.api_schemas(prim)?.iter().any(|a| a == "ShapingAPI");
+    let authored = ctx
+        .property_names(prim)?
+        .iter()
+        .any(|n| n.starts_with("shaping:") || n.starts_with("inputs:shaping:"));
+    if !applied && !authored {
+        return Ok(None);
+    }
+    let cone_default = if applied { 90.0 } else { 180.0 };
+    let cone_angle_deg = input_f32(ctx, prim, "shaping:cone:angle", cone_default)?;
+    if cone_angle_deg.is_nan() || cone_angle_deg < 0.0 {
+        return Err(ctx.err(
+            prim,
+            format!("inputs:shaping:cone:angle = {cone_angle_deg} must be a non-negative angle in degrees"),
+        ));
+    }
+    let softness = input_f32(ctx, prim, "shaping:cone:softness", 0.0)?;
+    let focus = input_f32(ctx, prim, "shaping:focus", 0.0)?;
+    if !(softness.is_finite() && focus.is_finite()) {
+        return Err(ctx.err(
+            prim,
+            "shaping:cone:softness and shaping:focus must be finite",
+        ));
+    }
+    let focus_tint = ctx.rgb_or(prim, &input_name(ctx, prim, "shaping:focusTint")?, [0.0; 3])?;
+    if focus_tint.iter().any(|&c| c.is_nan() || c < 0.0) {
+        return Err(ctx.err(prim, "inputs:shaping:focusTint has a negative component"));
+    }
+    if focus_tint.iter().any(|&c| c > 1.0) {
+        ctx.warn(
+            prim,
+            "inputs:shaping:focusTint above 1 is clamped to 1 (a tint only darkens)",
+        );
+    }
+    Ok(Some(ShapingDesc {
+        cone_angle_deg,
+        cone_softness: softness.clamp(0.0, 1.0),
+        focus: focus.max(0.0),
+        focus_tint: focus_tint.map(|c| c.min(1.0)),
+        ies: read_ies(ctx, prim)?,
+    }))
+}
+
+/// `shaping:ies:file` (resolved like any asset), `angleScale` and `normalize`.
+fn read_ies(ctx: &Ctx, prim: &usd::Prim) -> Result<Option<IesDesc>> {
+    let Some(file) = ctx.asset(prim, &input_name(ctx, prim, "shaping:ies:file")?)? else {
+        return Ok(None);
+    };
+    let angle_scale = input_f32(ctx, prim, "shaping:ies:angleScale", 0.0)?;
+    if !angle_scale.is_finite() {
+        return Err(ctx.err(prim, "inputs:shaping:ies:angleScale must be finite"));
+    }
+    Ok(Some(IesDesc {
+        file,
+        angle_scale,
+        normalize: ctx.bool_or(
+            prim,
+            &input_name(ctx, prim, "shaping:ies:normalize")?,
+            false,
+        )?,
+    }))
 }
 
 /// The LightAPI emission of a light or `MeshLightAPI` prim, with the `spectral:` vocabulary.

@@ -242,17 +242,63 @@ def SphereLight "Plain" {
 }
 
 #[test]
-fn shaping_and_other_unsupported_inputs_warn() {
-    let desc = load_body(
-        r#"def SphereLight "Spot" (prepend apiSchemas = ["ShapingAPI"]) {
+fn shaping_is_read_and_other_unsupported_inputs_warn() {
+    let dir = temp_dir();
+    std::fs::write(dir.join("beam.ies"), "TILT=NONE\n").expect("write ies");
+    let stage = dir.join("shaping.usda");
+    std::fs::write(
+        &stage,
+        format!(
+            r#"{METRES_Y_UP}def SphereLight "Spot" (prepend apiSchemas = ["ShapingAPI"]) {{
     float inputs:shaping:cone:angle = 30
+    float inputs:shaping:cone:softness = 1.5
+    float inputs:shaping:focus = 2
+    color3f inputs:shaping:focusTint = (0.5, 0.25, 1)
+    asset inputs:shaping:ies:file = @beam.ies@
+    float inputs:shaping:ies:angleScale = -0.5
+    bool inputs:shaping:ies:normalize = 1
     float inputs:diffuse = 0.5
-}
-"#,
-    );
-    assert_eq!(desc.lights.len(), 1);
-    assert_warned(&desc, &["/Spot", "shaping"]);
+}}
+def SphereLight "Applied" (prepend apiSchemas = ["ShapingAPI"]) {{
+}}
+def RectLight "Focused" {{
+    float inputs:shaping:focus = 4
+}}
+def RectLight "Plain" {{
+}}
+def DistantLight "Sun" {{
+    float inputs:shaping:cone:angle = 10
+}}
+"#
+        ),
+    )
+    .expect("write stage");
+    let desc = crate::scene::usd::load(&stage).expect("loads");
+    let spot = light(&desc, "/Spot").shaping.clone().expect("shaped");
+    assert_eq!(spot.cone_angle_deg, 30.0);
+    assert_eq!(spot.cone_softness, 1.0, "softness is clamped to [0, 1]");
+    assert_eq!(spot.focus, 2.0);
+    assert_eq!(spot.focus_tint, [0.5, 0.25, 1.0]);
+    let ies = spot.ies.expect("ies");
+    assert_eq!(ies.file, dir.join("beam.ies"));
+    assert_eq!((ies.angle_scale, ies.normalize), (-0.5, true));
+    // The schema fallback of the cone applies only with the API applied.
+    let applied = light(&desc, "/Applied").shaping.clone().expect("shaped");
+    assert_eq!(applied.cone_angle_deg, 90.0);
+    let focused = light(&desc, "/Focused").shaping.clone().expect("shaped");
+    assert_eq!((focused.cone_angle_deg, focused.focus), (180.0, 4.0));
+    assert!(light(&desc, "/Plain").shaping.is_none());
+    assert!(light(&desc, "/Sun").shaping.is_none());
+    assert_warned(&desc, &["/Sun", "ShapingAPI", "DistantLight"]);
     assert_warned(&desc, &["/Spot", "inputs:diffuse"]);
+    assert!(
+        !desc
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("/Spot") && w.contains("shaping")),
+        "{:?}",
+        desc.warnings
+    );
 }
 
 #[test]
