@@ -2,8 +2,8 @@
 //! in the cone it subtends (PBR 4ed §6.2.4); from inside, uniformly by area.
 
 use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
-use crate::math::{safe_sqrt, Frame};
-use crate::sampling::warp::{uniform_cone, uniform_cone_pdf, uniform_sphere};
+use crate::math::{safe_sqrt, Frame, INV_2PI};
+use crate::sampling::warp::{uniform_cone_gap, uniform_sphere};
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -21,14 +21,17 @@ impl SphereLight {
         4.0 * PI * self.radius * self.radius
     }
 
-    /// cos θmax of the cone subtended at `p`, or None when `p` is inside the sphere.
-    fn cos_theta_max(&self, p: Vec3) -> Option<f32> {
+    /// 1 − cos θmax of the cone subtended at `p`, or None when `p` is inside the sphere.
+    /// Computed as sin²θmax / (1 + cos θmax) so that it keeps its relative precision for a
+    /// small or distant sphere (1 − √(1 − r²/d²) loses it all when r ≪ d).
+    fn cone_gap(&self, p: Vec3) -> Option<f32> {
         let dist2 = (p - self.center).length_squared();
         let r2 = self.radius * self.radius;
         if dist2 <= r2 * 1.0001 {
             return None;
         }
-        Some(safe_sqrt(1.0 - r2 / dist2))
+        let sin2_max = r2 / dist2;
+        Some(sin2_max / (1.0 + safe_sqrt(1.0 - sin2_max)))
     }
 
     pub fn sample_li(
@@ -37,11 +40,11 @@ impl SphereLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let Some(cos_max) = self.cos_theta_max(ctx.p) else {
+        let Some(gap) = self.cone_gap(ctx.p) else {
             return self.sample_li_inside(ctx, u, lambda);
         };
         let axis = (self.center - ctx.p).normalize();
-        let wi = Frame::from_normal(axis).to_world(uniform_cone(u, cos_max));
+        let wi = Frame::from_normal(axis).to_world(uniform_cone_gap(u, gap));
         // The point where wi meets the sphere (nearest root); tangent rays graze it.
         let hit = self
             .intersect(ctx.p, wi, f32::INFINITY)
@@ -50,7 +53,7 @@ impl SphereLight {
                 n: (ctx.p - self.center).normalize(),
                 t: (self.center - ctx.p).length(),
             });
-        let pdf_w = uniform_cone_pdf(cos_max);
+        let pdf_w = INV_2PI / gap;
         if !pdf_w.is_finite() {
             return None;
         }
@@ -75,7 +78,9 @@ impl SphereLight {
         let p = self.center + self.radius * n;
         let wi = (p - ctx.p).normalize_or_zero();
         let pdf_w = area_to_solid_angle(1.0 / self.area(), ctx.p, p, n);
-        if wi == Vec3::ZERO || pdf_w == 0.0 || !pdf_w.is_finite() || n.dot(-wi) <= 0.0 {
+        // Seen from inside, every point faces away from the receiver, and `l` emits on both
+        // sides, so no facing test here (one would reject every sample).
+        if wi == Vec3::ZERO || pdf_w == 0.0 || !pdf_w.is_finite() {
             return None;
         }
         Some(LightLiSample {
@@ -90,8 +95,8 @@ impl SphereLight {
     }
 
     pub fn pdf_li(&self, ctx: &LightSampleContext, _wi: Vec3, hit: &LightHit) -> f32 {
-        match self.cos_theta_max(ctx.p) {
-            Some(cos_max) => uniform_cone_pdf(cos_max),
+        match self.cone_gap(ctx.p) {
+            Some(gap) => INV_2PI / gap,
             None => area_to_solid_angle(1.0 / self.area(), ctx.p, hit.p, hit.n),
         }
     }
