@@ -46,14 +46,11 @@ impl DomeLight {
             Some(map) => {
                 let (uv, pdf_uv) = map.distribution.sample(u);
                 let d_local = uv_to_dir(uv);
-                let sin_theta = (1.0 - d_local.y * d_local.y).max(0.0).sqrt();
+                let sin_theta = pole_distance(d_local);
                 if sin_theta == 0.0 || pdf_uv == 0.0 {
                     return None;
                 }
-                (
-                    self.world_to_local.transpose() * d_local,
-                    pdf_uv / (2.0 * PI * PI * sin_theta),
-                )
+                (self.to_world(d_local), pdf_uv / (2.0 * PI * PI * sin_theta))
             }
         };
         let l = self.le(wi, lambda);
@@ -72,8 +69,8 @@ impl DomeLight {
         match &self.map {
             None => UNIFORM_SPHERE_PDF,
             Some(map) => {
-                let d = self.world_to_local * wi;
-                let sin_theta = (1.0 - d.y * d.y).max(0.0).sqrt();
+                let d = self.to_local(wi);
+                let sin_theta = pole_distance(d);
                 if sin_theta == 0.0 {
                     return 0.0;
                 }
@@ -86,7 +83,7 @@ impl DomeLight {
         match &self.map {
             None => self.radiance.sample(lambda),
             Some(map) => {
-                let [u, v] = dir_to_uv(self.world_to_local * d);
+                let [u, v] = dir_to_uv(self.to_local(d));
                 let x = ((u * map.width as f32) as usize).min(map.width - 1);
                 let y = ((v * map.height as f32) as usize).min(map.height - 1);
                 let t = &map.texels[y * map.width + x];
@@ -94,6 +91,20 @@ impl DomeLight {
                     * self.radiance.sample(lambda)
             }
         }
+    }
+
+    /// World direction → unit dome-local direction. `world_to_local` is a rotation possibly
+    /// times a uniform scale (`scene::build` inverts the light's to_world, which carries the
+    /// stage's metersPerUnit), so directions are renormalised after the transform.
+    #[inline]
+    fn to_local(&self, w: Vec3) -> Vec3 {
+        (self.world_to_local * w).normalize_or_zero()
+    }
+
+    /// Inverse of [`Self::to_local`] (the transpose is the inverse up to the uniform scale).
+    #[inline]
+    fn to_world(&self, d_local: Vec3) -> Vec3 {
+        (self.world_to_local.transpose() * d_local).normalize_or_zero()
     }
 
     /// Φ ≈ π r² ∫ L dω (PBR 4ed §12.5.1's bound for infinite lights).
@@ -130,11 +141,20 @@ pub fn uv_to_dir(uv: [f32; 2]) -> Vec3 {
     Vec3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos())
 }
 
-/// Dome-local unit direction → lat-long (u, v).
+/// sin θ from the +Y pole of a unit dome-local direction, as the length of its horizontal
+/// part: √(1 − y²) would cancel catastrophically near the poles, where the lat-long pdf
+/// pdf_uv / (2π² sin θ) is largest.
+#[inline]
+fn pole_distance(d: Vec3) -> f32 {
+    (d.x * d.x + d.z * d.z).sqrt()
+}
+
+/// Dome-local direction → lat-long (u, v); the latitude comes from atan2, which is accurate
+/// near the poles (unlike asin of y) and indifferent to the length of `d`.
 #[inline]
 pub fn dir_to_uv(d: Vec3) -> [f32; 2] {
     let lon = d.x.atan2(d.z);
-    let lat = d.y.clamp(-1.0, 1.0).asin();
+    let lat = d.y.atan2(pole_distance(d));
     let u = (1.0 - lon * INV_PI) * 0.5;
     let v = 0.5 - lat * INV_PI;
     [

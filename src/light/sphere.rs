@@ -8,8 +8,8 @@
 
 use super::shaping::{self, Shaping};
 use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
-use crate::math::{safe_sqrt, Frame};
-use crate::sampling::warp::uniform_sphere;
+use crate::math::{safe_sqrt, Frame, INV_2PI};
+use crate::sampling::warp::{uniform_cone_gap, uniform_sphere};
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -30,20 +30,16 @@ impl SphereLight {
     }
 
     /// 1 − cos θmax of the cone subtended at `p`, or None when `p` is inside the sphere.
-    fn one_minus_cos_theta_max(&self, p: Vec3) -> Option<f32> {
+    /// Computed as sin²θmax / (1 + cos θmax) so that it keeps its relative precision for a
+    /// small or distant sphere (1 − √(1 − r²/d²) loses it all when r ≪ d).
+    fn cone_gap(&self, p: Vec3) -> Option<f32> {
         let dist2 = (p - self.center).length_squared();
         let r2 = self.radius * self.radius;
         if dist2 <= r2 * 1.0001 {
             return None;
         }
-        let sin2 = r2 / dist2;
-        Some(sin2 / (1.0 + safe_sqrt(1.0 - sin2)))
-    }
-
-    /// Uniform pdf over a cone with 1 − cos θmax = `omc`.
-    #[inline]
-    fn cone_pdf(omc: f32) -> f32 {
-        1.0 / (2.0 * PI * omc)
+        let sin2_max = r2 / dist2;
+        Some(sin2_max / (1.0 + safe_sqrt(1.0 - sin2_max)))
     }
 
     pub fn sample_li(
@@ -52,17 +48,11 @@ impl SphereLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let Some(omc) = self.one_minus_cos_theta_max(ctx.p) else {
+        let Some(gap) = self.cone_gap(ctx.p) else {
             return self.sample_li_inside(ctx, u, lambda);
         };
-        // Uniform in the cone: 1 − cos θ = u·omc, sin²θ = (1 − cos θ)(1 + cos θ).
-        let one_minus_cos = u[0] * omc;
-        let cos_theta = 1.0 - one_minus_cos;
-        let sin_theta = safe_sqrt(one_minus_cos * (2.0 - one_minus_cos));
-        let (sin_phi, cos_phi) = (2.0 * PI * u[1]).sin_cos();
-        let local = Vec3::new(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta);
         let axis = (self.center - ctx.p).normalize();
-        let wi = Frame::from_normal(axis).to_world(local).normalize();
+        let wi = Frame::from_normal(axis).to_world(uniform_cone_gap(u, gap));
         // The point where wi meets the sphere (nearest root); tangent rays graze it.
         let hit = self
             .intersect(ctx.p, wi, f32::INFINITY)
@@ -71,7 +61,7 @@ impl SphereLight {
                 n: (ctx.p - self.center).normalize(),
                 t: (self.center - ctx.p).length(),
             });
-        let pdf_w = Self::cone_pdf(omc);
+        let pdf_w = INV_2PI / gap;
         if !pdf_w.is_finite() {
             return None;
         }
@@ -96,7 +86,9 @@ impl SphereLight {
         let p = self.center + self.radius * n;
         let wi = (p - ctx.p).normalize_or_zero();
         let pdf_w = area_to_solid_angle(1.0 / self.area(), ctx.p, p, n);
-        if wi == Vec3::ZERO || pdf_w == 0.0 || !pdf_w.is_finite() || n.dot(-wi) <= 0.0 {
+        // Seen from inside, every point faces away from the receiver, and `l` emits on both
+        // sides, so no facing test here (one would reject every sample).
+        if wi == Vec3::ZERO || pdf_w == 0.0 || !pdf_w.is_finite() {
             return None;
         }
         Some(LightLiSample {
@@ -111,8 +103,8 @@ impl SphereLight {
     }
 
     pub fn pdf_li(&self, ctx: &LightSampleContext, _wi: Vec3, hit: &LightHit) -> f32 {
-        match self.one_minus_cos_theta_max(ctx.p) {
-            Some(omc) => Self::cone_pdf(omc),
+        match self.cone_gap(ctx.p) {
+            Some(gap) => INV_2PI / gap,
             None => area_to_solid_angle(1.0 / self.area(), ctx.p, hit.p, hit.n),
         }
     }

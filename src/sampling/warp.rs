@@ -46,10 +46,24 @@ pub const UNIFORM_SPHERE_PDF: f32 = INV_4PI;
 /// Uniform direction in the cone of half-angle θmax around +Z (PBR 4ed §A.5.4).
 #[inline]
 pub fn uniform_cone(u: [f32; 2], cos_theta_max: f32) -> Vec3 {
-    let cos_theta = (1.0 - u[0]) + u[0] * cos_theta_max;
-    let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
+    // 1 − cos θmax is exact in f32 for cos θmax ≥ 1/2 (Sterbenz).
+    uniform_cone_gap(u, 1.0 - cos_theta_max)
+}
+
+/// [`uniform_cone`] given the gap 1 − cos θmax instead of cos θmax: 1 − cos θ = u₀ (1 − cos θmax)
+/// and sin θ = √((1 − cos θ)(1 + cos θ)) never subtract numbers near 1, so tiny cones (the sun,
+/// a far sphere light) are sampled smoothly; `(1 − u₀) + u₀ cos θmax` would round cos θ to a
+/// few hundred rings and pile samples on the axis.
+#[inline]
+pub fn uniform_cone_gap(u: [f32; 2], one_minus_cos_max: f32) -> Vec3 {
+    let one_minus_cos = u[0] * one_minus_cos_max;
+    let sin_theta = safe_sqrt(one_minus_cos * (2.0 - one_minus_cos));
     let phi = u[1] * 2.0 * PI;
-    Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
+    Vec3::new(
+        sin_theta * phi.cos(),
+        sin_theta * phi.sin(),
+        1.0 - one_minus_cos,
+    )
 }
 
 /// pdf of [`uniform_cone`]: 1 / (2π (1 − cos θmax)).
