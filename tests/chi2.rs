@@ -267,6 +267,7 @@ fn disk_lights() -> Vec<LightCase> {
         frame: Frame::from_normal(Vec3::new(0.2, -1.0, 0.3).normalize()),
         radius: 0.4,
         radiance: Spectrum::Constant(1.0),
+        shaping: None,
     };
     let (c, n) = (disk.center, disk.frame.n);
     flat_light_cases("disk", &Light::Disk(disk), c, n, 0.8)
@@ -278,6 +279,7 @@ fn sphere_lights() -> Vec<LightCase> {
         center: Vec3::new(0.0, 1.0, 0.0),
         radius: 0.5,
         radiance: Spectrum::Constant(1.0),
+        shaping: None,
     };
     let c = sphere.center;
     let dir = Vec3::new(0.3, -0.8, 0.5).normalize();
@@ -310,6 +312,7 @@ fn distant_lights() -> Vec<LightCase> {
                 prim_path: "/distant".into(),
                 to_light,
                 cos_theta_max: half_deg.to_radians().cos(),
+                one_minus_cos: 2.0 * (0.5 * half_deg.to_radians()).sin().powi(2),
                 radiance: Spectrum::Constant(1.0),
             }),
             receiver: Vec3::ZERO,

@@ -65,7 +65,8 @@ impl DistantLight {
                 infinite: true,
             });
         }
-        let wi = Frame::from_normal(self.to_light).to_world(uniform_cone_gap(u, self.one_minus_cos));
+        let wi =
+            Frame::from_normal(self.to_light).to_world(uniform_cone_gap(u, self.one_minus_cos));
         let pdf_w = self.cone_pdf();
         Some(LightLiSample {
             l: self.radiance.sample(lambda),
