@@ -2,7 +2,7 @@
 //! with the concentric map (PBR 4ed §6.2.3 / §A.5.1).
 
 use super::shaping::{self, Shaping};
-use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
+use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
 use crate::math::Frame;
 use crate::sampling::warp::concentric_disk;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
@@ -34,22 +34,8 @@ impl DiskLight {
     ) -> Option<LightLiSample> {
         let d = concentric_disk(u) * self.radius;
         let p = self.center + d.x * self.frame.s + d.y * self.frame.t;
-        let wi = (p - ctx.p).normalize_or_zero();
-        if wi == Vec3::ZERO || self.frame.n.dot(-wi) <= 0.0 || self.radius == 0.0 {
-            return None;
-        }
-        let pdf_w = area_to_solid_angle(1.0 / self.area(), ctx.p, p, self.frame.n);
-        if pdf_w == 0.0 || !pdf_w.is_finite() {
-            return None;
-        }
-        Some(LightLiSample {
-            l: shaping::shape(&self.shaping, -wi, self.radiance.sample(lambda), lambda),
-            wi,
-            pdf_w,
-            p_light: p,
-            n_light: self.frame.n,
-            delta: false,
-            infinite: false,
+        sample_by_area(ctx, p, self.frame.n, self.area(), false, |w| {
+            shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
         })
     }
 

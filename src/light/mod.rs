@@ -199,6 +199,36 @@ pub fn area_to_solid_angle(pdf_a: f32, receiver: Vec3, p_light: Vec3, n_light: V
     pdf_a * dist2 / cos_l
 }
 
+/// The common tail of sampling a point `p` (normal `n`) of an emitter of area `area` uniformly
+/// by area: the direction from the receiver, the facing test, and the area pdf converted to
+/// solid angle (eq. 4.9). `radiance(w)` is the radiance leaving `p` towards `w`.
+pub fn sample_by_area(
+    ctx: &LightSampleContext,
+    p: Vec3,
+    n: Vec3,
+    area: f32,
+    two_sided: bool,
+    radiance: impl FnOnce(Vec3) -> SampledSpectrum,
+) -> Option<LightLiSample> {
+    let wi = (p - ctx.p).normalize_or_zero();
+    if wi == Vec3::ZERO || area <= 0.0 || !emits_towards(n, -wi, two_sided) {
+        return None;
+    }
+    let pdf_w = area_to_solid_angle(1.0 / area, ctx.p, p, n);
+    if pdf_w == 0.0 || !pdf_w.is_finite() {
+        return None;
+    }
+    Some(LightLiSample {
+        l: radiance(-wi),
+        wi,
+        pdf_w,
+        p_light: p,
+        n_light: n,
+        delta: false,
+        infinite: false,
+    })
+}
+
 /// One-sided (or two-sided) emission test for a flat emitter with normal `n`.
 #[inline]
 pub fn emits_towards(n: Vec3, w: Vec3, two_sided: bool) -> bool {

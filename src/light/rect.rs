@@ -2,7 +2,7 @@
 //! area (PBR 4ed §12.5 for area lights; the pdf conversion is eq. 4.9).
 
 use super::shaping::{self, Shaping};
-use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
+use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -56,22 +56,8 @@ impl RectLight {
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
         let p = self.corner + u[0] * self.edge_u + u[1] * self.edge_v;
-        let wi = (p - ctx.p).normalize_or_zero();
-        if wi == Vec3::ZERO || self.n.dot(-wi) <= 0.0 || self.area == 0.0 {
-            return None;
-        }
-        let pdf_w = area_to_solid_angle(1.0 / self.area, ctx.p, p, self.n);
-        if pdf_w == 0.0 || !pdf_w.is_finite() {
-            return None;
-        }
-        Some(LightLiSample {
-            l: shaping::shape(&self.shaping, -wi, self.radiance.sample(lambda), lambda),
-            wi,
-            pdf_w,
-            p_light: p,
-            n_light: self.n,
-            delta: false,
-            infinite: false,
+        sample_by_area(ctx, p, self.n, self.area, false, |w| {
+            shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
         })
     }
 

@@ -1,7 +1,9 @@
 //! One emissive triangle of a mesh light (MeshLightAPI or an emissive material), sampled
 //! uniformly by area (PBR 4ed §6.5.4).
 
-use super::{area_to_solid_angle, emits_towards, LightHit, LightLiSample, LightSampleContext};
+use super::{
+    area_to_solid_angle, emits_towards, sample_by_area, LightHit, LightLiSample, LightSampleContext,
+};
 use crate::sampling::warp::uniform_triangle;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
@@ -50,23 +52,8 @@ impl TriangleLight {
         }
         let b = uniform_triangle(u);
         let p = b[0] * self.p[0] + b[1] * self.p[1] + b[2] * self.p[2];
-        let wi = (p - ctx.p).normalize_or_zero();
-        if wi == Vec3::ZERO || !emits_towards(self.n, -wi, self.two_sided) {
-            return None;
-        }
-        let pdf_w = area_to_solid_angle(1.0 / self.area, ctx.p, p, self.n);
-        if pdf_w == 0.0 || !pdf_w.is_finite() {
-            return None;
-        }
-        let l = self.radiance.sample(lambda);
-        Some(LightLiSample {
-            l,
-            wi,
-            pdf_w,
-            p_light: p,
-            n_light: self.n,
-            delta: false,
-            infinite: false,
+        sample_by_area(ctx, p, self.n, self.area, self.two_sided, |_| {
+            self.radiance.sample(lambda)
         })
     }
 
