@@ -1,8 +1,10 @@
 //! The command line: `spectral-render STAGE [options]` renders; a first argument naming a
 //! subcommand runs that instead (DESIGN.md §1). Errors are printed as one line
-//! `error: FILE: PRIM: reason` with exit code 1; clap's usage errors exit with 2.
+//! `error: FILE: PRIM: reason` with exit code 1; clap's usage errors exit with 2 (`meter`
+//! reports them as one line with exit code 1).
 
 pub mod lights;
+pub mod meter;
 pub mod render;
 
 use std::ffi::OsString;
@@ -12,7 +14,7 @@ use std::process::ExitCode;
 type Command = fn(Vec<OsString>) -> Result<(), String>;
 
 /// Subcommands by name (each lives in its own file of this module).
-const SUBCOMMANDS: &[(&str, Command)] = &[("lights", lights::main)];
+const SUBCOMMANDS: &[(&str, Command)] = &[("lights", lights::main), ("meter", meter::main)];
 
 fn subcommand(name: &str) -> Option<Command> {
     SUBCOMMANDS

@@ -1,5 +1,6 @@
 //! Light-transport integrators. All are spectral with the same hero-wavelength machinery.
 
+pub mod meter;
 pub mod path;
 
 pub use path::PathIntegrator;

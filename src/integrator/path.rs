@@ -8,7 +8,7 @@
 use crate::bxdf::{Bsdf, TransportMode};
 use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
 use crate::geometry::Ray;
-use crate::light::{LightHit, LightSampleContext};
+use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
@@ -21,10 +21,11 @@ pub struct PathIntegrator {
 
 /// What the previous vertex knew, for MIS when a BSDF-sampled ray finds an emitter.
 #[derive(Clone, Copy)]
-struct Previous {
-    ctx: LightSampleContext,
-    pdf_bsdf_w: f32,
-    specular: bool,
+pub(crate) struct Previous {
+    pub(crate) ctx: LightSampleContext,
+    /// Solid-angle pdf with which the vertex sampled the ray's direction.
+    pub(crate) pdf_bsdf_w: f32,
+    pub(crate) specular: bool,
 }
 
 impl PathIntegrator {
@@ -33,14 +34,28 @@ impl PathIntegrator {
     pub fn li(
         &self,
         scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        lambda: &SampledWavelengths,
+        sampler: &mut Sampler,
+    ) -> SampledSpectrum {
+        self.li_from(scene, ray, t_max, None, lambda, sampler)
+    }
+
+    /// [`li`](Self::li) for a ray whose direction was sampled at vertex `prev` (None: a camera
+    /// ray), so that emitters it finds are MIS-weighted against light sampling at that vertex.
+    /// The light meters (`integrator::meter`) start paths here from their sensor point.
+    pub(crate) fn li_from(
+        &self,
+        scene: &Scene,
         mut ray: Ray,
         mut t_max: f32,
+        mut prev: Option<Previous>,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
     ) -> SampledSpectrum {
         let mut l = SampledSpectrum::ZERO;
         let mut beta = SampledSpectrum::ONE;
-        let mut prev: Option<Previous> = None;
         let mut depth = 0;
         loop {
             let Some(hit) = scene.intersect(&ray, t_max) else {
@@ -171,14 +186,7 @@ impl PathIntegrator {
         if f.is_black() {
             return SampledSpectrum::ZERO;
         }
-        let (shadow, t) = if ls.infinite {
-            (spawn_ray(si.p, si.p_error, si.ng, ls.wi), f32::INFINITY)
-        } else if matches!(lgt, crate::light::Light::Triangle(_)) {
-            spawn_ray_to(si.p, si.p_error, si.ng, ls.p_light, Vec3::ZERO, ls.n_light)
-        } else {
-            spawn_ray_to_point(si.p, si.p_error, si.ng, ls.p_light)
-        };
-        if scene.occluded(&shadow, t, Some(light as u32)) {
+        if !unoccluded(scene, si.p, si.p_error, si.ng, light, &ls) {
             return SampledSpectrum::ZERO;
         }
         let pdf_light = pmf * ls.pdf_w;
@@ -188,6 +196,26 @@ impl PathIntegrator {
         let w = power_heuristic(pdf_light, bsdf.pdf(wo, ls.wi, TransportMode::Radiance));
         f * ls.l * (w / pdf_light)
     }
+}
+
+/// True when nothing blocks the segment from the point `p` (error bound `p_error`, geometric
+/// normal `n`) to the sample `ls` on light `light` (PBR 4ed §6.8.6 for the spawned rays).
+pub(crate) fn unoccluded(
+    scene: &Scene,
+    p: Vec3,
+    p_error: Vec3,
+    n: Vec3,
+    light: usize,
+    ls: &LightLiSample,
+) -> bool {
+    let (shadow, t) = if ls.infinite {
+        (spawn_ray(p, p_error, n, ls.wi), f32::INFINITY)
+    } else if matches!(scene.lights[light], Light::Triangle(_)) {
+        spawn_ray_to(p, p_error, n, ls.p_light, Vec3::ZERO, ls.n_light)
+    } else {
+        spawn_ray_to_point(p, p_error, n, ls.p_light)
+    };
+    !scene.occluded(&shadow, t, Some(light as u32))
 }
 
 /// Russian roulette after the second bounce when the throughput has dropped below 1

@@ -78,6 +78,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         center,
         radius,
         summary,
+        stage_to_world: desc.stage_to_world,
     })
 }
 

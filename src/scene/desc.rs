@@ -5,7 +5,7 @@
 //! side their geometric normal points to; every entity carries its USD prim path so that
 //! errors and reports can name it.
 
-use glam::{Mat4, Vec2, Vec3};
+use glam::{DMat4, Mat4, Vec2, Vec3};
 use std::path::PathBuf;
 
 /// The whole stage as plain data.
@@ -20,6 +20,9 @@ pub struct SceneDescription {
     pub render: RenderSettingsDesc,
     /// Unsupported standard prims and attributes that were skipped, one line each.
     pub warnings: Vec<String>,
+    /// Stage space (stage units, stage up axis) to world space (metres, Y up), for converting
+    /// points and directions given in stage coordinates (light-meter positions and normals).
+    pub stage_to_world: DMat4,
 }
 
 /// A triangulated mesh in world space (metres, Y up).

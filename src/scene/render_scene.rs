@@ -7,7 +7,7 @@ use crate::geometry::Ray;
 use crate::light::{Light, LightHit, LightSampler};
 use crate::material::Material;
 use crate::sensor::Camera;
-use glam::{Vec2, Vec3};
+use glam::{DMat4, Vec2, Vec3};
 use std::path::PathBuf;
 
 /// A triangle mesh in world space.
@@ -85,6 +85,8 @@ pub struct Scene {
     pub center: Vec3,
     pub radius: f32,
     pub summary: Summary,
+    /// Stage space to world space (see `SceneDescription::stage_to_world`).
+    pub stage_to_world: DMat4,
 }
 
 impl Scene {

@@ -1,7 +1,8 @@
-//! Sensors: the camera and the film it exposes (light meters come in a later issue).
+//! Sensors: the camera and the film it exposes, and the light meters (no film).
 
 pub mod camera;
 pub mod film;
+pub mod meter;
 
 pub use camera::Camera;
 pub use film::Film;

@@ -155,6 +155,7 @@ impl<'s> Reader<'s> {
         self.desc.render =
             camera::read_render_settings(&mut self.ctx, &self.render_settings, &self.desc.cameras)?;
         self.desc.warnings = std::mem::take(&mut self.ctx.warnings);
+        self.desc.stage_to_world = self.ctx.stage_to_world;
         Ok(self.desc)
     }
 

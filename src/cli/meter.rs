@@ -1,0 +1,476 @@
+//! `spectral-render meter STAGE ...`: light-meter readings with 95% confidence intervals.
+//!
+//! ```text
+//! spectral-render meter stage.usda --at X,Y,Z --normal NX,NY,NZ [--at … --normal …]
+//!                                  [--spp N | --rel-error 0.005] [--seed N] [--json]
+//! spectral-render meter stage.usda --luminance --at X,Y,Z --dir DX,DY,DZ [--json]
+//! spectral-render meter stage.usda --grid X,Y,Z --u UX,UY,UZ --v VX,VY,VZ --n NU,NV
+//!                                  --normal NX,NY,NZ [-o map]
+//! ```
+//!
+//! Points, normals and vectors are in the stage's coordinates and units and are converted to
+//! world space like geometry (metersPerUnit, upAxis). `--json` prints
+//! `{"meters":[{"kind":"illuminance","at":[…],"normal":[…],"value":E,"unit":"lx","ci95":h,
+//! "samples":n}, …]}` (luminance entries have `"dir"` and `"unit":"cd/m2"`; under
+//! `--rel-error` each entry also has `"converged"`). Option errors, clap's included, are one
+//! line and exit 1.
+
+use crate::output::map::{num, vec3, IlluminanceMap};
+use crate::scene;
+use crate::sensor::meter::{
+    self, measure, Cap, Meter, MeterKind, MeterOptions, MeterRun, Reading, Stop,
+};
+use clap::Parser;
+use glam::{DMat4, DVec3};
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+
+/// Measure illuminance (lx) or luminance (cd/m²) in a USD stage, with 95% confidence
+/// intervals, or write an illuminance map.
+#[derive(Parser, Debug)]
+#[command(name = "spectral-render meter", bin_name = "spectral-render meter")]
+struct MeterArgs {
+    /// The stage (.usda, .usdc or .usdz).
+    scene: PathBuf,
+    /// Meter position in stage coordinates (repeat for several meters).
+    #[arg(long = "at", value_name = "X,Y,Z", allow_hyphen_values = true)]
+    at: Vec<String>,
+    /// Normal of the receiving surface, one per --at (or one for --grid).
+    #[arg(long, value_name = "NX,NY,NZ", allow_hyphen_values = true)]
+    normal: Vec<String>,
+    /// Measure luminance (cd/m²) looking along --dir instead of illuminance.
+    #[arg(long)]
+    luminance: bool,
+    /// Viewing direction of a luminance meter, one per --at.
+    #[arg(long, value_name = "DX,DY,DZ", allow_hyphen_values = true)]
+    dir: Vec<String>,
+    /// Origin (a corner) of an illuminance grid.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    grid: Option<String>,
+    /// First edge vector of the grid.
+    #[arg(long = "u", value_name = "UX,UY,UZ", allow_hyphen_values = true)]
+    u: Option<String>,
+    /// Second edge vector of the grid.
+    #[arg(long = "v", value_name = "VX,VY,VZ", allow_hyphen_values = true)]
+    v: Option<String>,
+    /// Cells along u and v.
+    #[arg(long = "n", value_name = "NU,NV")]
+    n: Option<String>,
+    /// Base name of the grid outputs: BASE.csv, BASE.json, BASE.png (default: map).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Samples per reading (default 4096).
+    #[arg(long)]
+    spp: Option<u64>,
+    /// Sample until every reading's ci95/value is below this (or a cap is hit).
+    #[arg(long = "rel-error", allow_negative_numbers = true)]
+    rel_error: Option<f64>,
+    /// Cap on the samples of one reading under --rel-error (default 2^24).
+    #[arg(long = "max-spp")]
+    max_spp: Option<u64>,
+    /// Wall-clock cap in seconds.
+    #[arg(long = "time", allow_negative_numbers = true)]
+    time: Option<f64>,
+    /// Seed of the deterministic sampler.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Maximum number of scattering events (as for rendering).
+    #[arg(long = "max-depth", default_value_t = 7)]
+    max_depth: u32,
+    /// Print the readings as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The grid as given (stage coordinates).
+#[derive(Clone, Copy, Debug)]
+struct GridSpec {
+    origin: DVec3,
+    u: DVec3,
+    v: DVec3,
+    n: (usize, usize),
+    normal: DVec3,
+}
+
+/// What was asked for, validated, still in stage coordinates.
+#[derive(Clone, Debug)]
+enum Request {
+    /// (kind, position, normal or direction) per meter.
+    Points(MeterKind, Vec<(DVec3, DVec3)>),
+    Grid(GridSpec),
+}
+
+/// Cells a grid may have (a 2000 × 2000 map).
+const MAX_CELLS: usize = 4_000_000;
+
+/// Parses the arguments after `spectral-render` and measures. `--help` prints the usage; any
+/// option error (clap's included) is one line and exit code 1.
+pub fn main(argv: Vec<OsString>) -> Result<(), String> {
+    match MeterArgs::try_parse_from(argv) {
+        Ok(args) => run(&args),
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => Err(clap_message(&e)),
+    }
+}
+
+/// The first line of clap's message, without its `error: ` prefix and usage block.
+fn clap_message(e: &clap::Error) -> String {
+    let text = e.to_string();
+    let first = text.lines().next().unwrap_or("invalid arguments");
+    format!("{} (see --help)", first.trim_start_matches("error: "))
+}
+
+fn run(args: &MeterArgs) -> Result<(), String> {
+    let request = request(args)?;
+    let opts = options(args)?;
+    let scene = scene::load(&args.scene, Some((1, 1))).map_err(|e| e.to_string())?;
+    super::render::print_summary(&scene);
+    match request {
+        Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
+        Request::Grid(g) => run_grid(args, &scene, &opts, &g),
+    }
+}
+
+fn run_points(
+    args: &MeterArgs,
+    scene: &scene::Scene,
+    opts: &MeterOptions,
+    kind: MeterKind,
+    points: &[(DVec3, DVec3)],
+) -> Result<(), String> {
+    let meters = points
+        .iter()
+        .map(|&(p, d)| world_meter(&scene.stage_to_world, kind, p, d))
+        .collect::<Result<Vec<_>, _>>()?;
+    let run = measure(scene, &meters, opts)?;
+    warn(&run, opts);
+    let rel = matches!(opts.stop, Stop::RelError(_));
+    if args.json {
+        let entries: Vec<String> = points
+            .iter()
+            .zip(&run.readings)
+            .map(|(&(p, d), r)| json_entry(kind, p, d, r, rel))
+            .collect();
+        println!("{{\"meters\":[\n{}\n]}}", entries.join(",\n"));
+    } else {
+        for (&(p, d), r) in points.iter().zip(&run.readings) {
+            println!("{}", text_entry(kind, p, d, r));
+        }
+    }
+    Ok(())
+}
+
+fn run_grid(
+    args: &MeterArgs,
+    scene: &scene::Scene,
+    opts: &MeterOptions,
+    g: &GridSpec,
+) -> Result<(), String> {
+    let (nu, nv) = g.n;
+    let m = &scene.stage_to_world;
+    let mut meters = Vec::with_capacity(nu * nv);
+    for j in 0..nv {
+        for i in 0..nu {
+            let c = IlluminanceMap::cell_centre(
+                g.origin.into(),
+                g.u.into(),
+                g.v.into(),
+                (nu, nv),
+                (i, j),
+            );
+            meters.push(world_meter(m, MeterKind::Illuminance, c.into(), g.normal)?);
+        }
+    }
+    let run = measure(scene, &meters, opts)?;
+    warn(&run, opts);
+    let map = IlluminanceMap {
+        origin: g.origin.into(),
+        u: g.u.into(),
+        v: g.v.into(),
+        nu,
+        nv,
+        normal: g.normal.into(),
+        readings: run.readings.clone(),
+    };
+    let base = output_base(args.output.as_deref());
+    let written = map.write(&base)?;
+    let s = map.summary();
+    let line = format!(
+        "E_min = {} lx, E_avg = {} lx, E_max = {} lx, U0 = {}",
+        num(s.e_min),
+        num(s.e_avg),
+        num(s.e_max),
+        num(s.u0)
+    );
+    if args.json {
+        print!("{}", map.json());
+        eprintln!("{line}");
+    } else {
+        println!("{line}");
+    }
+    let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    eprintln!(
+        "wrote {} ({} cells, {:.2} s)",
+        names.join(", "),
+        nu * nv,
+        run.wall_time_s
+    );
+    Ok(())
+}
+
+/// The meter in world space; a normal or direction that vanishes there is an error.
+fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter, String> {
+    let p_w = meter::stage_point(m, p);
+    match kind {
+        MeterKind::Illuminance => Meter::illuminance(p_w, meter::stage_normal(m, d)),
+        MeterKind::Luminance => Meter::luminance(p_w, meter::stage_vector(m, d)),
+    }
+}
+
+/// Warnings about dropped samples and readings a cap stopped.
+fn warn(run: &MeterRun, opts: &MeterOptions) {
+    if run.dropped > 0 {
+        eprintln!(
+            "warning: {} samples had a non-finite value and were dropped",
+            run.dropped
+        );
+    }
+    for (cap, what) in [
+        (Cap::Samples, "the sample cap (--max-spp)"),
+        (Cap::Time, "the time cap (--time)"),
+    ] {
+        let k = run
+            .readings
+            .iter()
+            .filter(|r| r.capped == Some(cap))
+            .count();
+        if k > 0 {
+            let target = match opts.stop {
+                Stop::RelError(r) => format!("before reaching ci95/value < {r}"),
+                Stop::Samples(n) => format!("before {n} samples"),
+            };
+            eprintln!("warning: {k} readings were stopped by {what} {target}");
+        }
+    }
+}
+
+fn json_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading, rel: bool) -> String {
+    let key = match kind {
+        MeterKind::Illuminance => "normal",
+        MeterKind::Luminance => "dir",
+    };
+    let converged = if rel {
+        format!(",\"converged\":{}", r.capped.is_none())
+    } else {
+        String::new()
+    };
+    format!(
+        "{{\"kind\":\"{}\",\"at\":{},\"{key}\":{},\"value\":{},\"unit\":\"{}\",\"ci95\":{},\"samples\":{}{converged}}}",
+        kind.name(),
+        vec3(p.into()),
+        vec3(d.into()),
+        num(r.value),
+        kind.unit(),
+        num(r.ci95),
+        r.samples
+    )
+}
+
+fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
+    let what = match kind {
+        MeterKind::Illuminance => "normal",
+        MeterKind::Luminance => "looking along",
+    };
+    format!(
+        "{} at ({}, {}, {}) {what} ({}, {}, {}): {:.6} {} ± {:.3} (95% CI, {} samples){}",
+        kind.name(),
+        p.x,
+        p.y,
+        p.z,
+        d.x,
+        d.y,
+        d.z,
+        r.value,
+        kind.unit(),
+        r.ci95,
+        r.samples,
+        if r.capped.is_some() { " [capped]" } else { "" }
+    )
+}
+
+/// `-o`: a base name; a trailing .csv/.json/.png is dropped, a directory gets `map` inside.
+fn output_base(o: Option<&Path>) -> PathBuf {
+    let Some(o) = o else {
+        return PathBuf::from("map");
+    };
+    if o.is_dir() {
+        return o.join("map");
+    }
+    match o.extension().and_then(|e| e.to_str()) {
+        Some("csv" | "json" | "png") => o.with_extension(""),
+        _ => o.to_path_buf(),
+    }
+}
+
+/// Checks which meters were asked for and parses their vectors.
+fn request(a: &MeterArgs) -> Result<Request, String> {
+    if a.grid.is_some() {
+        return grid_request(a);
+    }
+    for (given, flag) in [
+        (a.u.is_some(), "--u"),
+        (a.v.is_some(), "--v"),
+        (a.n.is_some(), "--n"),
+        (a.output.is_some(), "-o"),
+    ] {
+        if given {
+            return Err(format!("{flag} belongs to --grid, which was not given"));
+        }
+    }
+    if a.at.is_empty() {
+        return Err(
+            "nothing to measure: give --at X,Y,Z with --normal NX,NY,NZ \
+                    (illuminance), --luminance --at X,Y,Z --dir DX,DY,DZ, or --grid"
+                .into(),
+        );
+    }
+    let (kind, dirs, flag) = if a.luminance {
+        if !a.normal.is_empty() {
+            return Err("--luminance meters take --dir, not --normal".into());
+        }
+        (MeterKind::Luminance, &a.dir, "--dir")
+    } else {
+        if !a.dir.is_empty() {
+            return Err("--dir is for --luminance meters; illuminance meters take --normal".into());
+        }
+        (MeterKind::Illuminance, &a.normal, "--normal")
+    };
+    if dirs.len() != a.at.len() {
+        return Err(format!(
+            "{} --at but {} {flag}: give one {flag} per --at, in the same order",
+            a.at.len(),
+            dirs.len()
+        ));
+    }
+    let points =
+        a.at.iter()
+            .zip(dirs)
+            .map(|(p, d)| Ok((vector("--at", p)?, direction(flag, d)?)))
+            .collect::<Result<Vec<_>, String>>()?;
+    Ok(Request::Points(kind, points))
+}
+
+fn grid_request(a: &MeterArgs) -> Result<Request, String> {
+    if !a.at.is_empty() || a.luminance || !a.dir.is_empty() {
+        return Err(
+            "--grid measures illuminance on its own: drop --at, --dir and --luminance".into(),
+        );
+    }
+    let need = |v: &Option<String>, flag: &str| {
+        v.clone()
+            .ok_or_else(|| format!("--grid needs {flag} as well (origin, --u, --v, --n, --normal)"))
+    };
+    let (u, v, n) = (need(&a.u, "--u")?, need(&a.v, "--v")?, need(&a.n, "--n")?);
+    let normal = match a.normal.as_slice() {
+        [one] => direction("--normal", one)?,
+        [] => return Err("--grid needs --normal NX,NY,NZ".into()),
+        _ => return Err("--grid takes one --normal for all its cells".into()),
+    };
+    let g = GridSpec {
+        origin: vector("--grid", a.grid.as_deref().unwrap_or_default())?,
+        u: vector("--u", &u)?,
+        v: vector("--v", &v)?,
+        n: cells(&n)?,
+        normal,
+    };
+    if g.u.cross(g.v).length() == 0.0 {
+        return Err(format!(
+            "--u {u} and --v {v} do not span a rectangle (zero or parallel edges)"
+        ));
+    }
+    Ok(Request::Grid(g))
+}
+
+/// Three comma-separated finite numbers.
+fn vector(flag: &str, s: &str) -> Result<DVec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let bad = || format!("{flag} '{s}': expected three comma-separated numbers, e.g. 1,0.8,-2");
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let mut v = [0.0; 3];
+    for (x, p) in v.iter_mut().zip(&parts) {
+        *x = p.parse::<f64>().map_err(|_| bad())?;
+        if !x.is_finite() {
+            return Err(bad());
+        }
+    }
+    Ok(DVec3::from(v))
+}
+
+/// A vector that must not be zero.
+fn direction(flag: &str, s: &str) -> Result<DVec3, String> {
+    let v = vector(flag, s)?;
+    if v.length() == 0.0 {
+        return Err(format!("{flag} '{s}' has zero length"));
+    }
+    Ok(v)
+}
+
+/// `NU,NV`: two positive integers.
+fn cells(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("--n '{s}': expected two positive integers NU,NV, e.g. 20,10");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let nu: usize = a.trim().parse().map_err(|_| bad())?;
+    let nv: usize = b.trim().parse().map_err(|_| bad())?;
+    if nu == 0 || nv == 0 {
+        return Err(bad());
+    }
+    if nu.saturating_mul(nv) > MAX_CELLS {
+        return Err(format!("--n '{s}': at most {MAX_CELLS} cells"));
+    }
+    Ok((nu, nv))
+}
+
+/// Sampling options from the flags.
+fn options(a: &MeterArgs) -> Result<MeterOptions, String> {
+    let stop = match (a.spp, a.rel_error) {
+        (Some(_), Some(_)) => return Err("give --spp or --rel-error, not both".into()),
+        (Some(n), None) if n < 2 => {
+            return Err("--spp must be at least 2 (a confidence interval needs two samples)".into())
+        }
+        (Some(n), None) => Stop::Samples(n),
+        (None, Some(r)) if !(r.is_finite() && r > 0.0) => {
+            return Err(format!(
+                "--rel-error {r} must be a positive number, e.g. 0.005"
+            ))
+        }
+        (None, Some(r)) => Stop::RelError(r),
+        (None, None) => Stop::Samples(meter::DEFAULT_SAMPLES),
+    };
+    if a.max_spp.is_some() && a.rel_error.is_none() {
+        return Err("--max-spp caps --rel-error; use --spp for a fixed count".into());
+    }
+    if a.max_spp.is_some_and(|n| n < 2) {
+        return Err("--max-spp must be at least 2".into());
+    }
+    if let Some(t) = a.time {
+        if !(t.is_finite() && t > 0.0) {
+            return Err("--time must be a positive number of seconds".into());
+        }
+    }
+    if a.threads == Some(0) {
+        return Err("--threads must be at least 1".into());
+    }
+    Ok(MeterOptions {
+        stop,
+        max_samples: a.max_spp.unwrap_or(meter::DEFAULT_MAX_SAMPLES),
+        time_budget: a.time,
+        seed: a.seed,
+        max_depth: a.max_depth,
+        threads: a.threads,
+    })
+}
