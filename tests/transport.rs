@@ -75,8 +75,10 @@ fn preview_surface_colour_round_trips_under_d65() {
         [0.5, 0.5, 0.5],
         [0.05, 0.1, 0.9],
     ] {
+        // IOR 1 turns off the specular coat of the (complete) UsdPreviewSurface mapping, so
+        // the surface is exactly Lambertian with albedo diffuseColor.
         let inputs = format!(
-            "        color3f inputs:diffuseColor = ({}, {}, {})\n",
+            "        color3f inputs:diffuseColor = ({}, {}, {})\n        float inputs:ior = 1\n",
             c[0], c[1], c[2]
         );
         let path = write(

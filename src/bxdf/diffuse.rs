@@ -34,12 +34,7 @@ impl DiffuseBxdf {
             wi.z = -wi.z;
         }
         let pdf_w = cosine_hemisphere_pdf(wi.z.abs());
-        Some(BsdfSample {
-            f: self.r * INV_PI,
-            wi,
-            pdf_w,
-            specular: false,
-        })
+        Some(BsdfSample::reflection(self.r * INV_PI, wi, pdf_w, false))
     }
 
     #[inline]

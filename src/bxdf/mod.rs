@@ -3,14 +3,51 @@
 //! Conventions (DESIGN.md §2): `f()` excludes the cosine; pdfs are per unit solid angle;
 //! `wo` and `wi` point away from the surface. One model per file, dispatched through the
 //! closed [`Bxdf`] enum; [`Bsdf`] adds the shading frame and is returned by value.
+//!
+//! | model | file | lobes |
+//! |---|---|---|
+//! | Lambertian | `diffuse.rs` | diffuse |
+//! | Oren–Nayar | `oren_nayar.rs` | diffuse |
+//! | conductor, smooth / rough | `conductor.rs` | mirror / GGX, complex Fresnel |
+//! | dielectric, smooth / rough | `dielectric.rs` | mirror + refraction / GGX (Walter 2007) |
+//! | thin dielectric | `thin_dielectric.rs` | mirror + straight transmission |
+//! | plastic, smooth / rough | `plastic.rs` | coat (mirror / GGX) + coupled diffuse |
+//! | UsdPreviewSurface | `preview.rs` | clearcoat + metal + plastic |
+//!
+//! Shared pieces: `fresnel.rs` (dielectric, complex and Schlick Fresnel, Snell),
+//! `microfacet.rs` (Trowbridge–Reitz with visible-normal sampling), `coat.rs` (a specular
+//! coat and its directional albedo, for the layered models).
+//!
+//! Delta lobes follow pbrt: `f` and `pdf` leave them out, `sample_f` returns them with
+//! `specular: true`, f = reflectance/|cos θi| and pdf = the probability of choosing them.
+//! Every model accepts ωo on either side of the surface.
 
+pub mod coat;
+pub mod conductor;
+pub mod dielectric;
 pub mod diffuse;
+pub mod examples;
+pub mod fresnel;
+pub mod microfacet;
+pub mod oren_nayar;
+pub mod plastic;
+pub mod preview;
+pub mod thin_dielectric;
 
 use crate::math::Frame;
 use crate::spectral::SampledSpectrum;
 use glam::Vec3;
 
+pub use coat::{CoatAlbedo, CoatFresnel, SpecularCoat};
+pub use conductor::ConductorBxdf;
+pub use dielectric::DielectricBxdf;
 pub use diffuse::DiffuseBxdf;
+pub use examples::{examples, Example};
+pub use microfacet::TrowbridgeReitz;
+pub use oren_nayar::OrenNayarBxdf;
+pub use plastic::PlasticBxdf;
+pub use preview::PreviewBxdf;
+pub use thin_dielectric::ThinDielectricBxdf;
 
 /// Whether radiance (camera paths) or importance (light paths) is being transported.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,20 +65,75 @@ pub struct BsdfSample {
     pub pdf_w: f32,
     /// True for a Dirac delta lobe (pdf and f are then relative to the delta).
     pub specular: bool,
+    /// True when `wi` is on the other side of the surface than `wo`.
+    pub transmission: bool,
+    /// The relative IOR η' = ηt/ηi of a transmission (PBR 4ed §9.5), 1 for a reflection.
+    pub eta: f32,
+}
+
+impl BsdfSample {
+    #[inline]
+    pub fn reflection(f: SampledSpectrum, wi: Vec3, pdf_w: f32, specular: bool) -> BsdfSample {
+        BsdfSample {
+            f,
+            wi,
+            pdf_w,
+            specular,
+            transmission: false,
+            eta: 1.0,
+        }
+    }
+
+    #[inline]
+    pub fn transmission(
+        f: SampledSpectrum,
+        wi: Vec3,
+        pdf_w: f32,
+        specular: bool,
+        eta: f32,
+    ) -> BsdfSample {
+        BsdfSample {
+            f,
+            wi,
+            pdf_w,
+            specular,
+            transmission: true,
+            eta,
+        }
+    }
 }
 
 /// The closed set of reflection models.
 #[derive(Clone, Copy, Debug)]
 pub enum Bxdf {
     Diffuse(DiffuseBxdf),
+    OrenNayar(OrenNayarBxdf),
+    Conductor(ConductorBxdf),
+    Dielectric(DielectricBxdf),
+    ThinDielectric(ThinDielectricBxdf),
+    Plastic(PlasticBxdf),
+    Preview(PreviewBxdf),
+}
+
+/// Calls `$body` with `$b` bound to the model inside a [`Bxdf`].
+macro_rules! dispatch {
+    ($self:expr, $b:ident => $body:expr) => {
+        match $self {
+            Bxdf::Diffuse($b) => $body,
+            Bxdf::OrenNayar($b) => $body,
+            Bxdf::Conductor($b) => $body,
+            Bxdf::Dielectric($b) => $body,
+            Bxdf::ThinDielectric($b) => $body,
+            Bxdf::Plastic($b) => $body,
+            Bxdf::Preview($b) => $body,
+        }
+    };
 }
 
 impl Bxdf {
     #[inline]
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> SampledSpectrum {
-        match self {
-            Bxdf::Diffuse(b) => b.f(wo, wi, mode),
-        }
+        dispatch!(self, b => b.f(wo, wi, mode))
     }
 
     #[inline]
@@ -52,23 +144,36 @@ impl Bxdf {
         u: [f32; 2],
         mode: TransportMode,
     ) -> Option<BsdfSample> {
-        match self {
-            Bxdf::Diffuse(b) => b.sample_f(wo, uc, u, mode),
-        }
+        dispatch!(self, b => b.sample_f(wo, uc, u, mode))
     }
 
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> f32 {
-        match self {
-            Bxdf::Diffuse(b) => b.pdf(wo, wi, mode),
-        }
+        dispatch!(self, b => b.pdf(wo, wi, mode))
     }
 
     /// True when every lobe is a delta (no point in light sampling).
     #[inline]
     pub fn is_specular(&self) -> bool {
         match self {
-            Bxdf::Diffuse(_) => false,
+            Bxdf::Diffuse(_) | Bxdf::OrenNayar(_) | Bxdf::Plastic(_) => false,
+            Bxdf::Conductor(b) => b.is_specular(),
+            Bxdf::Dielectric(b) => b.is_specular(),
+            Bxdf::ThinDielectric(_) => true,
+            Bxdf::Preview(b) => b.is_specular(),
+        }
+    }
+
+    /// The model's name (for test reports).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Bxdf::Diffuse(_) => "diffuse",
+            Bxdf::OrenNayar(_) => "oren-nayar",
+            Bxdf::Conductor(_) => "conductor",
+            Bxdf::Dielectric(_) => "dielectric",
+            Bxdf::ThinDielectric(_) => "thin-dielectric",
+            Bxdf::Plastic(_) => "plastic",
+            Bxdf::Preview(_) => "preview-surface",
         }
     }
 }
@@ -131,6 +236,16 @@ impl Bsdf {
     #[inline]
     pub fn is_specular(&self) -> bool {
         self.bxdf.is_specular()
+    }
+}
+
+/// `w` mirrored through the tangent plane when `flip` (two-sided models work above it).
+#[inline]
+pub(crate) fn mirror_z(w: Vec3, flip: bool) -> Vec3 {
+    if flip {
+        Vec3::new(w.x, w.y, -w.z)
+    } else {
+        w
     }
 }
 

@@ -25,7 +25,7 @@
 //! `sensor::meter::origin_error`) and rays leave it through the same robust offset as surface
 //! hits ([`spawn_ray`], PBR 4ed §6.8.6). That makes a meter lying on a floor or a wall safe.
 
-use super::path::{unoccluded, PathIntegrator, Previous};
+use super::path::{transmittance, PathIntegrator, Previous};
 use crate::geometry::offset::spawn_ray;
 use crate::light::LightSampleContext;
 use crate::math::{Frame, INV_PI};
@@ -110,13 +110,14 @@ fn light_sample(
     if cos <= 0.0 || ls.l.is_black() || ls.pdf_w == 0.0 {
         return SampledSpectrum::ZERO;
     }
-    if !unoccluded(scene, ctx.p, p_error, ctx.n, light, &ls) {
+    let tr = transmittance(scene, ctx.p, p_error, ctx.n, &ls, light as u32);
+    if tr == 0.0 {
         return SampledSpectrum::ZERO;
     }
     let pdf_light = pmf * ls.pdf_w;
     if ls.delta {
-        return ls.l * (cos / pdf_light);
+        return ls.l * (tr * cos / pdf_light);
     }
     let w = power_heuristic(pdf_light, cos * INV_PI);
-    ls.l * (cos * w / pdf_light)
+    ls.l * (tr * cos * w / pdf_light)
 }

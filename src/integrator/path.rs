@@ -4,11 +4,22 @@
 //!
 //! Depth counts scattering events as pbrt's `maxdepth`: depth 0 sees emitters directly,
 //! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8).
+//!
+//! Two material hooks (`material/mod.rs`):
+//! - **Opacity.** A surface is present with probability `Material::opacity()`; otherwise the
+//!   ray continues unchanged from the hit and no vertex is counted (pbrt-v4's stochastic
+//!   alpha). Shadow rays are attenuated by (1 − opacity) of every translucent surface they
+//!   cross instead, the expected value of the same test.
+//! - **Dispersion.** At a material whose refraction depends on λ the secondary wavelengths
+//!   are terminated before the BSDF is built (DESIGN.md §5). `li` works on its own copy of the
+//!   wavelengths and re-expresses its estimate against the caller's pdfs on return, so the
+//!   caller's `sampled_to_xyz(l, lambda)` stays unbiased without seeing the termination.
 
 use crate::bxdf::{Bsdf, TransportMode};
 use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
 use crate::geometry::Ray;
 use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
+use crate::material::Material;
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
@@ -30,7 +41,9 @@ pub(crate) struct Previous {
 
 impl PathIntegrator {
     /// Radiance arriving along `ray` (limited to t < t_max for the camera ray), at the path's
-    /// wavelengths. Not yet divided by the wavelength pdfs.
+    /// wavelengths. Not yet divided by the wavelength pdfs. If the path terminated the
+    /// secondary wavelengths (dispersion), the estimate is scaled by p(λ)/p'(λ) per lane, so
+    /// that it is relative to `lambda_in`'s pdfs (the hero lane ×N, the others 0).
     pub fn li(
         &self,
         scene: &Scene,
@@ -48,15 +61,38 @@ impl PathIntegrator {
     pub(crate) fn li_from(
         &self,
         scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        prev: Option<Previous>,
+        lambda_in: &SampledWavelengths,
+        sampler: &mut Sampler,
+    ) -> SampledSpectrum {
+        let mut lambda = *lambda_in;
+        let l = self.trace(scene, ray, t_max, prev, &mut lambda, sampler);
+        if lambda.secondary_terminated() && !lambda_in.secondary_terminated() {
+            return l * lambda_in.pdf().safe_div(lambda.pdf());
+        }
+        l
+    }
+
+    /// The path-tracing loop; may terminate the secondary wavelengths of `lambda`.
+    fn trace(
+        &self,
+        scene: &Scene,
         mut ray: Ray,
         mut t_max: f32,
         mut prev: Option<Previous>,
-        lambda: &SampledWavelengths,
+        lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
     ) -> SampledSpectrum {
         let mut l = SampledSpectrum::ZERO;
         let mut beta = SampledSpectrum::ONE;
+        // Product of η'² over the refractions so far: radiance is scaled by 1/η'² across an
+        // interface, which Russian roulette must not mistake for absorption (pbrt-v4
+        // `etaScale`, PBR 4ed §14.1.3).
+        let mut eta_scale = 1.0;
         let mut depth = 0;
+        let mut pass_throughs = 0;
         loop {
             let Some(hit) = scene.intersect(&ray, t_max) else {
                 l += beta * self.escaped(scene, ray.d, prev, lambda);
@@ -69,6 +105,16 @@ impl PathIntegrator {
                 }
                 Hit::Surface(si) => si,
             };
+            let material = &scene.materials[si.material as usize];
+            if !surface_present(material, sampler) {
+                pass_throughs += 1;
+                if pass_throughs > MAX_PASS_THROUGHS {
+                    break;
+                }
+                ray = spawn_ray(si.p, si.p_error, si.ng, ray.d);
+                t_max -= si.t;
+                continue;
+            }
             if let Some(light) = si.light {
                 let lh = LightHit {
                     p: si.p,
@@ -82,7 +128,10 @@ impl PathIntegrator {
             }
             depth += 1;
             let wo = -ray.d;
-            let bsdf = scene.materials[si.material as usize].bsdf(si.ns, lambda);
+            if material.is_dispersive() {
+                lambda.terminate_secondary();
+            }
+            let bsdf = material.bsdf(si.ns, lambda);
             if !bsdf.is_specular() {
                 l += beta * self.sample_ld(scene, &si, &bsdf, wo, lambda, sampler);
             }
@@ -91,6 +140,9 @@ impl PathIntegrator {
                 break;
             };
             beta *= bs.f * (bs.wi.dot(si.ns).abs() / bs.pdf_w);
+            if bs.transmission {
+                eta_scale *= bs.eta * bs.eta;
+            }
             prev = Some(Previous {
                 ctx: LightSampleContext { p: si.p, n: si.ng },
                 pdf_bsdf_w: bs.pdf_w,
@@ -98,7 +150,7 @@ impl PathIntegrator {
             });
             ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
             t_max = f32::INFINITY;
-            if !russian_roulette(&mut beta, depth, sampler) {
+            if !russian_roulette(&mut beta, eta_scale, depth, sampler) {
                 break;
             }
         }
@@ -186,43 +238,89 @@ impl PathIntegrator {
         if f.is_black() {
             return SampledSpectrum::ZERO;
         }
-        if !unoccluded(scene, si.p, si.p_error, si.ng, light, &ls) {
+        let tr = transmittance(scene, si.p, si.p_error, si.ng, &ls, light as u32);
+        if tr == 0.0 {
             return SampledSpectrum::ZERO;
         }
         let pdf_light = pmf * ls.pdf_w;
         if ls.delta {
-            return f * ls.l / pdf_light;
+            return f * ls.l * (tr / pdf_light);
         }
         let w = power_heuristic(pdf_light, bsdf.pdf(wo, ls.wi, TransportMode::Radiance));
-        f * ls.l * (w / pdf_light)
+        f * ls.l * (tr * w / pdf_light)
     }
 }
 
-/// True when nothing blocks the segment from the point `p` (error bound `p_error`, geometric
-/// normal `n`) to the sample `ls` on light `light` (PBR 4ed §6.8.6 for the spawned rays).
-pub(crate) fn unoccluded(
+/// How many surfaces with opacity < 1 a ray may pass through before it is given up.
+const MAX_PASS_THROUGHS: u32 = 256;
+
+/// The stochastic opacity test: true when the surface is there for this path.
+#[inline]
+fn surface_present(material: &Material, sampler: &mut Sampler) -> bool {
+    let a = material.opacity();
+    a >= 1.0 || (a > 0.0 && sampler.get_1d() < a)
+}
+
+/// The shadow ray from a surface point to a light sample, and its t_max.
+#[inline]
+fn shadow_ray(p: Vec3, p_error: Vec3, ng: Vec3, ls: &LightLiSample, lgt: &Light) -> (Ray, f32) {
+    if ls.infinite {
+        (spawn_ray(p, p_error, ng, ls.wi), f32::INFINITY)
+    } else if matches!(lgt, Light::Triangle(_)) {
+        spawn_ray_to(p, p_error, ng, ls.p_light, Vec3::ZERO, ls.n_light)
+    } else {
+        spawn_ray_to_point(p, p_error, ng, ls.p_light)
+    }
+}
+
+/// The fraction of the light sample's radiance that reaches `p`: 0 behind an opaque surface,
+/// the product of (1 − opacity) over the translucent surfaces in between, else 1.
+pub(crate) fn transmittance(
     scene: &Scene,
     p: Vec3,
     p_error: Vec3,
-    n: Vec3,
-    light: usize,
+    ng: Vec3,
     ls: &LightLiSample,
-) -> bool {
-    let (shadow, t) = if ls.infinite {
-        (spawn_ray(p, p_error, n, ls.wi), f32::INFINITY)
-    } else if matches!(scene.lights[light], Light::Triangle(_)) {
-        spawn_ray_to(p, p_error, n, ls.p_light, Vec3::ZERO, ls.n_light)
-    } else {
-        spawn_ray_to_point(p, p_error, n, ls.p_light)
-    };
-    !scene.occluded(&shadow, t, Some(light as u32))
+    light: u32,
+) -> f32 {
+    let lgt = &scene.lights[light as usize];
+    let (mut ray, mut t) = shadow_ray(p, p_error, ng, ls, lgt);
+    if !scene.occluded(&ray, t, Some(light)) {
+        return 1.0;
+    }
+    if scene.materials.iter().all(|m| m.opacity() >= 1.0) {
+        return 0.0;
+    }
+    let mut tr = 1.0;
+    for _ in 0..MAX_PASS_THROUGHS {
+        let si = match scene.intersect(&ray, t) {
+            None => return tr,
+            Some(Hit::Light { light: l, .. }) => return if l == light { tr } else { 0.0 },
+            Some(Hit::Surface(si)) => si,
+        };
+        let opacity = scene.materials[si.material as usize].opacity();
+        tr *= 1.0 - opacity.clamp(0.0, 1.0);
+        if tr == 0.0 {
+            return 0.0;
+        }
+        (ray, t) = shadow_ray(si.p, si.p_error, si.ng, ls, lgt);
+        if !scene.occluded(&ray, t, Some(light)) {
+            return tr;
+        }
+    }
+    0.0
 }
 
 /// Russian roulette after the second bounce when the throughput has dropped below 1
-/// (PBR 4ed §13.4.1, q = max(0, 1 − max β)); returns false when the path is terminated.
+/// (PBR 4ed §13.4.1, q = max(0, 1 − max β η_scale)); returns false when the path is terminated.
 #[inline]
-fn russian_roulette(beta: &mut SampledSpectrum, depth: u32, sampler: &mut Sampler) -> bool {
-    let m = beta.max_value();
+fn russian_roulette(
+    beta: &mut SampledSpectrum,
+    eta_scale: f32,
+    depth: u32,
+    sampler: &mut Sampler,
+) -> bool {
+    let m = beta.max_value() * eta_scale;
     if m < 1.0 && depth > 1 {
         let q = (1.0 - m).max(0.0);
         if sampler.get_1d() < q {

@@ -4,6 +4,7 @@
 use super::desc::*;
 use super::render_scene::{Mesh, Scene, Summary, TriRef};
 use crate::accel::bvh::Bvh;
+use crate::bxdf::TrowbridgeReitz;
 use crate::imageio;
 use crate::light::dome::LatLong;
 use crate::light::emission::{self, Photometric};
@@ -11,10 +12,11 @@ use crate::light::ies::IesProfile;
 use crate::light::report;
 use crate::light::shaping::Shaping;
 use crate::light::*;
-use crate::material::Material;
+use crate::material::{Material, PlasticMaterial, PreviewMaterial};
 use crate::math::Frame;
 use crate::sampling::distribution::Distribution2D;
 use crate::sensor::Camera;
+use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
 use crate::spectral::{data, DenseSpectrum, Spectrum};
 use crate::{Error, Result};
@@ -115,47 +117,166 @@ pub fn reflectance(s: &SpectrumDesc) -> std::result::Result<Spectrum, String> {
     })
 }
 
+/// The render material of a material prim (the models of `material/` and `bxdf/`).
 fn material(m: &MaterialDesc, warnings: &mut Vec<String>) -> std::result::Result<Material, String> {
+    let path = &m.prim_path;
     match &m.kind {
         MaterialKind::Diffuse {
             reflectance: r,
             roughness,
         } => {
-            if *roughness != 0.0 {
-                warnings.push(format!(
-                    "{}: Oren–Nayar roughness not supported yet; rendered as Lambertian",
-                    m.prim_path
-                ));
-            }
-            Ok(Material::Diffuse {
-                reflectance: reflectance(r)?,
+            let reflectance = reflectance(r)?;
+            let sigma = non_negative("roughness", *roughness)?;
+            Ok(if sigma == 0.0 {
+                Material::Diffuse { reflectance }
+            } else {
+                Material::OrenNayar { reflectance, sigma }
             })
         }
-        MaterialKind::PreviewSurface(ps) => {
-            let d = PreviewSurfaceDesc::default();
-            if ps.metallic != d.metallic
-                || ps.use_specular_workflow && ps.specular_color != [0.0; 3]
-                || ps.clearcoat != d.clearcoat
-                || ps.opacity != d.opacity
-            {
-                warnings.push(format!("{}: only diffuseColor and emissiveColor of UsdPreviewSurface are rendered so far", m.prim_path));
-            }
-            Ok(Material::Diffuse {
-                reflectance: reflectance(&SpectrumDesc::Rgb(ps.diffuse_color))?,
-            })
-        }
-        MaterialKind::Conductor { .. }
-        | MaterialKind::Dielectric { .. }
-        | MaterialKind::Plastic { .. } => {
-            warnings.push(format!(
-                "{}: this spectral: material is not implemented yet; rendered as 50% grey diffuse",
-                m.prim_path
-            ));
-            Ok(Material::Diffuse {
-                reflectance: Spectrum::Constant(0.5),
-            })
-        }
+        MaterialKind::Conductor { eta, k, roughness } => Ok(Material::Conductor {
+            eta: conductor_spectrum(eta, "eta", false)?,
+            k: conductor_spectrum(k, "k", true)?,
+            distrib: TrowbridgeReitz::isotropic(non_negative("roughness", *roughness)?),
+        }),
+        MaterialKind::Dielectric {
+            ior,
+            roughness,
+            thin,
+        } => dielectric(path, ior, *roughness, *thin, warnings),
+        MaterialKind::Plastic {
+            reflectance: r,
+            ior,
+            roughness,
+        } => Ok(Material::Plastic(PlasticMaterial::new(
+            reflectance(r)?,
+            *ior,
+            non_negative("roughness", *roughness)?,
+        ))),
+        MaterialKind::PreviewSurface(ps) => preview_surface(path, ps, warnings),
     }
+}
+
+/// `spectral:dielectric`: an interface, or a thin slab with `inputs:thin`.
+fn dielectric(
+    path: &str,
+    i: &IorDesc,
+    roughness: f32,
+    thin: bool,
+    warnings: &mut Vec<String>,
+) -> std::result::Result<Material, String> {
+    let ior = ior(i)?;
+    let alpha = non_negative("roughness", roughness)?;
+    if !thin {
+        let distrib = TrowbridgeReitz::isotropic(alpha);
+        return Ok(Material::Dielectric { ior, distrib });
+    }
+    if alpha > 0.0 {
+        warnings.push(format!(
+            "{path}: a thin dielectric is always smooth; inputs:roughness ignored"
+        ));
+    }
+    Ok(Material::ThinDielectric { ior })
+}
+
+/// UsdPreviewSurface (mapping in `material/preview.rs`).
+fn preview_surface(
+    path: &str,
+    ps: &PreviewSurfaceDesc,
+    warnings: &mut Vec<String>,
+) -> std::result::Result<Material, String> {
+    let n = Vec3::from_array(ps.normal);
+    if n.try_normalize().is_none_or(|n| n.z <= 0.0) {
+        warnings.push(format!(
+            "{path}: UsdPreviewSurface normal {:?} does not point out of the surface; using (0, 0, 1)",
+            ps.normal
+        ));
+    }
+    let diffuse = reflectance(&SpectrumDesc::Rgb(ps.diffuse_color))?;
+    let specular = reflectance(&SpectrumDesc::Rgb(ps.specular_color))?;
+    let m = PreviewMaterial::new(ps, diffuse, specular);
+    Ok(Material::Preview(Box::new(m)))
+}
+
+/// A roughness (α or σ) that must be ≥ 0.
+fn non_negative(name: &str, v: f32) -> std::result::Result<f32, String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "inputs:{name} must be a finite number ≥ 0, got {v}"
+        ))
+    }
+}
+
+/// η (`k_part` false) or k (true) of a conductor: a metal in `spectra/metal/`, any tabulated
+/// spectrum, or samples. η must be positive and k non-negative at every wavelength.
+fn conductor_spectrum(
+    s: &SpectrumDesc,
+    what: &str,
+    k_part: bool,
+) -> std::result::Result<Spectrum, String> {
+    let dense = match s {
+        SpectrumDesc::Named(token) => match (data::metal(token), data::named(token)) {
+            (Some((n, k)), _) => if k_part { k } else { n }.clone(),
+            (None, Some(d)) => d.clone(),
+            (None, None) => {
+                return Err(format!(
+                    "unknown {what} spectrum '{token}' (metals: {}; or a file in spectra/)",
+                    data::metal_names().join(", ")
+                ))
+            }
+        },
+        SpectrumDesc::Samples(samples) => DenseSpectrum::from_samples(samples).ok_or(format!(
+            "{what} samples must be finite (nm, value) pairs sorted by wavelength"
+        ))?,
+        SpectrumDesc::Rgb(_) => {
+            return Err(format!(
+                "a conductor's {what} must be a spectrum, not a colour"
+            ))
+        }
+    };
+    let valid = |v: f32| v.is_finite() && if k_part { v >= 0.0 } else { v > 0.0 };
+    if !dense.values.iter().all(|&v| valid(v)) {
+        let bound = if k_part { "≥ 0" } else { "> 0" };
+        return Err(format!(
+            "a conductor's {what} must be {bound} at every wavelength"
+        ));
+    }
+    Ok(Spectrum::Dense {
+        data: Arc::new(dense),
+        scale: 1.0,
+    })
+}
+
+/// A dielectric's IOR as Sellmeier coefficients (a constant is the one-term form B₁ = n² − 1).
+fn ior(i: &IorDesc) -> std::result::Result<Sellmeier, String> {
+    let s = match i {
+        IorDesc::Constant(n) if n.is_finite() && *n > 0.0 => Sellmeier::constant(*n),
+        IorDesc::Constant(n) => return Err(format!("inputs:ior must be positive, got {n}")),
+        IorDesc::Glass(name) => data::glass(name).ok_or_else(|| {
+            format!(
+                "unknown glass '{name}' (known: {})",
+                data::glass_names().join(", ")
+            )
+        })?,
+        IorDesc::Sellmeier { b, c } => Sellmeier { b: *b, c: *c },
+    };
+    let mut lambda = crate::spectral::LAMBDA_MIN;
+    while lambda <= crate::spectral::LAMBDA_MAX {
+        let l2 = (lambda * 1e-3).powi(2);
+        let n2: f32 = 1.0
+            + (0..3)
+                .filter(|&j| s.b[j] != 0.0)
+                .map(|j| s.b[j] * l2 / (l2 - s.c[j]))
+                .sum::<f32>();
+        if !(n2.is_finite() && n2 > 0.0) {
+            return Err(format!(
+                "the Sellmeier coefficients give no real index of refraction at {lambda} nm"
+            ));
+        }
+        lambda += 1.0;
+    }
+    Ok(s)
 }
 
 /// Validates a mesh, assigns its material and turns emissive meshes into triangle lights.

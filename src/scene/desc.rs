@@ -121,6 +121,8 @@ pub struct PreviewSurfaceDesc {
     pub opacity: f32,
     pub opacity_threshold: f32,
     pub ior: f32,
+    /// Tangent-space normal, components in [−1, 1].
+    pub normal: [f32; 3],
 }
 
 impl Default for PreviewSurfaceDesc {
@@ -138,6 +140,7 @@ impl Default for PreviewSurfaceDesc {
             opacity: 1.0,
             opacity_threshold: 0.0,
             ior: 1.5,
+            normal: [0.0, 0.0, 1.0],
         }
     }
 }

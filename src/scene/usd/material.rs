@@ -16,7 +16,7 @@ const MAX_CONNECTION_DEPTH: usize = 32;
 const KNOWN_NODE_PREFIXES: [&str; 3] = ["UsdUVTexture", "UsdPrimvarReader_", "UsdTransform2d"];
 
 /// The UsdPreviewSurface inputs the renderer understands.
-const PREVIEW_INPUTS: [&str; 12] = [
+const PREVIEW_INPUTS: [&str; 13] = [
     "diffuseColor",
     "emissiveColor",
     "useSpecularWorkflow",
@@ -29,6 +29,7 @@ const PREVIEW_INPUTS: [&str; 12] = [
     "opacityThreshold",
     "ior",
     "opacityMode",
+    "normal",
 ];
 
 /// The Material bound to `prim`: direct bindings, purpose `full` before all-purpose,
@@ -233,6 +234,7 @@ fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDe
             .f32("opacityThreshold")?
             .unwrap_or(d.opacity_threshold),
         ior: inputs.positive("ior")?.unwrap_or(d.ior),
+        normal: inputs.vec3("normal")?.unwrap_or(d.normal),
     })
 }
 

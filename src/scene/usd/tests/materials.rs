@@ -185,6 +185,7 @@ fn preview_surface_inputs_and_emission() {
         opacity: 0.9,
         opacity_threshold: 0.2,
         ior: 1.7,
+        ..PreviewSurfaceDesc::default()
     };
     assert!(matches!(&lamp.kind, MaterialKind::PreviewSurface(p) if *p == expected));
     let default = material_of(&desc, "Default");
