@@ -14,7 +14,10 @@
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use rayon::prelude::*;
-use spectral_render::bxdf::{Bxdf, DiffuseBxdf, TransportMode};
+use spectral_render::bxdf::{
+    Bxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, OrenNayarBxdf, PlasticBxdf, TransportMode,
+    TrowbridgeReitz,
+};
 use spectral_render::geometry::{triangle, Ray};
 use spectral_render::light::dome::LatLong;
 use spectral_render::light::{
@@ -102,23 +105,80 @@ struct Model {
 }
 
 /// Roughness values for models that have one (in the model's own parameterisation); unused
-/// until the first rough model is listed in [`MODELS`].
-#[allow(dead_code)]
+/// of the microfacet models.
 const ROUGH: &[f32] = &[0.05, 0.2, 0.5, 1.0];
 /// For models without a roughness parameter.
 const NO_ROUGHNESS: &[f32] = &[0.0];
 
 /// Every model of `spectral_render::bxdf::Bxdf`; adding a model is one line here, e.g.
 /// `Model { name: "conductor", roughness: ROUGH, make: |a| Bxdf::Conductor(..) },`.
-const MODELS: &[Model] = &[Model {
-    name: "diffuse",
-    roughness: NO_ROUGHNESS,
-    make: |_| {
-        Bxdf::Diffuse(DiffuseBxdf {
-            r: SampledSpectrum::splat(0.5),
-        })
+const MODELS: &[Model] = &[
+    Model {
+        name: "diffuse",
+        roughness: NO_ROUGHNESS,
+        make: |_| {
+            Bxdf::Diffuse(DiffuseBxdf {
+                r: SampledSpectrum::splat(0.5),
+            })
+        },
     },
-}];
+    Model {
+        name: "oren-nayar",
+        roughness: &[0.3, 1.0],
+        make: |sigma| Bxdf::OrenNayar(OrenNayarBxdf::new(SampledSpectrum::splat(0.5), sigma)),
+    },
+    Model {
+        name: "conductor",
+        roughness: ROUGH,
+        make: |a| {
+            Bxdf::Conductor(ConductorBxdf::new(
+                TrowbridgeReitz::new(a, a),
+                SampledSpectrum::splat(0.2),
+                SampledSpectrum::splat(3.0),
+            ))
+        },
+    },
+    Model {
+        name: "conductor-anisotropic",
+        roughness: &[0.1],
+        make: |a| {
+            Bxdf::Conductor(ConductorBxdf::new(
+                TrowbridgeReitz::new(a, 4.0 * a),
+                SampledSpectrum::splat(0.2),
+                SampledSpectrum::splat(3.0),
+            ))
+        },
+    },
+    Model {
+        name: "dielectric",
+        roughness: ROUGH,
+        make: |a| Bxdf::Dielectric(DielectricBxdf::new(TrowbridgeReitz::new(a, a), 1.5)),
+    },
+    Model {
+        name: "plastic",
+        roughness: ROUGH,
+        make: |a| Bxdf::Plastic(PlasticBxdf::new(SampledSpectrum::splat(0.5), 1.5, a)),
+    },
+    Model {
+        name: "preview-surface-clearcoat",
+        roughness: NO_ROUGHNESS,
+        make: |_| example("preview-clearcoat"),
+    },
+    Model {
+        name: "preview-surface-metal",
+        roughness: NO_ROUGHNESS,
+        make: |_| example("preview-metal"),
+    },
+];
+
+/// A named instance from `bxdf::examples()` (the UsdPreviewSurface composites).
+fn example(name: &str) -> Bxdf {
+    spectral_render::bxdf::examples()
+        .into_iter()
+        .find(|e| e.name == name)
+        .map(|e| e.bxdf)
+        .unwrap_or_else(|| panic!("no example {name}"))
+}
 
 /// Incident directions (θ, φ) in degrees in the shading frame: normal, moderate, steep,
 /// grazing (89°), and one from below the surface (the inside of a dielectric).
