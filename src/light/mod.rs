@@ -10,6 +10,7 @@ pub mod disk;
 pub mod distant;
 pub mod dome;
 pub mod emission;
+pub mod emit;
 pub mod rect;
 pub mod sampler;
 pub mod sphere;
