@@ -17,7 +17,7 @@ use super::subpath::{direct_pdf_w, BidirContext, Walk};
 use super::vertex::{LightOrigin, PathVertex};
 use crate::bxdf::TransportMode;
 use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
-use crate::light::{Light, LightHit, LightSampleContext};
+use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
 use crate::sampling::Sampler;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
@@ -72,9 +72,7 @@ pub fn vertex_to_sensor(
         return None;
     }
     let weight = if use_mis {
-        let cam_a = ss.pdf_dir_w * y.cos_geo(ss.wi) / (ss.p - y.p).length_squared();
-        let rev_w = y.bsdf.pdf(ss.wi, y.wo, TransportMode::Radiance);
-        ctx.mis.light_to_camera(&y.mis, cam_a, rev_w)
+        sensor_weight(ctx, y, ss.p, ss.pdf_dir_w)
     } else {
         1.0
     };
@@ -82,6 +80,17 @@ pub fn vertex_to_sensor(
         bin: ss.bin,
         c: Contribution::new(value, weight),
     })
+}
+
+/// MIS weight of light vertex `y` connected to sensor point `p_sensor`, whose rays leave
+/// towards `y` with direction density `pdf_dir_w` [tech. rep. (46), (47)].
+pub fn sensor_weight(ctx: &BidirContext, y: &PathVertex, p_sensor: Vec3, pdf_dir_w: f32) -> f32 {
+    let d = p_sensor - y.p;
+    let dist2 = d.length_squared();
+    let wi = d / dist2.sqrt();
+    let cam_a = pdf_dir_w * y.cos_geo(wi) / dist2;
+    ctx.mis
+        .light_to_camera(&y.mis, cam_a, y.reverse_pdf(wi, TransportMode::Importance))
 }
 
 /// s = 1, t = 1: the light subpath's own origin y_0 seen by the sensor. Its estimate is
@@ -111,8 +120,7 @@ pub fn origin_to_sensor(
         return None;
     }
     let weight = if use_mis {
-        let cam_a = ss.pdf_dir_w * cos / (ss.p - o.p).length_squared();
-        ctx.mis.origin_to_camera(cam_a, pos_a)
+        origin_weight(ctx, o, ss.p, ss.pdf_dir_w)
     } else {
         1.0
     };
@@ -120,6 +128,14 @@ pub fn origin_to_sensor(
         bin: ss.bin,
         c: Contribution::new(value, weight),
     })
+}
+
+/// MIS weight of the light's point y_0 seen from sensor point `p_sensor` (eq. (37), n = 2).
+pub fn origin_weight(ctx: &BidirContext, o: &LightOrigin, p_sensor: Vec3, pdf_dir_w: f32) -> f32 {
+    let d = p_sensor - o.p;
+    let dist2 = d.length_squared();
+    let cam_a = pdf_dir_w * o.n.dot(d).abs() / (dist2 * dist2.sqrt());
+    ctx.mis.origin_to_camera(cam_a, o.pmf * o.pdf_pos_a)
 }
 
 /// s = 1, t ≥ 2: next-event estimation at camera vertex `z`, one light chosen by power
@@ -155,11 +171,20 @@ pub fn next_event(
     if value.is_black() || scene.occluded(&shadow, t, Some(index as u32)) {
         return None;
     }
-    let le = light.pdf_le(ls.p_light, ls.n_light, -ls.wi, &ctx.sphere);
-    let weight = ctx.mis.direct(
+    let weight = direct_weight(ctx, z, index as u32, &ls);
+    Some(Contribution::new(value, weight))
+}
+
+/// MIS weight of next-event estimation at `z` that chose light `light` and sampled `ls`
+/// [tech. rep. (44), (45)].
+pub fn direct_weight(ctx: &BidirContext, z: &PathVertex, light: u32, ls: &LightLiSample) -> f32 {
+    let pmf = ctx.scene.light_sampler.pmf(light as usize);
+    let lgt = &ctx.scene.lights[light as usize];
+    let le = lgt.pdf_le(ls.p_light, ls.n_light, -ls.wi, &ctx.sphere);
+    ctx.mis.direct(
         &z.mis,
         DirectPdfs {
-            direct_w,
+            direct_w: pmf * ls.pdf_w,
             emit: pmf * le.pos_a * le.dir_w,
             cos_cam: z.cos_geo(ls.wi),
             cos_light: if ls.infinite {
@@ -168,11 +193,10 @@ pub fn next_event(
                 ls.n_light.dot(ls.wi).abs()
             },
             bsdf_fwd_w: z.bsdf.pdf(z.wo, ls.wi, TransportMode::Radiance),
-            bsdf_rev_w: z.bsdf.pdf(ls.wi, z.wo, TransportMode::Importance),
+            bsdf_rev_w: z.reverse_pdf(ls.wi, TransportMode::Radiance),
             delta: ls.delta,
         },
-    );
-    Some(Contribution::new(value, weight))
+    )
 }
 
 /// s ≥ 2, t ≥ 2: light vertex `y` joined to camera vertex `z` by a shadow ray
@@ -198,14 +222,21 @@ pub fn connect(ctx: &BidirContext, y: &PathVertex, z: &PathVertex) -> Option<Con
     if ctx.scene.occluded(&ray, t, None) {
         return None;
     }
+    Some(Contribution::new(value, connect_weight(ctx, y, z)))
+}
+
+/// MIS weight of joining light vertex `y` to camera vertex `z` [tech. rep. (40), (41)].
+pub fn connect_weight(ctx: &BidirContext, y: &PathVertex, z: &PathVertex) -> f32 {
+    let d = y.p - z.p;
+    let dist2 = d.length_squared();
+    let w = d / dist2.sqrt();
     let pdfs = ConnectionPdfs {
         cam_fwd_a: z.bsdf.pdf(z.wo, w, TransportMode::Radiance) * y.cos_geo(w) / dist2,
-        cam_rev_w: z.bsdf.pdf(w, z.wo, TransportMode::Importance),
+        cam_rev_w: z.reverse_pdf(w, TransportMode::Radiance),
         light_fwd_a: y.bsdf.pdf(y.wo, -w, TransportMode::Importance) * z.cos_geo(w) / dist2,
-        light_rev_w: y.bsdf.pdf(-w, y.wo, TransportMode::Radiance),
+        light_rev_w: y.reverse_pdf(-w, TransportMode::Importance),
     };
-    let weight = ctx.mis.connect(&y.mis, &z.mis, pdfs);
-    Some(Contribution::new(value, weight))
+    ctx.mis.connect(&y.mis, &z.mis, pdfs)
 }
 
 /// s = 0: the camera walk, just arrived at light `light` (point `hit`), sees its emission
@@ -224,18 +255,24 @@ pub fn emitter_hit(
     if le.is_black() {
         return None;
     }
+    let weight = emitter_weight(ctx, walk, light, hit, w);
+    Some(Contribution::new(walk.beta * le, weight))
+}
+
+/// MIS weight of the camera walk finding light `light` at `hit`, `w` pointing back
+/// [tech. rep. (42), (43)].
+pub fn emitter_weight(ctx: &BidirContext, walk: &Walk, light: u32, hit: &LightHit, w: Vec3) -> f32 {
+    let lgt = &ctx.scene.lights[light as usize];
     let pmf = ctx.scene.light_sampler.pmf(light as usize);
     let pdf = lgt.pdf_le(hit.p, hit.n, w, &ctx.sphere);
-    let weight = if walk.depth == 1 {
-        ctx.mis.emitter_hit(&walk.mis, pmf * pdf.pos_a, 0.0)
-    } else {
-        let dist2 = (hit.p - walk.prev.p).length_squared();
-        let direct_w = direct_pdf_w(ctx.scene, light, &walk.prev, -w, hit);
-        let direct_a = direct_w * hit.n.dot(w).abs() / dist2;
-        ctx.mis
-            .emitter_hit(&walk.mis, direct_a, pmf * pdf.pos_a * pdf.dir_w)
-    };
-    Some(Contribution::new(walk.beta * le, weight))
+    if walk.depth == 1 {
+        return ctx.mis.emitter_hit(&walk.mis, pmf * pdf.pos_a, 0.0);
+    }
+    let dist2 = (hit.p - walk.prev.p).length_squared();
+    let direct_w = direct_pdf_w(ctx.scene, light, &walk.prev, -w, hit);
+    let direct_a = direct_w * hit.n.dot(w).abs() / dist2;
+    ctx.mis
+        .emitter_hit(&walk.mis, direct_a, pmf * pdf.pos_a * pdf.dir_w)
 }
 
 /// s = 0 for infinite lights: the camera walk escaped along `d`. The walk's MIS quantities
@@ -247,11 +284,6 @@ pub fn escaped(
     d: Vec3,
     lambda: &SampledWavelengths,
 ) -> Contribution {
-    let far = LightHit {
-        p: Vec3::ZERO,
-        n: Vec3::ZERO,
-        t: f32::INFINITY,
-    };
     let mut total = Contribution::default();
     for &i in &ctx.scene.infinite_lights {
         let lgt = &ctx.scene.lights[i as usize];
@@ -259,18 +291,30 @@ pub fn escaped(
         if le.is_black() {
             continue;
         }
-        let weight = if walk.depth == 0 {
-            1.0
-        } else {
-            let pmf = ctx.scene.light_sampler.pmf(i as usize);
-            let direct_w = direct_pdf_w(ctx.scene, i, &walk.prev, d, &far);
-            let pdf = lgt.pdf_le(Vec3::ZERO, Vec3::ZERO, -d, &ctx.sphere);
-            ctx.mis
-                .emitter_hit(&walk.mis, direct_w, pmf * pdf.pos_a * pdf.dir_w)
-        };
-        total += Contribution::new(walk.beta * le, weight);
+        total += Contribution::new(walk.beta * le, escaped_weight(ctx, walk, i, d));
     }
     total
+}
+
+/// MIS weight of the camera walk escaping along `d` to infinite light `light`
+/// [tech. rep. (43), §5.1].
+pub fn escaped_weight(ctx: &BidirContext, walk: &Walk, light: u32, d: Vec3) -> f32 {
+    if ctx.scene.lights[light as usize].is_delta() {
+        return 0.0; // no ray finds a delta light
+    }
+    if walk.depth == 0 {
+        return 1.0;
+    }
+    let far = LightHit {
+        p: Vec3::ZERO,
+        n: Vec3::ZERO,
+        t: f32::INFINITY,
+    };
+    let pmf = ctx.scene.light_sampler.pmf(light as usize);
+    let direct_w = direct_pdf_w(ctx.scene, light, &walk.prev, d, &far);
+    let pdf = ctx.scene.lights[light as usize].pdf_le(Vec3::ZERO, Vec3::ZERO, -d, &ctx.sphere);
+    ctx.mis
+        .emitter_hit(&walk.mis, direct_w, pmf * pdf.pos_a * pdf.dir_w)
 }
 
 /// True when something blocks the segment from a surface point to the sensor sample, within

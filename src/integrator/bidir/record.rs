@@ -160,3 +160,44 @@ fn add3(acc: &mut [f64; 3], v: [f32; 3]) {
         *a += x as f64;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectral::SampledSpectrum;
+
+    #[test]
+    fn terminated_wavelengths_apply_to_every_contribution_of_the_sample() {
+        // A contribution recorded before the termination (a splat from the light subpath) and
+        // one after (the camera subpath's) are both converted with the final wavelengths.
+        let mut rec = SampleRecord::new(0);
+        let c = Contribution::new(SampledSpectrum([1.0, 2.0, 3.0, 4.0]), 1.0);
+        rec.add_splat(5, 2, c);
+        rec.add_camera(1, 2, c);
+        let mut lambda = SampledWavelengths::sample_visible(0.37);
+        lambda.terminate_secondary();
+        let mut acc = TileAccumulator::new(1, 0);
+        acc.add(0, &rec, &lambda);
+        let hero = sampled_to_xyz(SampledSpectrum([1.0, 0.0, 0.0, 0.0]), &lambda);
+        assert_eq!(acc.splats[0].xyz, hero);
+        assert_eq!(acc.sums[0], hero.map(f64::from));
+        assert_eq!(acc.dropped, 0);
+    }
+
+    #[test]
+    fn a_non_finite_contribution_drops_the_whole_sample() {
+        let mut rec = SampleRecord::new(0);
+        rec.add_camera(0, 2, Contribution::new(SampledSpectrum::ONE, 1.0));
+        rec.add_splat(
+            1,
+            3,
+            Contribution::new(SampledSpectrum::splat(f32::NAN), 1.0),
+        );
+        let mut acc = TileAccumulator::new(1, 0);
+        acc.add(0, &rec, &SampledWavelengths::sample_visible(0.5));
+        assert_eq!(
+            (acc.dropped, acc.splats.len(), acc.sums[0]),
+            (1, 0, [0.0; 3])
+        );
+    }
+}

@@ -10,13 +10,13 @@
 use super::mis::{Mis, SubpathMis};
 use super::sensor::Sensor;
 use super::vertex::{bsdf_at, shading_correction, LightOrigin, PathVertex};
-use crate::bxdf::TransportMode;
+use crate::bxdf::{BsdfSample, TransportMode};
 use crate::geometry::offset::spawn_ray;
 use crate::geometry::Ray;
-use crate::light::emit::SceneSphere;
-use crate::light::{Light, LightHit, LightSampleContext};
+use crate::light::emit::{LightLeSample, SceneSphere};
+use crate::light::{LightHit, LightSampleContext};
 use crate::sampling::Sampler;
-use crate::scene::{Hit, Scene, SurfaceHit};
+use crate::scene::{Hit, Scene};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
 
@@ -110,8 +110,7 @@ impl Walk {
         self.depth += 1;
     }
 
-    /// Samples the next direction at vertex `v` and moves the ray there: throughput (with the
-    /// adjoint shading correction for importance), MIS [tech. rep. (34)–(36), (53)–(55)] and
+    /// Samples the next direction at vertex `v` and moves on ([`Walk::advance`]), then
     /// Russian roulette. False when the walk ends.
     pub fn scatter(
         &mut self,
@@ -124,18 +123,21 @@ impl Walk {
         let Some(bs) = v.bsdf.sample_f(v.wo, uc, u, mode) else {
             return false;
         };
+        self.advance(mis, v, bs, mode);
+        self.roulette(sampler)
+    }
+
+    /// Leaves vertex `v` along the sampled `bs`: throughput f |cos θ| / pdf (with the adjoint
+    /// shading correction for importance), MIS [tech. rep. (34)–(36), (53)–(55)], new ray.
+    pub fn advance(&mut self, mis: &Mis, v: &PathVertex, bs: BsdfSample, mode: TransportMode) {
         let mut factor = v.cos_shading(bs.wi) / bs.pdf_w;
-        let reverse = match mode {
-            TransportMode::Importance => {
-                factor *= shading_correction(v.ns, v.ng, v.wo, bs.wi);
-                TransportMode::Radiance
-            }
-            TransportMode::Radiance => TransportMode::Importance,
-        };
+        if mode == TransportMode::Importance {
+            factor *= shading_correction(v.ns, v.ng, v.wo, bs.wi);
+        }
         let pdf_rev_w = if bs.specular {
             bs.pdf_w
         } else {
-            v.bsdf.pdf(bs.wi, v.wo, reverse)
+            v.reverse_pdf(bs.wi, mode)
         };
         let f = bs.f * factor;
         self.beta *= f;
@@ -146,7 +148,6 @@ impl Walk {
         self.t_max = f32::INFINITY;
         self.prev = LightSampleContext { p: v.p, n: v.ng };
         self.from_infinite = false;
-        self.roulette(sampler)
     }
 
     /// Russian roulette after the second bounce when the scattering throughput has dropped
@@ -197,7 +198,14 @@ pub fn trace_light_subpath(
 ) {
     path.clear();
     let (u_light, u_pos, u_dir) = (sampler.get_1d(), sampler.get_2d(), sampler.get_2d());
-    let Some((origin, mut walk)) = emit(ctx, lambda, u_light, u_pos, u_dir) else {
+    let Some((index, pmf)) = ctx.scene.light_sampler.sample(u_light) else {
+        return;
+    };
+    let light = &ctx.scene.lights[index];
+    let Some(le) = light.sample_le(u_pos, u_dir, &ctx.sphere, lambda) else {
+        return;
+    };
+    let Some((origin, mut walk)) = Walk::light(ctx, index as u32, pmf, &le) else {
         return;
     };
     path.origin = Some(origin);
@@ -206,8 +214,8 @@ pub fn trace_light_subpath(
             return;
         };
         if walk.depth == 0 {
-            walk.mis
-                .light_direct(&ctx.mis, first_hit_direct(ctx, &origin, &si, walk.ray.d));
+            let direct = first_hit_direct(ctx, &origin, si.p, si.ng, walk.ray.d);
+            walk.mis.light_direct(&ctx.mis, direct);
         }
         walk.arrive(&ctx.mis, si.p, si.ng);
         if walk.depth > ctx.max_depth {
@@ -226,57 +234,57 @@ pub fn trace_light_subpath(
     }
 }
 
-/// Chooses a light and emits a ray from it: the origin y_0 and the walk leaving it, with
-/// β = L |cos θ| / (pmf p_pos p_dir) (PBR 3ed §16.3.1, GenerateLightSubpath; Veach 1997 §10.2).
-fn emit(
-    ctx: &BidirContext,
-    lambda: &SampledWavelengths,
-    u_light: f32,
-    u_pos: [f32; 2],
-    u_dir: [f32; 2],
-) -> Option<(LightOrigin, Walk)> {
-    let (index, pmf) = ctx.scene.light_sampler.sample(u_light)?;
-    let light: &Light = &ctx.scene.lights[index];
-    let le = light.sample_le(u_pos, u_dir, &ctx.sphere, lambda)?;
-    let emit = pmf * le.pdf_pos_a * le.pdf_dir_w;
-    if le.l.is_black() || !emit.is_finite() || emit <= 0.0 {
-        return None;
+impl Walk {
+    /// A light subpath leaving light `index` (chosen with probability `pmf`) along the
+    /// emitted ray `le`: the origin y_0 and the walk with β = L |cos θ| / (pmf p_pos p_dir)
+    /// (PBR 3ed §16.3.1, GenerateLightSubpath; Veach 1997 §10.2) and the MIS start
+    /// [tech. rep. (31)–(33), (48)–(50)].
+    pub fn light(
+        ctx: &BidirContext,
+        index: u32,
+        pmf: f32,
+        le: &LightLeSample,
+    ) -> Option<(LightOrigin, Walk)> {
+        let emit = pmf * le.pdf_pos_a * le.pdf_dir_w;
+        if le.l.is_black() || !emit.is_finite() || emit <= 0.0 {
+            return None;
+        }
+        let origin = LightOrigin {
+            light: index,
+            p: le.p,
+            p_error: le.p_error,
+            n: le.n,
+            pmf,
+            pdf_pos_a: le.pdf_pos_a,
+            infinite: le.infinite,
+            delta_dir: le.delta_dir,
+        };
+        let ray = if le.infinite {
+            Ray::new(le.p, le.w)
+        } else {
+            spawn_ray(le.p, le.p_error, le.n, le.w)
+        };
+        let walk = Walk {
+            ray,
+            t_max: f32::INFINITY,
+            beta: le.l * (le.cos_light() / emit),
+            rr_beta: SampledSpectrum::ONE,
+            mis: SubpathMis::light_start(&ctx.mis, emit, le.cos_light(), le.delta_dir),
+            depth: 0,
+            prev: LightSampleContext { p: le.p, n: le.n },
+            from_infinite: le.infinite,
+        };
+        Some((origin, walk))
     }
-    let origin = LightOrigin {
-        light: index as u32,
-        p: le.p,
-        p_error: le.p_error,
-        n: le.n,
-        pmf,
-        pdf_pos_a: le.pdf_pos_a,
-        infinite: le.infinite,
-        delta_dir: le.delta_dir,
-    };
-    let ray = if le.infinite {
-        Ray::new(le.p, le.w)
-    } else {
-        spawn_ray(le.p, le.p_error, le.n, le.w)
-    };
-    let walk = Walk {
-        ray,
-        t_max: f32::INFINITY,
-        beta: le.l * (le.cos_light() / emit),
-        rr_beta: SampledSpectrum::ONE,
-        mis: SubpathMis::light_start(&ctx.mis, emit, le.cos_light(), le.delta_dir),
-        depth: 0,
-        prev: LightSampleContext { p: le.p, n: le.n },
-        from_infinite: le.infinite,
-    };
-    Some((origin, walk))
 }
 
-/// The next-event density with which the first light vertex y_1 would have chosen y_0, in the
-/// form [`SubpathMis::light_direct`] takes: per area at y_0, pmf · p_li_w · |cos θ_y0| / d², for
-/// finite lights; per solid angle, pmf · p_li_w, for infinite ones (`d` is the direction of
-/// travel y_0 → y_1).
-fn first_hit_direct(ctx: &BidirContext, o: &LightOrigin, si: &SurfaceHit, d: Vec3) -> f32 {
-    let rctx = LightSampleContext { p: si.p, n: si.ng };
-    let dist2 = (o.p - si.p).length_squared();
+/// The next-event density with which the first light vertex y_1 (at `p`, normal `ng`) would
+/// have chosen y_0, in the form [`SubpathMis::light_direct`] takes: per area at y_0,
+/// pmf · p_li_w · |cos θ_y0| / d², for finite lights; per solid angle, pmf · p_li_w, for
+/// infinite ones (`d` is the direction of travel y_0 → y_1).
+pub fn first_hit_direct(ctx: &BidirContext, o: &LightOrigin, p: Vec3, ng: Vec3, d: Vec3) -> f32 {
+    let rctx = LightSampleContext { p, n: ng };
+    let dist2 = (o.p - p).length_squared();
     let direct = direct_pdf_w(ctx.scene, o.light, &rctx, -d, &o.hit(dist2.sqrt()));
     if o.infinite {
         direct

@@ -66,6 +66,17 @@ impl PathVertex {
             * shading_correction(self.ns, self.ng, self.wo, wi)
     }
 
+    /// The density with which the *other* subpath would sample `self.wo` at this vertex,
+    /// arriving from `wi` (the vertex's own subpath transports in `mode`).
+    #[inline]
+    pub fn reverse_pdf(&self, wi: Vec3, mode: TransportMode) -> f32 {
+        let other = match mode {
+            TransportMode::Importance => TransportMode::Radiance,
+            TransportMode::Radiance => TransportMode::Importance,
+        };
+        self.bsdf.pdf(wi, self.wo, other)
+    }
+
     /// |cos θ| against the shading normal (the cosine of the rendering equation).
     #[inline]
     pub fn cos_shading(&self, w: Vec3) -> f32 {
