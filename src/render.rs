@@ -134,7 +134,8 @@ fn render_in_pool(scene: &Scene, opts: &RenderOptions) -> Result<RenderOutput, S
     let mut done = 0u64;
     let mut dropped = 0u64;
     while done < target {
-        let pass_end = done + pass_size(done, target, opts.time_budget.is_some());
+        let elapsed = start.elapsed().as_secs_f64();
+        let pass_end = done + pass_size(done, target, opts.time_budget, elapsed);
         while done < pass_end {
             let count = chunk.min(pass_end - done);
             let results: Vec<TileAccumulator> = tiles
@@ -216,14 +217,21 @@ fn strategy_count(opts: &RenderOptions) -> Result<usize, String> {
     Ok(strategies::count(opts.max_depth))
 }
 
-/// Pass sizes: everything at once for a sample count; growing passes (1, 1, 2, 4, … 64) under
-/// a time budget so that the budget is checked often at first and cheaply later.
-fn pass_size(done: u64, target: u64, timed: bool) -> u64 {
+/// Pass sizes: everything at once for a sample count; under a time budget, growing passes
+/// (1, 1, 2, 4, … 64) so that the budget is checked often at first and cheaply later, each cut
+/// to what the rate so far says still fits in the budget (at least 1), so that the render
+/// ends close to the budget (equal-time comparisons rely on it).
+fn pass_size(done: u64, target: u64, budget: Option<f64>, elapsed: f64) -> u64 {
     let remaining = target - done;
-    if !timed {
+    let Some(budget) = budget else {
         return remaining;
+    };
+    let mut n = done.clamp(1, 64);
+    if done > 0 && elapsed > 0.0 {
+        let fits = (budget - elapsed) / (elapsed / done as f64);
+        n = n.min((fits.max(1.0)) as u64);
     }
-    done.clamp(1, 64).min(remaining)
+    n.min(remaining)
 }
 
 /// Samples [first, first + count) of every pixel of one tile.

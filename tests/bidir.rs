@@ -1332,3 +1332,59 @@ fn bidirectional_images_are_bit_identical_for_one_and_two_threads() {
         assert_eq!(run(1), run(2), "{kind:?}");
     }
 }
+
+#[test]
+fn command_line_options_of_the_bidirectional_integrators() {
+    let dir = temp_dir("bidir-cli");
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_spectral-render"))
+            .args(args)
+            .arg(cbox())
+            .current_dir(&dir)
+            .output()
+            .unwrap()
+    };
+    for (integrator, mis) in [("light", "power"), ("bdpt", "balance")] {
+        let o = run(&[
+            "--integrator",
+            integrator,
+            "--mis",
+            mis,
+            "--spp",
+            "2",
+            "--resolution",
+            "8x8",
+            "-o",
+            "x.exr",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = spectral_render::output::exr::read(&dir.join("x.exr")).unwrap();
+        assert!(img.channels["XYZ.Y"].iter().all(|v| v.is_finite()));
+    }
+    for (args, message) in [
+        (&["--integrator", "vcm"][..], "unknown integrator"),
+        (&["--mis", "cutoff"][..], "unknown MIS heuristic"),
+        (
+            &["--strategies", "st"][..],
+            "--strategies needs --integrator bdpt",
+        ),
+        (
+            &[
+                "--integrator",
+                "bdpt",
+                "--strategies",
+                "st",
+                "--max-depth",
+                "40",
+            ][..],
+            "strategy images need --max-depth 15 or less",
+        ),
+    ] {
+        let o = run(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(message),
+            "{args:?}: {err}"
+        );
+    }
+}

@@ -116,42 +116,60 @@ impl TileAccumulator {
     pub fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths) {
         let xyz = |s| sampled_to_xyz(s, lambda);
         let own = xyz(rec.camera.weighted);
-        let finite = |v: &[f32; 3]| v.iter().all(|c| c.is_finite());
-        let splats_ok = rec.splats.iter().all(|s| finite(&xyz(s.c.weighted)));
-        let parts_ok = rec
-            .strategies
-            .iter()
-            .chain(rec.splats.iter().map(|s| &s.c))
-            .all(|c| finite(&xyz(c.unweighted)));
-        if !(finite(&own) && splats_ok && parts_ok) {
+        let mut ok = finite(&own);
+        let first_splat = self.splats.len();
+        for s in &rec.splats {
+            let v = xyz(s.c.weighted);
+            ok &= finite(&v);
+            self.splats.push(Splat {
+                pixel: s.bin,
+                xyz: v,
+            });
+        }
+        if self.strategies.is_some() {
+            ok &= rec
+                .strategies
+                .iter()
+                .chain(rec.splats.iter().map(|s| &s.c))
+                .all(|c| finite(&xyz(c.unweighted)) && finite(&xyz(c.weighted)));
+        }
+        if !ok {
+            self.splats.truncate(first_splat);
             self.dropped += 1;
             return;
         }
         add3(&mut self.sums[k], own);
-        for s in &rec.splats {
-            self.splats.push(Splat {
-                pixel: s.bin,
-                xyz: xyz(s.c.weighted),
-            });
-        }
         if let Some(st) = &mut self.strategies {
-            for (i, c) in rec.strategies.iter().enumerate() {
-                if c.unweighted.is_black() {
-                    continue;
-                }
-                add3(&mut st.weighted[i * st.pixels + k], xyz(c.weighted));
-                add3(&mut st.unweighted[i * st.pixels + k], xyz(c.unweighted));
-            }
-            for s in &rec.splats {
-                st.splats.push(StrategySplat {
-                    pixel: s.bin,
-                    strategy: s.strategy,
-                    weighted: xyz(s.c.weighted),
-                    unweighted: xyz(s.c.unweighted),
-                });
-            }
+            st.add(k, rec, lambda);
         }
     }
+}
+
+impl StrategyTile {
+    /// A finished (finite) sample's contributions, per strategy.
+    fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths) {
+        let xyz = |s| sampled_to_xyz(s, lambda);
+        for (i, c) in rec.strategies.iter().enumerate() {
+            if c.unweighted.is_black() {
+                continue;
+            }
+            add3(&mut self.weighted[i * self.pixels + k], xyz(c.weighted));
+            add3(&mut self.unweighted[i * self.pixels + k], xyz(c.unweighted));
+        }
+        for s in &rec.splats {
+            self.splats.push(StrategySplat {
+                pixel: s.bin,
+                strategy: s.strategy,
+                weighted: xyz(s.c.weighted),
+                unweighted: xyz(s.c.unweighted),
+            });
+        }
+    }
+}
+
+#[inline]
+fn finite(v: &[f32; 3]) -> bool {
+    v.iter().all(|c| c.is_finite())
 }
 
 #[inline]
