@@ -597,7 +597,7 @@ fn path_light_and_bdpt_agree_per_pixel() {
             let z = z_test(a, b, alpha);
             let (wp, wc) = z.worst;
             eprintln!(
-                "{}: {label}: {} tests, max |z| {:.2} (pixel {wp} channel {wc}: {:.4} ± {:.4} vs {:.4} ± {:.4}), min p {:.2e}, Šidák level {:.2e}; \
+                "{}: {label}: {} tests, max |z| {:.2} (pixel {wp} channel {wc}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}), min p {:.2e}, Šidák level {:.2e}; \
                  image Y {:.5} ± {:.5} vs {:.5} ± {:.5} (z {:.2})",
                 case.name,
                 z.tests,

@@ -87,6 +87,9 @@ impl Film {
 
     /// Adds splats in the order given (callers pass tiles in tile order).
     pub fn add_splats(&mut self, splats: &[Splat]) {
+        if splats.is_empty() {
+            return;
+        }
         if self.splat.is_empty() {
             self.splat = vec![[0.0; 3]; self.width * self.height];
         }
