@@ -1,6 +1,7 @@
 //! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
 
-use crate::integrator::IntegratorKind;
+use crate::integrator::bidir::strategies::StrategyImage;
+use crate::integrator::{IntegratorKind, MisHeuristic};
 use crate::output::{exr, png};
 use crate::render::{self, RenderOptions};
 use crate::{scene, spectral};
@@ -36,9 +37,15 @@ struct RenderArgs {
     /// Maximum number of scattering events (pbrt's maxdepth; Mitsuba's max_depth − 1).
     #[arg(long = "max-depth", default_value_t = 7)]
     max_depth: u32,
-    /// Light-transport algorithm.
+    /// Light-transport algorithm: path, light (light tracing) or bdpt.
     #[arg(long, default_value = "path", value_parser = parse_integrator)]
     integrator: IntegratorKind,
+    /// MIS heuristic of BDPT: power (β = 2) or balance.
+    #[arg(long, default_value = "power", value_parser = parse_mis)]
+    mis: MisHeuristic,
+    /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
+    #[arg(long, value_name = "DIR")]
+    strategies: Option<PathBuf>,
     /// Also write an 8-bit sRGB PNG preview.
     #[arg(long)]
     preview: Option<PathBuf>,
@@ -67,7 +74,21 @@ fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
     match s {
         "path" => Ok(IntegratorKind::Path),
-        other => Err(format!("unknown integrator '{other}' (available: path)")),
+        "light" => Ok(IntegratorKind::Light),
+        "bdpt" => Ok(IntegratorKind::Bdpt),
+        other => Err(format!(
+            "unknown integrator '{other}' (available: path, light, bdpt)"
+        )),
+    }
+}
+
+fn parse_mis(s: &str) -> Result<MisHeuristic, String> {
+    match s {
+        "power" => Ok(MisHeuristic::Power),
+        "balance" => Ok(MisHeuristic::Balance),
+        other => Err(format!(
+            "unknown MIS heuristic '{other}' (available: power, balance)"
+        )),
     }
 }
 
@@ -87,6 +108,8 @@ fn run(args: &RenderArgs) -> Result<(), String> {
         threads: args.threads,
         max_depth: args.max_depth,
         integrator: args.integrator,
+        mis: args.mis,
+        strategies: args.strategies.is_some(),
         progress: true,
     };
     let out = render::render(&scene, &opts)?;
@@ -121,6 +144,9 @@ fn run(args: &RenderArgs) -> Result<(), String> {
             args.preview_exposure,
         )?;
     }
+    if let (Some(dir), Some(images)) = (&args.strategies, &out.strategies) {
+        write_strategies(dir, &out, images, &meta, white)?;
+    }
     let rate = (out.width * out.height) as f64 * out.spp as f64 / out.wall_time_s.max(1e-9);
     eprintln!(
         "wrote {} ({}x{}, {} spp, {:.2} s, {:.2} Msamples/s)",
@@ -134,7 +160,43 @@ fn run(args: &RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// One EXR per strategy and kind: `DIR/d{depth}_s{s}_t{t}_{weighted,unweighted}.exr`.
+fn write_strategies(
+    dir: &Path,
+    out: &render::RenderOutput,
+    images: &[StrategyImage],
+    meta: &exr::ExrMetadata,
+    white: [f32; 2],
+) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    for img in images {
+        let depth = img.s + img.t - 2;
+        for (kind, xyz) in [("weighted", &img.weighted), ("unweighted", &img.unweighted)] {
+            let name = format!("d{depth:02}_s{:02}_t{:02}_{kind}.exr", img.s, img.t);
+            let rgb: Vec<[f32; 3]> = xyz.iter().map(|p| render::xyz_to_rgb(*p)).collect();
+            exr::write(
+                &dir.join(name),
+                out.width,
+                out.height,
+                &rgb,
+                xyz,
+                white,
+                meta,
+            )?;
+        }
+    }
+    eprintln!(
+        "wrote {} strategy images to {}",
+        2 * images.len(),
+        dir.display()
+    );
+    Ok(())
+}
+
 fn validate(args: &RenderArgs) -> Result<(), String> {
+    if args.strategies.is_some() && args.integrator != IntegratorKind::Bdpt {
+        return Err("--strategies needs --integrator bdpt".into());
+    }
     if args.spp == Some(0) {
         return Err("--spp must be at least 1".into());
     }

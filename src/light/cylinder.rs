@@ -18,7 +18,7 @@
 //! ```
 
 use super::shaping::{self, Shaping};
-use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
+use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
 use crate::math::Frame;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::Vec3;
@@ -54,33 +54,23 @@ impl CylinderLight {
         n.dot(self.frame.n).abs() > 0.5
     }
 
+    /// A uniformly distributed point on the lateral surface and its outward normal.
+    pub fn point_on_side(&self, u: [f32; 2]) -> (Vec3, Vec3) {
+        let x = (u[0] - 0.5) * self.length;
+        let (sin_phi, cos_phi) = (2.0 * PI * u[1]).sin_cos();
+        let n = cos_phi * self.frame.s + sin_phi * self.frame.t;
+        (self.center + x * self.frame.n + self.radius * n, n)
+    }
+
     pub fn sample_li(
         &self,
         ctx: &LightSampleContext,
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let x = (u[0] - 0.5) * self.length;
-        let (sin_phi, cos_phi) = (2.0 * PI * u[1]).sin_cos();
-        let n = cos_phi * self.frame.s + sin_phi * self.frame.t;
-        let p = self.center + x * self.frame.n + self.radius * n;
-        let wi = (p - ctx.p).normalize_or_zero();
-        if wi == Vec3::ZERO || n.dot(-wi) <= 0.0 || self.area() == 0.0 {
-            return None;
-        }
-        let pdf_w = area_to_solid_angle(1.0 / self.area(), ctx.p, p, n);
-        if pdf_w == 0.0 || !pdf_w.is_finite() {
-            return None;
-        }
-        let l = shaping::shape(&self.shaping, -wi, self.radiance.sample(lambda), lambda);
-        Some(LightLiSample {
-            l,
-            wi,
-            pdf_w,
-            p_light: p,
-            n_light: n,
-            delta: false,
-            infinite: false,
+        let (p, n) = self.point_on_side(u);
+        sample_by_area(ctx, p, n, self.area(), false, |w| {
+            shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
         })
     }
 

@@ -5,11 +5,45 @@
 //! (UsdRenderSettings' default `aspectRatioConformPolicy = "expandAperture"`). The camera
 //! looks along its local −Z with +Y up. Pixel values are radiance: the camera's importance is
 //! normalised so that a sample's weight is 1 (a box filter of one pixel).
+//!
+//! Importance for light transport from the light side (PBR 4ed §5.4.1, `PerspectiveCamera::We`,
+//! `PDF_We`, `SampleWi`): a ray leaving lens point `p_lens` (pinhole: the camera position)
+//! along direction ω with cos θ = ω·forward carries
+//!   We = 1 / (A · A_lens · cos⁴θ)
+//! where A is the image-plane area at distance 1 (`4 half_w half_h`) and A_lens = π r²
+//! (1 for the pinhole). Camera rays are generated with p_pos = 1/A_lens on the lens and
+//! p_dir = 1/(A cos³θ) per solid angle (dA_film = dω / cos³θ, for the thin lens too because
+//! the focal plane is parallel to the film). These are normalised over the *whole* image, so a
+//! light path splatting into pixel j estimates (pixel j's value) / N_pixels, and the film
+//! divides splats by light paths per pixel (pbrt-v4's `splatScale = 1/spp`).
 
 use crate::geometry::Ray;
 use crate::sampling::warp::concentric_disk;
 use crate::scene::desc::CameraDesc;
 use glam::{Mat4, Vec3};
+use std::f32::consts::PI;
+
+/// A lens point sampled towards a reference point, with the importance arriving there
+/// (PBR 4ed §5.4.1, `CameraWiSample`).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraWiSample {
+    /// Unit direction from the reference point towards the lens point.
+    pub wi: Vec3,
+    pub p_lens: Vec3,
+    /// Distance from the reference point to the lens point.
+    pub dist: f32,
+    /// Importance We of the ray from the lens point through the reference point.
+    pub we: f32,
+    /// Solid-angle density of `wi` at the reference point: dist² / (cos θ · A_lens).
+    pub pdf_w: f32,
+    /// Density per solid angle with which camera rays leave `p_lens` along −wi (for MIS).
+    pub pdf_dir_w: f32,
+    /// Continuous raster position (pixels, origin top left).
+    pub raster: [f32; 2],
+    /// Fraction of the segment reference → lens beyond the near clipping plane: occluders
+    /// are looked for only there, as camera rays start on that plane.
+    pub visible_fraction: f32,
+}
 
 #[derive(Clone, Debug)]
 pub struct Camera {
@@ -26,6 +60,8 @@ pub struct Camera {
     pub clip_far: f32,
     /// 2^exposure: the image scale UsdLux asks renderers to apply.
     pub exposure_scale: f32,
+    /// Inverse of `to_world` (a rigid transform).
+    pub from_world: Mat4,
 }
 
 impl Camera {
@@ -51,6 +87,7 @@ impl Camera {
             clip_near: desc.clip_near.max(0.0),
             clip_far: desc.clip_far,
             exposure_scale: desc.exposure.exp2(),
+            from_world: desc.to_world.inverse(),
         }
     }
 
@@ -83,6 +120,136 @@ impl Camera {
 
     pub fn position(&self) -> Vec3 {
         self.to_world.transform_point3(Vec3::ZERO)
+    }
+
+    /// Unit viewing direction (world-space local −Z).
+    pub fn forward(&self) -> Vec3 {
+        self.to_world.transform_vector3(Vec3::NEG_Z).normalize()
+    }
+
+    /// Image-plane area at distance 1, A of PBR 4ed eq. 5.3 ff.
+    pub fn image_area(&self) -> f32 {
+        4.0 * self.half_w * self.half_h
+    }
+
+    /// Lens area π r² (1 for the pinhole, as pbrt-v4).
+    pub fn lens_area(&self) -> f32 {
+        if self.lens_radius > 0.0 {
+            PI * self.lens_radius * self.lens_radius
+        } else {
+            1.0
+        }
+    }
+
+    /// The world-space lens point that [`Camera::generate_ray`] uses for `u_lens`.
+    pub fn lens_point(&self, u_lens: [f32; 2]) -> Vec3 {
+        self.to_world.transform_point3(self.lens_local(u_lens))
+    }
+
+    fn lens_local(&self, u_lens: [f32; 2]) -> Vec3 {
+        if self.lens_radius > 0.0 {
+            let l = concentric_disk(u_lens) * self.lens_radius;
+            Vec3::new(l.x, l.y, 0.0)
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// Importance We of the ray leaving lens point `p_lens` in unit direction `w`, and the
+    /// raster position it passes through; 0 and None outside the image (PBR 4ed §5.4.1).
+    pub fn we(&self, p_lens: Vec3, w: Vec3) -> (f32, Option<[f32; 2]>) {
+        let o = self.from_world.transform_point3(p_lens);
+        let d = self.from_world.transform_vector3(w);
+        let cos = -d.z;
+        let Some(raster) = self.raster_of_ray(o, d) else {
+            return (0.0, None);
+        };
+        let cos2 = cos * cos;
+        (
+            1.0 / (self.image_area() * self.lens_area() * cos2 * cos2),
+            Some(raster),
+        )
+    }
+
+    /// Densities of camera-ray generation for the ray leaving lens point `p_lens` along unit
+    /// direction `w`: (per lens area, per solid angle) = (1/A_lens, 1/(A cos³θ)), zero outside
+    /// the image (PBR 4ed §5.4.1, `PerspectiveCamera::PDF_We`).
+    pub fn pdf_we(&self, p_lens: Vec3, w: Vec3) -> (f32, f32) {
+        let o = self.from_world.transform_point3(p_lens);
+        let d = self.from_world.transform_vector3(w);
+        if self.raster_of_ray(o, d).is_none() {
+            return (0.0, 0.0);
+        }
+        (1.0 / self.lens_area(), self.ray_pdf_dir(w))
+    }
+
+    /// 1/(A cos³θ) for a ray this camera generated along unit direction `w` (no image-bounds
+    /// test, which rounding could fail at the image border).
+    pub fn ray_pdf_dir(&self, w: Vec3) -> f32 {
+        let cos = -self.from_world.transform_vector3(w).z;
+        if cos <= 0.0 {
+            return 0.0;
+        }
+        1.0 / (self.image_area() * cos * cos * cos)
+    }
+
+    /// Samples a lens point seen from `p_ref` (PBR 4ed §5.4.1, `PerspectiveCamera::SampleWi`);
+    /// None when `p_ref` is outside the clipping range or the image.
+    pub fn sample_wi(&self, p_ref: Vec3, u_lens: [f32; 2]) -> Option<CameraWiSample> {
+        let q = self.from_world.transform_point3(p_ref);
+        let depth = -q.z;
+        if !(depth > self.clip_near && depth < self.clip_far) {
+            return None;
+        }
+        let lens = self.lens_local(u_lens);
+        let to_ref = q - lens;
+        let dist = to_ref.length();
+        if dist == 0.0 || !dist.is_finite() {
+            return None;
+        }
+        let d = to_ref / dist;
+        let cos = -d.z;
+        let raster = self.raster_of_ray(lens, d)?;
+        let cos2 = cos * cos;
+        let we = 1.0 / (self.image_area() * self.lens_area() * cos2 * cos2);
+        let pdf_w = dist * dist / (cos * self.lens_area());
+        let p_lens = self.to_world.transform_point3(lens);
+        Some(CameraWiSample {
+            wi: (p_lens - p_ref).normalize(),
+            p_lens,
+            dist,
+            we,
+            pdf_w,
+            pdf_dir_w: 1.0 / (self.image_area() * cos2 * cos),
+            raster,
+            visible_fraction: (depth - self.clip_near) / depth,
+        })
+    }
+
+    /// Raster position of the camera-space ray (o on the lens, unit d): where it crosses the
+    /// film at distance 1 (pinhole) or the focal plane (thin lens, PBR 4ed §5.2.3).
+    fn raster_of_ray(&self, o: Vec3, d: Vec3) -> Option<[f32; 2]> {
+        let cos = -d.z;
+        if cos <= 0.0 {
+            return None;
+        }
+        let (sx, sy) = if self.lens_radius > 0.0 {
+            let f = o + d * (self.focus_distance / cos);
+            (f.x / self.focus_distance, f.y / self.focus_distance)
+        } else {
+            (d.x / cos, d.y / cos)
+        };
+        let x = (sx / self.half_w + 1.0) * 0.5 * self.width as f32;
+        let y = (1.0 - sy / self.half_h) * 0.5 * self.height as f32;
+        let inside =
+            (0.0..self.width as f32).contains(&x) && (0.0..self.height as f32).contains(&y);
+        inside.then_some([x, y])
+    }
+
+    /// The pixel index of a raster position.
+    pub fn pixel_index(&self, raster: [f32; 2]) -> Option<u32> {
+        let (x, y) = (raster[0] as u32, raster[1] as u32);
+        (x < self.width && y < self.height).then(|| y * self.width + x)
     }
 }
 
@@ -141,5 +308,74 @@ mod tests {
         };
         let (a, b) = (target([0.1, 0.2]), target([0.9, 0.7]));
         assert!((a - b).length() < 1e-4, "{a} {b}");
+    }
+
+    fn thin_lens() -> Camera {
+        let mut d = desc();
+        d.lens_radius = 0.05;
+        d.focus_distance = 2.0;
+        d.to_world = Mat4::from_rotation_y(0.3) * d.to_world;
+        Camera::new(&d, 48, 32)
+    }
+
+    #[test]
+    fn sample_wi_and_we_find_the_pixel_of_a_camera_ray() {
+        let mut s = crate::sampling::Sampler::new(9, 0, 0);
+        for cam in [Camera::new(&desc(), 40, 30), thin_lens()] {
+            for _ in 0..200 {
+                let film = [s.get_1d() * 40.0, s.get_1d() * 30.0];
+                let film = [
+                    film[0] * cam.width as f32 / 40.0,
+                    film[1] * cam.height as f32 / 30.0,
+                ];
+                let u = s.get_2d();
+                let (ray, _) = cam.generate_ray(film, u);
+                let p_lens = cam.lens_point(u);
+                let (we, raster) = cam.we(p_lens, ray.d);
+                let r = raster.unwrap();
+                assert!((r[0] - film[0]).abs() < 2e-3 && (r[1] - film[1]).abs() < 2e-3);
+                let ws = cam.sample_wi(ray.at(1.5), u).unwrap();
+                assert!((ws.raster[0] - film[0]).abs() < 2e-3);
+                assert!((ws.raster[1] - film[1]).abs() < 2e-3);
+                assert!((ws.we / we - 1.0).abs() < 1e-3 && (ws.wi + ray.d).length() < 1e-3);
+                let (pos, dir) = cam.pdf_we(p_lens, ray.d);
+                assert!((pos * cam.lens_area() - 1.0).abs() < 1e-5);
+                assert!((dir / ws.pdf_dir_w - 1.0).abs() < 1e-3);
+            }
+        }
+    }
+
+    #[test]
+    fn importance_integrates_to_one_over_the_image() {
+        // ∫ We cos θ dω = 1 / A_lens (PBR 4ed §5.4.1), by uniform sampling of the hemisphere.
+        let mut s = crate::sampling::Sampler::new(10, 0, 0);
+        for cam in [Camera::new(&desc(), 64, 32), thin_lens()] {
+            let n = 400_000;
+            let fwd = cam.forward();
+            let frame = crate::math::Frame::from_normal(fwd);
+            let p_lens = cam.lens_point([0.3, 0.6]);
+            let mut sum = 0.0f64;
+            for _ in 0..n {
+                let w = frame.to_world(crate::sampling::warp::uniform_sphere(s.get_2d()));
+                let (we, _) = cam.we(p_lens, w);
+                sum += (we * w.dot(fwd).max(0.0)) as f64 * 4.0 * std::f64::consts::PI;
+            }
+            let est = sum / n as f64 * cam.lens_area() as f64;
+            assert!((est - 1.0).abs() < 0.02, "{est}");
+        }
+    }
+
+    #[test]
+    fn points_outside_the_clipping_range_are_not_seen() {
+        let cam = Camera::new(&desc(), 16, 16);
+        assert!(cam
+            .sample_wi(Vec3::new(0.0, 0.0, 3.9 - 0.0005), [0.5; 2])
+            .is_none());
+        assert!(cam
+            .sample_wi(Vec3::new(0.0, 0.0, 3.9 - 200.0), [0.5; 2])
+            .is_none());
+        assert!(cam.sample_wi(Vec3::new(0.0, 0.0, 5.0), [0.5; 2]).is_none());
+        let ws = cam.sample_wi(Vec3::new(0.0, 0.0, 0.0), [0.5; 2]).unwrap();
+        assert!((ws.visible_fraction - (3.9 - 0.001) / 3.9).abs() < 1e-5);
     }
 }

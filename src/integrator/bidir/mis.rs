@@ -1,0 +1,286 @@
+//! Multiple importance sampling for bidirectional estimators by recurrent partial weights
+//! (Georgiev 2012, "Implementing Vertex Connection and Merging", tech. rep.; SmallVCM).
+//!
+//! For a full path built by technique s (s light vertices), the weight is
+//! w_s = m(p_s) / Σ_j m(p_j), with m(x) = x for the balance and m(x) = x² for the power
+//! heuristic (Veach 1997 eqs. 9.12, 9.13; m distributes over the products below, so both fit the
+//! same recurrence). Dividing by m(p_s) gives [tech. rep. (37)]
+//!
+//!   w_s = 1 / (w_light + 1 + w_camera),
+//!
+//! where w_light = Σ_{j<s} m(p_j/p_s) and w_camera = Σ_{j>s} m(p_j/p_s) are computed from three
+//! numbers cached at every subpath vertex, [`SubpathMis`] `dvcm`, `dvc`, `dvm`, so a connection
+//! costs O(1) instead of O(path length). The quantities (for a light vertex y_i; camera vertices
+//! are symmetric, with the camera in place of the light):
+//!
+//! - `dvcm` = m(1/p→(y_i)), the area density of y_i from its own subpath (after the direct
+//!   sampling pdf of the light for i = 1, eq. 31);
+//! - `dvc` gathers the techniques that would sample y_{i−1}, y_{i−2}, … from the other side,
+//!   up to the geometry of the next, not yet known, connection.
+//!
+//! Conventions: pdfs named `_w` per solid angle, `_a` per area; "forward" is the direction a
+//! subpath was built in, "reverse" the other one. A light sub-path count n_L = 1: one light path
+//! per camera path, with the camera's importance normalised over the whole image (see
+//! `sensor::camera`), so the report's n_VC = 1 and its N_L factors drop out. Russian roulette is
+//! not folded into the pdfs (as pbrt-v4's BDPT): the weights are still a partition of unity for
+//! every path, which is all unbiasedness needs.
+
+/// Which heuristic turns technique pdfs into weights.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MisHeuristic {
+    /// Veach 1997 eq. 9.10 (β = 1).
+    Balance,
+    /// Veach 1997 eq. 9.13 with β = 2.
+    #[default]
+    Power,
+}
+
+impl MisHeuristic {
+    pub fn name(&self) -> &'static str {
+        match self {
+            MisHeuristic::Balance => "balance",
+            MisHeuristic::Power => "power",
+        }
+    }
+}
+
+/// The MIS configuration of a render: the heuristic and the merging factors of VCM.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mis {
+    pub heuristic: MisHeuristic,
+    /// m(η_VCM), η_VCM = π r² n_VM / n_VC [tech. rep. (20)] ("mMisVmWeightFactor"):
+    /// the weight of a merge relative to a connection; 0 when nothing merges (BDPT).
+    pub vm_weight: f32,
+    /// m(1/η_VCM) ("mMisVcWeightFactor"), used by merging weights only; 0 for BDPT.
+    pub vc_weight: f32,
+}
+
+impl Mis {
+    /// Connections only: bidirectional path tracing and light tracing.
+    pub fn bdpt(heuristic: MisHeuristic) -> Mis {
+        Mis {
+            heuristic,
+            vm_weight: 0.0,
+            vc_weight: 0.0,
+        }
+    }
+
+    /// m(x): the heuristic applied to one pdf or pdf ratio.
+    #[inline]
+    pub fn m(&self, x: f32) -> f32 {
+        match self.heuristic {
+            MisHeuristic::Balance => x,
+            MisHeuristic::Power => x * x,
+        }
+    }
+
+    /// Connecting light vertex y_{s−1} to camera vertex z_{t−1} (s, t ≥ 2)
+    /// [tech. rep. (37), (40), (41)]; the densities are described at [`ConnectionPdfs`].
+    #[inline]
+    pub fn connect(&self, light: &SubpathMis, cam: &SubpathMis, pdfs: ConnectionPdfs) -> f32 {
+        let w_light = self.m(pdfs.cam_fwd_a)
+            * (self.vm_weight + light.dvcm + light.dvc * self.m(pdfs.light_rev_w));
+        let w_camera = self.m(pdfs.light_fwd_a)
+            * (self.vm_weight + cam.dvcm + cam.dvc * self.m(pdfs.cam_rev_w));
+        weight(w_light + 1.0 + w_camera)
+    }
+
+    /// Light vertex y_{s−1} (s ≥ 2) connected to the camera, t = 1 [tech. rep. (46), (47),
+    /// (37)]; `cam_a` is the density with which a camera ray would find y_{s−1} (with n_L = 1).
+    #[inline]
+    pub fn light_to_camera(&self, light: &SubpathMis, cam_a: f32, light_rev_w: f32) -> f32 {
+        let w_light =
+            self.m(cam_a) * (self.vm_weight + light.dvcm + light.dvc * self.m(light_rev_w));
+        weight(w_light + 1.0)
+    }
+
+    /// The light's own point y_0 seen by the camera (s = 1, t = 1): the only other technique
+    /// for this two-vertex path is the camera ray hitting it (s = 0), so
+    /// w = 1 / (1 + m(p_cam_a / (pmf · p_pos_a))) (eq. (37) with n = 2).
+    #[inline]
+    pub fn origin_to_camera(&self, cam_a: f32, emit_pos_a: f32) -> f32 {
+        weight(1.0 + self.m(cam_a / emit_pos_a))
+    }
+
+    /// Next-event estimation at camera vertex z_{t−1}, s = 1 [tech. rep. (44), (45), (37)].
+    /// `direct_w` = pmf · the light-sampling density at z (1 relative to a delta);
+    /// `emit` = pmf · p_pos_a · p_dir_w of emitting the same ray from the light;
+    /// `cos_cam` (geometric, at z) and `cos_light` (1 for infinite lights) convert it;
+    /// `bsdf_fwd_w` / `bsdf_rev_w` are z's BSDF densities towards the light / back.
+    #[inline]
+    pub fn direct(&self, cam: &SubpathMis, p: DirectPdfs) -> f32 {
+        let w_light = if p.delta {
+            0.0
+        } else {
+            self.m(p.bsdf_fwd_w / p.direct_w)
+        };
+        let w_camera = self.m(p.emit * p.cos_cam / (p.direct_w * p.cos_light))
+            * (self.vm_weight + cam.dvcm + cam.dvc * self.m(p.bsdf_rev_w));
+        weight(w_light + 1.0 + w_camera)
+    }
+
+    /// A camera path that finds an emitter, s = 0 [tech. rep. (42), (43), (37)]:
+    /// w_camera = m(direct_a) · dVCM + m(emit) · dVC, with `direct_a` the light-sampling
+    /// density of the point per area (per solid angle for infinite lights, whose camera
+    /// quantities are not yet divided by the distance, §5.1) and `emit` = pmf · p_pos · p_dir.
+    #[inline]
+    pub fn emitter_hit(&self, cam: &SubpathMis, direct_a: f32, emit: f32) -> f32 {
+        let w_camera = self.m(direct_a) * cam.dvcm + self.m(emit) * cam.dvc;
+        weight(1.0 + w_camera)
+    }
+}
+
+/// The four densities of a vertex connection, see [`Mis::connect`].
+#[derive(Clone, Copy, Debug)]
+pub struct ConnectionPdfs {
+    /// Density of the light vertex when the camera vertex's BSDF samples it, per area.
+    pub cam_fwd_a: f32,
+    /// The light vertex's BSDF density towards its predecessor, given the connection.
+    pub light_rev_w: f32,
+    /// Density of the camera vertex when the light vertex's BSDF samples it, per area.
+    pub light_fwd_a: f32,
+    /// The camera vertex's BSDF density towards its predecessor, given the connection.
+    pub cam_rev_w: f32,
+}
+
+/// The densities of next-event estimation, see [`Mis::direct`].
+#[derive(Clone, Copy, Debug)]
+pub struct DirectPdfs {
+    pub direct_w: f32,
+    pub emit: f32,
+    pub cos_cam: f32,
+    pub cos_light: f32,
+    pub bsdf_fwd_w: f32,
+    pub bsdf_rev_w: f32,
+    pub delta: bool,
+}
+
+/// 1 / denominator, 0 when the denominator overflowed or is not a number.
+#[inline]
+fn weight(denominator: f32) -> f32 {
+    if denominator.is_finite() && denominator > 0.0 {
+        1.0 / denominator
+    } else {
+        0.0
+    }
+}
+
+/// Partial MIS weights cached along a subpath ("dVCM", "dVC", "dVM" of SmallVCM).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SubpathMis {
+    pub dvcm: f32,
+    pub dvc: f32,
+    pub dvm: f32,
+}
+
+impl SubpathMis {
+    /// A camera subpath whose first ray has direction density `pdf_dir_w` [tech. rep. (31)–(33),
+    /// the part known before tracing]: dVCM = m(n_L / p_dir_w) with n_L = 1, dVC = dVM = 0
+    /// (no technique samples the lens from the light side, t = 0).
+    #[inline]
+    pub fn camera_start(mis: &Mis, pdf_dir_w: f32) -> SubpathMis {
+        SubpathMis {
+            dvcm: mis.m(1.0 / pdf_dir_w),
+            dvc: 0.0,
+            dvm: 0.0,
+        }
+    }
+
+    /// A light subpath emitted with `emit` = pmf · p_pos_a · p_dir_w [tech. rep. (31)–(33),
+    /// delta lights (48)–(50)]: dVCM = m(1/emit) (the direct-sampling density is multiplied in
+    /// by [`SubpathMis::light_direct`] once the first hit is known), dVC = m(cos_light/emit),
+    /// 0 for a delta direction, which no other technique can sample; dVM = dVC · m(1/η_VCM).
+    #[inline]
+    pub fn light_start(mis: &Mis, emit: f32, cos_light: f32, delta_dir: bool) -> SubpathMis {
+        let dvc = if delta_dir {
+            0.0
+        } else {
+            mis.m(cos_light / emit)
+        };
+        SubpathMis {
+            dvcm: mis.m(1.0 / emit),
+            dvc,
+            dvm: dvc * mis.vc_weight,
+        }
+    }
+
+    /// Completes eq. (31) at the first light vertex y_1: multiplies dVCM by the density of
+    /// next-event estimation from y_1 choosing y_0, `direct` = pmf · p_direct_a (finite lights,
+    /// per area at y_0) or pmf · p_li_w (infinite lights, §5.1). SmallVCM takes this density
+    /// from the emitter alone; ours depends on y_1 (cone sampling of spheres), hence it is
+    /// applied once y_1 is known.
+    #[inline]
+    pub fn light_direct(&mut self, mis: &Mis, direct: f32) {
+        self.dvcm *= mis.m(direct);
+    }
+
+    /// At a newly found vertex, distance² `dist2` from the previous one, geometric cosine
+    /// `cos_geo` [tech. rep. (31)–(36), the part after tracing]: dVCM · m(d²) (not for the first
+    /// segment of an infinite light, §5.1), all three divided by m(|cos θ|).
+    #[inline]
+    pub fn at_hit(&mut self, mis: &Mis, dist2: f32, cos_geo: f32, from_infinite: bool) {
+        if !from_infinite {
+            self.dvcm *= mis.m(dist2);
+        }
+        let c = mis.m(cos_geo.abs());
+        self.dvcm /= c;
+        self.dvc /= c;
+        self.dvm /= c;
+    }
+
+    /// After sampling the next direction with density `pdf_fwd_w` (reverse density
+    /// `pdf_rev_w`, geometric cosine of the new direction `cos_out`): non-specular
+    /// [tech. rep. (34)–(36)], specular [tech. rep. (53)–(55)].
+    #[inline]
+    pub fn scatter(
+        &mut self,
+        mis: &Mis,
+        cos_out: f32,
+        pdf_fwd_w: f32,
+        pdf_rev_w: f32,
+        specular: bool,
+    ) {
+        let g = mis.m(cos_out.abs() / pdf_fwd_w);
+        let rev = mis.m(pdf_rev_w);
+        if specular {
+            self.dvcm = 0.0;
+            self.dvc *= g * rev;
+            self.dvm *= g * rev;
+        } else {
+            self.dvc = g * (self.dvc * rev + self.dvcm + mis.vm_weight);
+            self.dvm = g * (self.dvm * rev + self.dvcm * mis.vc_weight + 1.0);
+            self.dvcm = mis.m(1.0 / pdf_fwd_w);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heuristics() {
+        let b = Mis::bdpt(MisHeuristic::Balance);
+        let p = Mis::bdpt(MisHeuristic::Power);
+        assert_eq!(b.m(3.0), 3.0);
+        assert_eq!(p.m(3.0), 9.0);
+        assert_eq!(weight(f32::INFINITY), 0.0);
+        assert_eq!(weight(f32::NAN), 0.0);
+    }
+
+    #[test]
+    fn two_vertex_paths_split_between_camera_hit_and_light_tracing() {
+        // n = 2: w(0,2) + w(1,1) = 1 for any pair of densities.
+        for h in [MisHeuristic::Balance, MisHeuristic::Power] {
+            let mis = Mis::bdpt(h);
+            let (cam_a, pos_a) = (0.7f32, 2.5f32);
+            let cam = SubpathMis {
+                dvcm: mis.m(1.0 / cam_a),
+                ..Default::default()
+            };
+            let w0 = mis.emitter_hit(&cam, pos_a, 123.0);
+            let w1 = mis.origin_to_camera(cam_a, pos_a);
+            assert!((w0 + w1 - 1.0).abs() < 1e-6);
+        }
+    }
+}

@@ -1,0 +1,56 @@
+//! Shared machinery of the bidirectional integrators (light tracing, BDPT and, later, VCM,
+//! which adds merging on top of the same vertices, walks and MIS quantities).
+//!
+//! | file | concept |
+//! |---|---|
+//! | `mis.rs` | heuristics and SmallVCM's recurrent partial weights dVCM/dVC/dVM (Georgiev 2012) |
+//! | `vertex.rs` | [`PathVertex`] (y_i, z_i) and [`LightOrigin`] (y_0); shading-normal correction |
+//! | `subpath.rs` | [`Walk`] (loop-carried state), [`trace_light_subpath`], [`BidirContext`] |
+//! | `connect.rs` | the techniques: s = 0, t = 1, s = 1 and general connections |
+//! | `sensor.rs` | the sensor vertex z_0 (camera; meters later) |
+//! | `record.rs` | a sample's contributions → tile sums and splats |
+//! | `strategies.rs` | the per-(s, t) decomposition written by `--strategies` |
+//!
+//! Naming (as SmallVCM's header): y_i light vertices, z_i camera vertices, i = depth (segments
+//! from the subpath's origin); a path made of s light and t camera vertices is technique
+//! (s, t) with s + t − 2 scattering events. `wo` points back along a vertex's own subpath,
+//! `wi` towards the next or the connected vertex. Pdfs carry `_w` (solid angle) or `_a` (area);
+//! "forward" is a subpath's own sampling direction, "reverse" the opposite one.
+//!
+//! Memory: a per-thread [`Workspace`] holds the light subpath and the sample record; both are
+//! cleared and reused from sample to sample, so nothing is allocated per bounce.
+
+pub mod connect;
+pub mod mis;
+pub mod record;
+pub mod sensor;
+pub mod strategies;
+pub mod subpath;
+pub mod vertex;
+
+pub use connect::Contribution;
+pub use mis::{Mis, MisHeuristic, SubpathMis};
+pub use record::{SampleRecord, TileAccumulator};
+pub use sensor::Sensor;
+pub use subpath::{trace_light_subpath, BidirContext, LightSubpath, Walk};
+pub use vertex::{LightOrigin, PathVertex};
+
+/// Per-thread buffers of a bidirectional integrator, reused for every sample.
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    pub light: LightSubpath,
+    pub record: SampleRecord,
+}
+
+impl Workspace {
+    /// Buffers for paths up to `max_depth` scattering events; `strategy_count` > 0 also
+    /// records the per-strategy decomposition.
+    pub fn new(max_depth: u32, strategy_count: usize) -> Workspace {
+        let mut light = LightSubpath::default();
+        light.vertices.reserve((max_depth as usize + 1).min(64));
+        Workspace {
+            light,
+            record: SampleRecord::new(strategy_count),
+        }
+    }
+}

@@ -1,0 +1,294 @@
+//! Random walks for both subpaths: the loop-carried state ([`Walk`], SmallVCM's
+//! `SubPathState`), the step from one vertex to the next with its MIS bookkeeping, and the
+//! whole light subpath ([`trace_light_subpath`]), stored in a reused per-thread buffer.
+//!
+//! Depth: a light vertex y_i and a camera vertex z_i have depth i (segments from the light or
+//! the camera). A full path of s light and t camera vertices has s + t − 2 scattering events,
+//! at most `max_depth` (pbrt's maxdepth, as the path tracer), so light subpaths stop at
+//! y_{max_depth} and camera subpaths at z_{max_depth+1}.
+
+use super::mis::{Mis, SubpathMis};
+use super::sensor::Sensor;
+use super::vertex::{bsdf_at, shading_correction, LightOrigin, PathVertex};
+use crate::bxdf::{BsdfSample, TransportMode};
+use crate::geometry::offset::spawn_ray;
+use crate::geometry::Ray;
+use crate::light::emit::{LightLeSample, SceneSphere};
+use crate::light::{LightHit, LightSampleContext};
+use crate::sampling::Sampler;
+use crate::scene::{Hit, Scene};
+use crate::spectral::{SampledSpectrum, SampledWavelengths};
+use glam::Vec3;
+
+/// What every bidirectional technique needs to know about the render.
+#[derive(Clone, Copy)]
+pub struct BidirContext<'a> {
+    pub scene: &'a Scene,
+    pub sensor: Sensor<'a>,
+    pub sphere: SceneSphere,
+    pub mis: Mis,
+    pub max_depth: u32,
+}
+
+impl<'a> BidirContext<'a> {
+    /// The camera as sensor, the scene's emission sphere.
+    pub fn new(scene: &'a Scene, mis: Mis, max_depth: u32) -> BidirContext<'a> {
+        BidirContext {
+            scene,
+            sensor: Sensor::Camera(&scene.camera),
+            sphere: SceneSphere::of(scene),
+            mis,
+            max_depth,
+        }
+    }
+}
+
+/// A light subpath: its origin y_0 and its non-specular scattering vertices y_1, y_2, …
+/// (specular ones cannot be connected to and are not stored).
+#[derive(Clone, Debug, Default)]
+pub struct LightSubpath {
+    pub origin: Option<LightOrigin>,
+    pub vertices: Vec<PathVertex>,
+}
+
+impl LightSubpath {
+    pub fn clear(&mut self) {
+        self.origin = None;
+        self.vertices.clear();
+    }
+}
+
+/// The state carried from one vertex of a subpath to the next.
+#[derive(Clone, Copy, Debug)]
+pub struct Walk {
+    pub ray: Ray,
+    pub t_max: f32,
+    /// Throughput including emission (light) or importance (camera).
+    pub beta: SampledSpectrum,
+    /// Product of the scattering factors f |cos| / pdf alone: what Russian roulette looks at
+    /// (a light subpath's `beta` is in units of power).
+    pub rr_beta: SampledSpectrum,
+    pub mis: SubpathMis,
+    /// Depth of the vertex the ray left from.
+    pub depth: u32,
+    /// Position and geometric normal of the vertex the ray left from.
+    pub prev: LightSampleContext,
+    /// The ray left an infinite light (no distance factor in the MIS update, §5.1).
+    pub from_infinite: bool,
+}
+
+impl Walk {
+    /// A camera subpath: the camera ray from lens point `p_lens`, its direction density
+    /// [tech. rep. (31)–(33)].
+    pub fn camera(ctx: &BidirContext, ray: Ray, t_max: f32, p_lens: Vec3) -> Option<Walk> {
+        let pdf_dir_w = ctx.sensor.ray_pdf_dir_w(ray.d);
+        if pdf_dir_w <= 0.0 {
+            return None;
+        }
+        Some(Walk {
+            ray,
+            t_max,
+            beta: SampledSpectrum::ONE,
+            rr_beta: SampledSpectrum::ONE,
+            mis: SubpathMis::camera_start(&ctx.mis, pdf_dir_w),
+            depth: 0,
+            prev: LightSampleContext {
+                p: p_lens,
+                n: Vec3::ZERO,
+            },
+            from_infinite: false,
+        })
+    }
+
+    /// Arrival at point `p` with geometric normal `ng`: the MIS quantities completed for the
+    /// new vertex [tech. rep. (31)–(36)] and the depth advanced.
+    #[inline]
+    pub fn arrive(&mut self, mis: &Mis, p: Vec3, ng: Vec3) {
+        let dist2 = (p - self.prev.p).length_squared();
+        let cos = ng.dot(self.ray.d);
+        self.mis.at_hit(mis, dist2, cos, self.from_infinite);
+        self.depth += 1;
+    }
+
+    /// Samples the next direction at vertex `v` and moves on ([`Walk::advance`]), then
+    /// Russian roulette. False when the walk ends.
+    pub fn scatter(
+        &mut self,
+        mis: &Mis,
+        v: &PathVertex,
+        mode: TransportMode,
+        sampler: &mut Sampler,
+    ) -> bool {
+        let (uc, u) = (sampler.get_1d(), sampler.get_2d());
+        let Some(bs) = v.bsdf.sample_f(v.wo, uc, u, mode) else {
+            return false;
+        };
+        self.advance(mis, v, bs, mode);
+        self.roulette(sampler)
+    }
+
+    /// Leaves vertex `v` along the sampled `bs`: throughput f |cos θ| / pdf (with the adjoint
+    /// shading correction for importance), MIS [tech. rep. (34)–(36), (53)–(55)], new ray.
+    pub fn advance(&mut self, mis: &Mis, v: &PathVertex, bs: BsdfSample, mode: TransportMode) {
+        let mut factor = v.cos_shading(bs.wi) / bs.pdf_w;
+        if mode == TransportMode::Importance {
+            factor *= shading_correction(v.ns, v.ng, v.wo, bs.wi);
+        }
+        let pdf_rev_w = if bs.specular {
+            bs.pdf_w
+        } else {
+            v.reverse_pdf(bs.wi, mode)
+        };
+        let f = bs.f * factor;
+        self.beta *= f;
+        self.rr_beta *= f;
+        self.mis
+            .scatter(mis, v.cos_geo(bs.wi), bs.pdf_w, pdf_rev_w, bs.specular);
+        self.ray = spawn_ray(v.p, v.p_error, v.ng, bs.wi);
+        self.t_max = f32::INFINITY;
+        self.prev = LightSampleContext { p: v.p, n: v.ng };
+        self.from_infinite = false;
+    }
+
+    /// Russian roulette after the second bounce when the scattering throughput has dropped
+    /// below 1 (PBR 4ed §13.4.1, q = max(0, 1 − max β), the path tracer's rule).
+    #[inline]
+    fn roulette(&mut self, sampler: &mut Sampler) -> bool {
+        let m = self.rr_beta.max_value();
+        if m < 1.0 && self.depth > 1 {
+            let q = (1.0 - m).max(0.0);
+            if sampler.get_1d() < q {
+                return false;
+            }
+            let k = 1.0 / (1.0 - q);
+            self.beta *= k;
+            self.rr_beta *= k;
+        }
+        self.beta.is_finite() && !self.beta.is_black()
+    }
+}
+
+/// pmf · the light-sampling (next-event) density per solid angle at `ctx` of the point `hit` on
+/// light `light` seen along `wi`; pmf alone for a delta light (densities relative to the delta).
+#[inline]
+pub fn direct_pdf_w(
+    scene: &Scene,
+    light: u32,
+    ctx: &LightSampleContext,
+    wi: Vec3,
+    hit: &LightHit,
+) -> f32 {
+    let pmf = scene.light_sampler.pmf(light as usize);
+    let l = &scene.lights[light as usize];
+    if l.is_delta() {
+        pmf
+    } else {
+        pmf * l.pdf_li(ctx, wi, hit)
+    }
+}
+
+/// Traces a light subpath into `path` (cleared first): a light chosen by power, an emitted
+/// ray, then BSDF sampling in importance mode up to y_{max_depth}. Analytic light shapes
+/// absorb light paths; escaping paths end.
+pub fn trace_light_subpath(
+    ctx: &BidirContext,
+    lambda: &mut SampledWavelengths,
+    sampler: &mut Sampler,
+    path: &mut LightSubpath,
+) {
+    path.clear();
+    let (u_light, u_pos, u_dir) = (sampler.get_1d(), sampler.get_2d(), sampler.get_2d());
+    let Some((index, pmf)) = ctx.scene.light_sampler.sample(u_light) else {
+        return;
+    };
+    let light = &ctx.scene.lights[index];
+    let Some(le) = light.sample_le(u_pos, u_dir, &ctx.sphere, lambda) else {
+        return;
+    };
+    let Some((origin, mut walk)) = Walk::light(ctx, index as u32, pmf, &le) else {
+        return;
+    };
+    path.origin = Some(origin);
+    loop {
+        let Some(Hit::Surface(si)) = ctx.scene.intersect(&walk.ray, walk.t_max) else {
+            return;
+        };
+        if walk.depth == 0 {
+            let direct = first_hit_direct(ctx, &origin, si.p, si.ng, walk.ray.d);
+            walk.mis.light_direct(&ctx.mis, direct);
+        }
+        walk.arrive(&ctx.mis, si.p, si.ng);
+        if walk.depth > ctx.max_depth {
+            return;
+        }
+        let bsdf = bsdf_at(ctx.scene, &si, lambda);
+        let v = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
+        if !bsdf.is_specular() {
+            path.vertices.push(v);
+        }
+        if walk.depth >= ctx.max_depth
+            || !walk.scatter(&ctx.mis, &v, TransportMode::Importance, sampler)
+        {
+            return;
+        }
+    }
+}
+
+impl Walk {
+    /// A light subpath leaving light `index` (chosen with probability `pmf`) along the
+    /// emitted ray `le`: the origin y_0 and the walk with β = L |cos θ| / (pmf p_pos p_dir)
+    /// (PBR 3ed §16.3.1, GenerateLightSubpath; Veach 1997 §10.2) and the MIS start
+    /// [tech. rep. (31)–(33), (48)–(50)].
+    pub fn light(
+        ctx: &BidirContext,
+        index: u32,
+        pmf: f32,
+        le: &LightLeSample,
+    ) -> Option<(LightOrigin, Walk)> {
+        let emit = pmf * le.pdf_pos_a * le.pdf_dir_w;
+        if le.l.is_black() || !emit.is_finite() || emit <= 0.0 {
+            return None;
+        }
+        let origin = LightOrigin {
+            light: index,
+            p: le.p,
+            p_error: le.p_error,
+            n: le.n,
+            pmf,
+            pdf_pos_a: le.pdf_pos_a,
+            infinite: le.infinite,
+            delta_dir: le.delta_dir,
+        };
+        let ray = if le.infinite {
+            Ray::new(le.p, le.w)
+        } else {
+            spawn_ray(le.p, le.p_error, le.n, le.w)
+        };
+        let walk = Walk {
+            ray,
+            t_max: f32::INFINITY,
+            beta: le.l * (le.cos_light() / emit),
+            rr_beta: SampledSpectrum::ONE,
+            mis: SubpathMis::light_start(&ctx.mis, emit, le.cos_light(), le.delta_dir),
+            depth: 0,
+            prev: LightSampleContext { p: le.p, n: le.n },
+            from_infinite: le.infinite,
+        };
+        Some((origin, walk))
+    }
+}
+
+/// The next-event density with which the first light vertex y_1 (at `p`, normal `ng`) would
+/// have chosen y_0, in the form [`SubpathMis::light_direct`] takes: per area at y_0,
+/// pmf · p_li_w · |cos θ_y0| / d², for finite lights; per solid angle, pmf · p_li_w, for
+/// infinite ones (`d` is the direction of travel y_0 → y_1).
+pub fn first_hit_direct(ctx: &BidirContext, o: &LightOrigin, p: Vec3, ng: Vec3, d: Vec3) -> f32 {
+    let rctx = LightSampleContext { p, n: ng };
+    let dist2 = (o.p - p).length_squared();
+    let direct = direct_pdf_w(ctx.scene, o.light, &rctx, -d, &o.hit(dist2.sqrt()));
+    if o.infinite {
+        direct
+    } else {
+        direct * o.n.dot(d).abs() / dist2
+    }
+}

@@ -1,0 +1,1415 @@
+//! Light tracing and BDPT against the path tracer and against their own definitions:
+//!
+//! - agreement: PT, LT and BDPT per pixel (z-tests with Šidák correction) and in the image
+//!   mean, on a table of scenes (adding a scene is one entry);
+//! - MIS: on random paths through a scene with every light type, the recurrent weights equal a
+//!   brute-force evaluation of m(p_s) / Σ_j m(p_j) from per-vertex densities, and sum to 1;
+//! - closed forms with BDPT and LT: the white furnace, a plane under a uniform dome;
+//! - the strategy images (`--strategies`) sum to the BDPT image;
+//! - no NaN or Inf with a point-like light against a wall and a camera inside a closed box;
+//! - 1 and 2 threads give bit-identical images.
+
+mod common;
+use common::*;
+use glam::Vec3;
+use spectral_render::bxdf::{BsdfSample, TransportMode};
+use spectral_render::geometry::offset::spawn_ray;
+use spectral_render::geometry::Ray;
+use spectral_render::integrator::bidir::connect::{
+    connect_weight, direct_weight, emitter_weight, escaped_weight, origin_weight, sensor_weight,
+};
+use spectral_render::integrator::bidir::subpath::first_hit_direct;
+use spectral_render::integrator::bidir::vertex::bsdf_at;
+use spectral_render::integrator::bidir::{BidirContext, Mis, MisHeuristic, PathVertex, Walk};
+use spectral_render::integrator::IntegratorKind;
+use spectral_render::light::emit::LightLeSample;
+use spectral_render::light::{Light, LightHit, LightLiSample, LightSampleContext};
+use spectral_render::render::{self, RenderOptions, RenderOutput};
+use spectral_render::sampling::Sampler;
+use spectral_render::scene::{self, Hit, Scene, SurfaceHit};
+use spectral_render::spectral::SampledWavelengths;
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------------------------------------
+// Stages
+// ---------------------------------------------------------------------------------------------
+
+/// A camera at `pos` looking down −Z with a square field of half-tangent `half_tan`.
+fn camera_at(pos: [f32; 3], half_tan: f32, extra: &str) -> String {
+    let focal = 10.0 / half_tan;
+    format!(
+        "def Camera \"Cam\"\n{{\n    float focalLength = {focal}\n    float horizontalAperture = 20\n    float verticalAperture = 20\n    float2 clippingRange = (0.01, 1000)\n{extra}    double3 xformOp:translate = ({}, {}, {})\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n\n",
+        pos[0], pos[1], pos[2]
+    )
+}
+
+/// A polygon mesh (one face) with optional per-vertex normals and extra lines.
+fn polygon(name: &str, points: &[[f32; 3]], normals: Option<&[[f32; 3]]>, extra: &str) -> String {
+    let list = |v: &[[f32; 3]]| {
+        v.iter()
+            .map(|p| format!("({}, {}, {})", p[0], p[1], p[2]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let idx: Vec<String> = (0..points.len()).map(|i| i.to_string()).collect();
+    let normals = normals
+        .map(|n| format!("    normal3f[] normals = [{}]\n", list(n)))
+        .unwrap_or_default();
+    format!(
+        "def Mesh \"{name}\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{{\n    int[] faceVertexCounts = [{}]\n    int[] faceVertexIndices = [{}]\n    point3f[] points = [{}]\n{normals}{extra}}}\n\n",
+        points.len(),
+        idx.join(", "),
+        list(points)
+    )
+}
+
+fn mesh_light(name: &str, points: &[[f32; 3]], intensity: f32, two_sided: bool) -> String {
+    let extra = format!(
+        "    float inputs:intensity = {intensity}\n    uniform bool doubleSided = {}\n{}",
+        two_sided as u8,
+        binding("Grey")
+    );
+    polygon(name, points, None, &extra).replace(
+        "[\"MaterialBindingAPI\"]",
+        "[\"MeshLightAPI\", \"MaterialBindingAPI\"]",
+    )
+}
+
+fn looks() -> String {
+    let flat = |r: f32| {
+        format!("        float2[] inputs:reflectance:samples = [(360, {r}), (830, {r})]\n")
+    };
+    let mut s = "def Scope \"Looks\"\n{\n".to_string();
+    s += &material("Grey", "spectral:diffuse", &flat(0.6));
+    s += &material(
+        "Red",
+        "spectral:diffuse",
+        "        float2[] inputs:reflectance:samples = [(360, 0.05), (560, 0.1), (620, 0.7), (830, 0.8)]\n",
+    );
+    s += &material("White", "spectral:diffuse", &flat(0.8));
+    s += &material(
+        "Gold",
+        "spectral:conductor",
+        "        uniform token inputs:metal = \"Au\"\n        float inputs:roughness = 0.2\n",
+    );
+    s += "}\n\n";
+    s
+}
+
+/// A UsdLux light with a transform.
+fn lux(kind: &str, name: &str, inputs: &str, translate: [f32; 3], rotate: [f32; 3]) -> String {
+    format!(
+        "def {kind} \"{name}\"\n{{\n{inputs}    double3 xformOp:translate = ({}, {}, {})\n    float3 xformOp:rotateXYZ = ({}, {}, {})\n    uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:rotateXYZ\"]\n}}\n\n",
+        translate[0], translate[1], translate[2], rotate[0], rotate[1], rotate[2]
+    )
+}
+
+/// A quad with tilted per-vertex normals (shading normals differ from the geometric one).
+fn smooth_panel() -> String {
+    polygon(
+        "Panel",
+        &[
+            [1.5, 0.0, -1.5],
+            [1.5, 0.0, 1.0],
+            [1.5, 1.5, 1.0],
+            [1.5, 1.5, -1.5],
+        ],
+        Some(&[
+            [-1.0, 0.3, 0.0],
+            [-1.0, -0.2, 0.2],
+            [-1.0, 0.1, -0.3],
+            [-1.0, 0.0, 0.3],
+        ]),
+        &binding("Grey"),
+    )
+}
+
+/// An open corner (floor, back and left walls) with every light type: a one-sided and a
+/// two-sided mesh light, rect, disk and sphere lights, a dome, a distant light with an
+/// angle and a delta distant light.
+fn every_light_stage() -> String {
+    let mut s = header();
+    s += &camera_at([0.0, 1.0, 4.0], 0.6, "");
+    s += &looks();
+    s += &polygon(
+        "Floor",
+        &[
+            [-2.0, 0.0, 2.0],
+            [2.0, 0.0, 2.0],
+            [2.0, 0.0, -2.0],
+            [-2.0, 0.0, -2.0],
+        ],
+        None,
+        &binding("White"),
+    );
+    s += &polygon(
+        "Back",
+        &[
+            [-2.0, 0.0, -2.0],
+            [2.0, 0.0, -2.0],
+            [2.0, 2.0, -2.0],
+            [-2.0, 2.0, -2.0],
+        ],
+        None,
+        &binding("Grey"),
+    );
+    s += &polygon(
+        "Left",
+        &[
+            [-2.0, 0.0, 2.0],
+            [-2.0, 0.0, -2.0],
+            [-2.0, 2.0, -2.0],
+            [-2.0, 2.0, 2.0],
+        ],
+        None,
+        &binding("Red"),
+    );
+    s += &smooth_panel();
+    s += &mesh_light(
+        "Lamp",
+        &[
+            [-0.4, 1.8, -0.4],
+            [0.4, 1.8, -0.4],
+            [0.4, 1.8, 0.4],
+            [-0.4, 1.8, 0.4],
+        ],
+        5.0,
+        false,
+    );
+    s += &mesh_light(
+        "Fin",
+        &[[-1.0, 0.2, 0.5], [-0.5, 0.2, 0.5], [-0.75, 0.8, 0.5]],
+        4.0,
+        true,
+    );
+    s += &lux("RectLight", "Rect", "    float inputs:width = 0.5\n    float inputs:height = 0.3\n    float inputs:intensity = 3\n", [0.5, 1.2, -1.95], [0.0, 180.0, 0.0]);
+    s += &lux(
+        "DiskLight",
+        "Disk",
+        "    float inputs:radius = 0.2\n    float inputs:intensity = 3\n",
+        [-1.95, 1.0, -0.5],
+        [0.0, -90.0, 0.0],
+    );
+    s += &lux(
+        "SphereLight",
+        "Bulb",
+        "    float inputs:radius = 0.1\n    float inputs:intensity = 4\n",
+        [0.8, 0.5, 0.3],
+        [0.0, 0.0, 0.0],
+    );
+    s += &lux(
+        "CylinderLight",
+        "Tube",
+        "    float inputs:radius = 0.05\n    float inputs:length = 0.6\n    float inputs:intensity = 3\n",
+        [-0.5, 1.5, 0.5],
+        [0.0, 30.0, 0.0],
+    );
+    s += "def DomeLight \"Sky\"\n{\n    float inputs:intensity = 0.5\n}\n\n";
+    s += &lux(
+        "DistantLight",
+        "Haze",
+        "    float inputs:angle = 10\n    float inputs:intensity = 1\n",
+        [0.0; 3],
+        [-60.0, 0.0, 0.0],
+    );
+    s += &lux(
+        "DistantLight",
+        "Sun",
+        "    float inputs:angle = 0\n    float inputs:intensity = 2\n",
+        [0.0; 3],
+        [-40.0, 30.0, 0.0],
+    );
+    s
+}
+
+/// A tunnel-like room (open towards a thin-lens camera, walls long enough that every camera
+/// ray enters it) lit by one small, bright sphere light only, hidden from the camera behind a
+/// panel with shading normals; diffuse walls of two colours. The light is kept away from
+/// walls: hot spots close to a tiny light give the path tracer heavy-tailed pixel estimates,
+/// whose batch variances a z-test cannot trust.
+fn small_light_stage() -> String {
+    small_light_stage_with("Grey")
+}
+
+/// [`small_light_stage`] with the tilted panel made of `panel_look` (e.g. a glossy conductor).
+fn small_light_stage_with(panel_look: &str) -> String {
+    let mut s = header();
+    s += &camera_at(
+        [0.0, 1.0, 3.5],
+        0.4,
+        "    float fStop = 8\n    float focusDistance = 4\n",
+    );
+    s += &looks();
+    let walls: [(&str, [[f32; 3]; 4], &str); 5] = [
+        (
+            "Floor",
+            [
+                [-1.5, 0.0, 4.0],
+                [1.5, 0.0, 4.0],
+                [1.5, 0.0, -2.0],
+                [-1.5, 0.0, -2.0],
+            ],
+            "White",
+        ),
+        (
+            "Ceiling",
+            [
+                [-1.5, 2.0, 2.0],
+                [-1.5, 2.0, -2.0],
+                [1.5, 2.0, -2.0],
+                [1.5, 2.0, 2.0],
+            ],
+            "White",
+        ),
+        (
+            "Back",
+            [
+                [-1.5, 0.0, -2.0],
+                [1.5, 0.0, -2.0],
+                [1.5, 2.0, -2.0],
+                [-1.5, 2.0, -2.0],
+            ],
+            "Grey",
+        ),
+        (
+            "Left",
+            [
+                [-1.5, 0.0, 2.0],
+                [-1.5, 0.0, -2.0],
+                [-1.5, 2.0, -2.0],
+                [-1.5, 2.0, 2.0],
+            ],
+            "Red",
+        ),
+        (
+            "Right",
+            [
+                [1.5, 0.0, -2.0],
+                [1.5, 0.0, 2.0],
+                [1.5, 2.0, 2.0],
+                [1.5, 2.0, -2.0],
+            ],
+            "Grey",
+        ),
+    ];
+    for (name, points, look) in walls {
+        s += &polygon(name, &points, None, &binding(look));
+    }
+    s += &polygon(
+        "Panel",
+        &[
+            [0.2, 0.0, -0.6],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.2, 0.0],
+            [0.2, 1.2, -0.6],
+        ],
+        Some(&[
+            [-0.5, 0.2, 0.8],
+            [-0.8, -0.1, 0.6],
+            [-0.6, 0.0, 0.7],
+            [-0.4, 0.3, 0.8],
+        ]),
+        &binding(panel_look),
+    );
+    s += &lux(
+        "SphereLight",
+        "Bulb",
+        "    float inputs:radius = 0.02\n    float inputs:intensity = 3000\n",
+        [0.6, 0.7, -1.0],
+        [0.0; 3],
+    );
+    s
+}
+
+/// The white furnace of `tests/transport.rs`: a closed cube whose walls emit `le` nits on both
+/// sides and reflect a flat 0.8; the camera inside.
+fn furnace_stage(le: f32) -> String {
+    let flat = "        float2[] inputs:reflectance:samples = [(360, 0.8), (830, 0.8)]\n";
+    let mut s = header();
+    s += &camera(0.5, 0.8, 0.0);
+    s += "def Scope \"Looks\"\n{\n";
+    s += &material("Wall", "spectral:diffuse", flat);
+    s += "}\n\n";
+    for (i, f) in cube_faces(1.0).iter().enumerate() {
+        s += &polygon(&format!("Face{i}"), f, None, "")
+            .replace(
+                "[\"MaterialBindingAPI\"]",
+                "[\"MeshLightAPI\", \"MaterialBindingAPI\"]",
+            )
+            .replace(
+                "}\n\n",
+                &format!(
+                    "    uniform bool doubleSided = 1\n    float inputs:intensity = {le}\n{}}}\n\n",
+                    binding("Wall")
+                ),
+            );
+    }
+    s
+}
+
+/// The six faces of the cube [−h, h]³, facing inwards.
+fn cube_faces(h: f32) -> [[[f32; 3]; 4]; 6] {
+    let (a, b) = (-h, h);
+    [
+        [[a, a, a], [a, b, a], [b, b, a], [b, a, a]],
+        [[a, a, b], [b, a, b], [b, b, b], [a, b, b]],
+        [[a, a, a], [a, a, b], [a, b, b], [a, b, a]],
+        [[b, a, a], [b, b, a], [b, b, b], [b, a, b]],
+        [[a, a, a], [b, a, a], [b, a, b], [a, a, b]],
+        [[a, b, a], [a, b, b], [b, b, b], [b, b, a]],
+    ]
+}
+
+fn cbox() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda")
+}
+
+fn load_text(name: &str, text: &str, res: (u32, u32)) -> Scene {
+    let dir = temp_dir(name);
+    let path = write(&dir, &format!("{name}.usda"), text);
+    scene::load(&path, Some(res)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn render_with(
+    scene: &Scene,
+    integrator: IntegratorKind,
+    spp: u32,
+    seed: u64,
+    max_depth: u32,
+) -> RenderOutput {
+    let opts = RenderOptions {
+        spp: Some(spp),
+        seed,
+        max_depth,
+        integrator,
+        ..Default::default()
+    };
+    let out = render::render(scene, &opts).unwrap();
+    assert_finite(&out);
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Statistics
+// ---------------------------------------------------------------------------------------------
+
+/// ln Γ(x) for x > 0 (Lanczos approximation, g = 7, 9 terms; Press et al. 2007 §6.1).
+fn ln_gamma(x: f64) -> f64 {
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    let x = x - 1.0;
+    let mut a = C[0];
+    let t = x + 7.5;
+    for (i, c) in C.iter().enumerate().skip(1) {
+        a += c / (x + i as f64);
+    }
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+/// Regularised incomplete beta I_x(a, b) by its continued fraction (modified Lentz).
+fn inc_beta(a: f64, b: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x >= 1.0 {
+        return 1.0;
+    }
+    if x > (a + 1.0) / (a + b + 2.0) {
+        return 1.0 - inc_beta(b, a, 1.0 - x);
+    }
+    let front =
+        (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln()).exp() / a;
+    let tiny = 1e-300;
+    let (mut c, mut d) = (1.0, 1.0 - (a + b) * x / (a + 1.0));
+    d = 1.0 / if d.abs() < tiny { tiny } else { d };
+    let mut f = d;
+    for m in 1..400 {
+        let m = m as f64;
+        for num in [
+            m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m)),
+            -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0)),
+        ] {
+            d = 1.0 + num * d;
+            d = 1.0 / if d.abs() < tiny { tiny } else { d };
+            c = 1.0 + num / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            f *= c * d;
+        }
+        if (c * d - 1.0).abs() < 1e-14 {
+            break;
+        }
+    }
+    front * f
+}
+
+/// Two-sided p-value of a statistic z under Student's t with `df` degrees of freedom
+/// (the normal distribution as df → ∞).
+fn two_sided_p(z: f64, df: f64) -> f64 {
+    inc_beta(0.5 * df, 0.5, df / (df + z * z))
+}
+
+#[test]
+fn p_values_match_tables() {
+    assert!((two_sided_p(1.959_964, 1e7) - 0.05).abs() < 1e-5);
+    assert!((two_sided_p(2.042_272, 30.0) - 0.05).abs() < 1e-5);
+    assert!((two_sided_p(4.0, 1e7) - 6.334e-5).abs() < 1e-7);
+}
+
+/// Per-pixel means of K independent renders and the variances of those means.
+struct Batches {
+    k: usize,
+    mean: Vec<[f64; 3]>,
+    var_mean: Vec<[f64; 3]>,
+    /// Mean luminance of the image and its standard error.
+    image_y: (f64, f64),
+}
+
+fn batches(
+    scene: &Scene,
+    integrator: IntegratorKind,
+    k: usize,
+    spp: u32,
+    max_depth: u32,
+    seed_base: u64,
+) -> Batches {
+    let outs: Vec<Vec<[f32; 3]>> = (0..k)
+        .map(|i| render_with(scene, integrator, spp, seed_base + i as u64, max_depth).xyz)
+        .collect();
+    let n = outs[0].len();
+    let mut mean = vec![[0.0; 3]; n];
+    let mut var_mean = vec![[0.0; 3]; n];
+    for p in 0..n {
+        for c in 0..3 {
+            let v: Vec<f64> = outs.iter().map(|o| o[p][c] as f64).collect();
+            let m = v.iter().sum::<f64>() / k as f64;
+            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64;
+            mean[p][c] = m;
+            var_mean[p][c] = var / k as f64;
+        }
+    }
+    let image: Vec<f64> = outs
+        .iter()
+        .map(|o| o.iter().map(|p| p[1] as f64).sum::<f64>() / n as f64)
+        .collect();
+    let m = image.iter().sum::<f64>() / k as f64;
+    let var = image.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64;
+    Batches {
+        k,
+        mean,
+        var_mean,
+        image_y: (m, (var / k as f64).sqrt()),
+    }
+}
+
+/// The outcome of per-pixel z-tests between two integrators.
+#[derive(Debug)]
+struct ZTest {
+    tests: usize,
+    /// (pixel, channel) of the largest |z|.
+    worst: (usize, usize),
+    max_abs_z: f64,
+    min_p: f64,
+    sidak_alpha: f64,
+    image_z: f64,
+}
+
+/// z = Δ / sqrt(σ²_a + σ²_b) per pixel and XYZ channel, two-sided p from Student's t with the
+/// Welch–Satterthwaite degrees of freedom; Šidák-corrected level for a family-wise α.
+fn z_test(a: &Batches, b: &Batches, alpha: f64) -> ZTest {
+    let mut max_abs_z = 0.0f64;
+    let mut min_p = 1.0f64;
+    let mut tests = 0;
+    let mut worst = (0, 0);
+    for p in 0..a.mean.len() {
+        for c in 0..3 {
+            let (va, vb) = (a.var_mean[p][c], b.var_mean[p][c]);
+            let d = a.mean[p][c] - b.mean[p][c];
+            let v = va + vb;
+            tests += 1;
+            if v == 0.0 {
+                assert_eq!(
+                    d, 0.0,
+                    "pixel {p} channel {c}: zero variance but different means"
+                );
+                continue;
+            }
+            let z = d / v.sqrt();
+            let df = v * v / (va * va / (a.k - 1) as f64 + vb * vb / (b.k - 1) as f64);
+            if z.abs() > max_abs_z {
+                max_abs_z = z.abs();
+                worst = (p, c);
+            }
+            min_p = min_p.min(two_sided_p(z, df));
+        }
+    }
+    let sidak_alpha = 1.0 - (1.0 - alpha).powf(1.0 / tests as f64);
+    let image_z = (a.image_y.0 - b.image_y.0) / (a.image_y.1.powi(2) + b.image_y.1.powi(2)).sqrt();
+    ZTest {
+        tests,
+        worst,
+        max_abs_z,
+        min_p,
+        sidak_alpha,
+        image_z,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Agreement of PT, LT and BDPT
+// ---------------------------------------------------------------------------------------------
+
+/// One scene of the agreement table.
+struct AgreementCase {
+    name: &'static str,
+    scene: fn() -> Scene,
+    max_depth: u32,
+    batches: usize,
+    spp: u32,
+}
+
+/// The agreement scenes: adding one (e.g. a glossy conductor with a small bright light, once
+/// that model exists) is one entry.
+const AGREEMENT: &[AgreementCase] = &[
+    AgreementCase {
+        name: "cornell box",
+        scene: || scene::load(&cbox(), Some((20, 20))).unwrap(),
+        max_depth: 7,
+        batches: 32,
+        spp: 32,
+    },
+    AgreementCase {
+        name: "small bright light, thin lens, shading normals",
+        scene: || load_text("small-light", &small_light_stage(), (20, 20)),
+        max_depth: 7,
+        batches: 32,
+        spp: 64,
+    },
+    AgreementCase {
+        name: "glossy conductor (rough gold, GGX α 0.2) and a small bright light",
+        scene: || load_text("glossy", &small_light_stage_with("Gold"), (20, 20)),
+        max_depth: 7,
+        batches: 32,
+        spp: 192,
+    },
+];
+
+#[test]
+fn path_light_and_bdpt_agree_per_pixel() {
+    let alpha = 0.01;
+    for case in AGREEMENT {
+        let scene = (case.scene)();
+        let run = |kind, base| batches(&scene, kind, case.batches, case.spp, case.max_depth, base);
+        let pt = run(IntegratorKind::Path, 1000);
+        let lt = run(IntegratorKind::Light, 2000);
+        let bd = run(IntegratorKind::Bdpt, 3000);
+        for (label, a, b) in [
+            ("PT-LT", &pt, &lt),
+            ("PT-BDPT", &pt, &bd),
+            ("LT-BDPT", &lt, &bd),
+        ] {
+            let z = z_test(a, b, alpha);
+            let (wp, wc) = z.worst;
+            eprintln!(
+                "{}: {label}: {} tests, max |z| {:.2} (pixel {wp} channel {wc}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}), min p {:.2e}, Šidák level {:.2e}; \
+                 image Y {:.5} ± {:.5} vs {:.5} ± {:.5} (z {:.2})",
+                case.name,
+                z.tests,
+                z.max_abs_z,
+                a.mean[wp][wc],
+                a.var_mean[wp][wc].sqrt(),
+                b.mean[wp][wc],
+                b.var_mean[wp][wc].sqrt(),
+                z.min_p,
+                z.sidak_alpha,
+                a.image_y.0,
+                a.image_y.1,
+                b.image_y.0,
+                b.image_y.1,
+                z.image_z
+            );
+            assert!(
+                z.min_p > z.sidak_alpha,
+                "{}: {label} differ per pixel: {z:?}",
+                case.name
+            );
+            assert!(
+                z.image_z.abs() < 3.3,
+                "{}: {label} image means differ: {z:?}",
+                case.name
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// MIS: recurrence against brute force
+// ---------------------------------------------------------------------------------------------
+
+/// The light end x_0 of a full path.
+#[derive(Clone, Copy, Debug)]
+enum LightEnd {
+    /// A point on a finite light with the light's geometric (front) normal.
+    Point { p: Vec3, n: Vec3 },
+    /// An infinite light seen along `to_light` from x_1.
+    Direction { to_light: Vec3 },
+}
+
+/// A full path: x_0 on light `light`, surface vertices x_1 … x_{n−2} (light to camera order)
+/// and the pinhole x_{n−1}.
+struct FullPath {
+    light: u32,
+    end: LightEnd,
+    surfaces: Vec<SurfaceHit>,
+    lens: Vec3,
+}
+
+impl FullPath {
+    fn n(&self) -> usize {
+        self.surfaces.len() + 2
+    }
+
+    fn p(&self, i: usize) -> Vec3 {
+        let n = self.n();
+        if i == n - 1 {
+            self.lens
+        } else if i == 0 {
+            match self.end {
+                LightEnd::Point { p, .. } => p,
+                LightEnd::Direction { .. } => unreachable!("x_0 at infinity"),
+            }
+        } else {
+            self.surfaces[i - 1].p
+        }
+    }
+
+    /// Unit direction from x_i to x_j (for x_0 at infinity: its direction).
+    fn dir(&self, i: usize, j: usize) -> Vec3 {
+        match (self.end, i, j) {
+            (LightEnd::Direction { to_light }, _, 0) => to_light,
+            (LightEnd::Direction { to_light }, 0, _) => -to_light,
+            _ => (self.p(j) - self.p(i)).normalize(),
+        }
+    }
+
+    fn infinite(&self) -> bool {
+        matches!(self.end, LightEnd::Direction { .. })
+    }
+}
+
+/// The light's front normal at point `p` (outward for spheres).
+fn light_normal(light: &Light, p: Vec3) -> Vec3 {
+    match light {
+        Light::Triangle(t) => t.n,
+        Light::Rect(r) => r.n,
+        Light::Disk(d) => d.frame.n,
+        Light::Sphere(s) => (p - s.center).normalize(),
+        _ => Vec3::ZERO,
+    }
+}
+
+/// A random full path of `k` surface vertices through `scene` (None when this try failed):
+/// a camera walk by cosine sampling, closed by a light point or direction that illuminates the
+/// last vertex. Visibility of the closing segment is not required (weights do not depend on it).
+fn random_path(scene: &Scene, k: usize, sampler: &mut Sampler) -> Option<FullPath> {
+    let cam = &scene.camera;
+    let film = [
+        sampler.get_1d() * cam.width as f32,
+        sampler.get_1d() * cam.height as f32,
+    ];
+    let (mut ray, t_max) = cam.generate_ray(film, [0.5; 2]);
+    let lens = cam.lens_point([0.5; 2]);
+    let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+    let mut surfaces = Vec::new();
+    let mut t = t_max;
+    if k == 0 {
+        // The camera sees an emitter directly.
+        return match scene.intersect(&ray, t) {
+            Some(Hit::Light { light, hit }) => Some(FullPath {
+                light,
+                end: LightEnd::Point { p: hit.p, n: hit.n },
+                surfaces,
+                lens,
+            }),
+            Some(Hit::Surface(si)) => {
+                let light = si.light?;
+                let hit = LightHit {
+                    p: si.p,
+                    n: si.ng,
+                    t: si.t,
+                };
+                if scene.lights[light as usize]
+                    .l(&hit, -ray.d, &lambda)
+                    .is_black()
+                {
+                    return None;
+                }
+                Some(FullPath {
+                    light,
+                    end: LightEnd::Point { p: si.p, n: si.ng },
+                    surfaces,
+                    lens,
+                })
+            }
+            None => None,
+        };
+    }
+    for _ in 0..k {
+        let Some(Hit::Surface(si)) = scene.intersect(&ray, t) else {
+            return None;
+        };
+        let bsdf = bsdf_at(scene, &si, &mut lambda);
+        let bs = bsdf.sample_f(
+            -ray.d,
+            sampler.get_1d(),
+            sampler.get_2d(),
+            TransportMode::Radiance,
+        )?;
+        surfaces.push(si);
+        ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
+        t = f32::INFINITY;
+    }
+    surfaces.reverse();
+    // Close on a light, which must illuminate x_1 and be seen from its BSDF's side.
+    let x1 = surfaces[0];
+    // Uniformly, so that weak lights are checked as often as bright ones.
+    let li = ((sampler.get_1d() * scene.lights.len() as f32) as usize).min(scene.lights.len() - 1);
+    let light = &scene.lights[li];
+    let ctx = LightSampleContext { p: x1.p, n: x1.ng };
+    let ls = light.sample_li(&ctx, sampler.get_2d(), &lambda)?;
+    if ls.l.is_black() {
+        return None;
+    }
+    let end = if ls.infinite {
+        LightEnd::Direction { to_light: ls.wi }
+    } else {
+        LightEnd::Point {
+            p: ls.p_light,
+            n: light_normal(light, ls.p_light),
+        }
+    };
+    let wo = if k >= 2 {
+        (surfaces[1].p - x1.p).normalize()
+    } else {
+        (lens - x1.p).normalize()
+    };
+    let bsdf = bsdf_at(scene, &x1, &mut lambda);
+    if bsdf.f(wo, ls.wi, TransportMode::Radiance).is_black() {
+        return None;
+    }
+    Some(FullPath {
+        light: li as u32,
+        end,
+        surfaces,
+        lens,
+    })
+}
+
+/// Brute force: p_s for s = 0 … n−1 as products of per-vertex area (or, for x_0 at
+/// infinity, solid-angle) densities (Veach 1997 §10.2, eq. 10.9).
+fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
+    let scene = ctx.scene;
+    let n = path.n();
+    let li = path.light as usize;
+    let light = &scene.lights[li];
+    let pmf = scene.light_sampler.pmf(li) as f64;
+    let mut lambda = SampledWavelengths::sample_visible(0.5);
+    let bsdf =
+        |i: usize, lambda: &mut SampledWavelengths| bsdf_at(scene, &path.surfaces[i - 1], lambda);
+    let ng = |i: usize| -> Vec3 {
+        match (i, path.end) {
+            (0, LightEnd::Point { n, .. }) => n,
+            _ => path.surfaces[i - 1].ng,
+        }
+    };
+    // Converts a direction density at x_from into a density at x_to.
+    let to_area = |pdf_w: f64, from: usize, to: usize| -> f64 {
+        if to == 0 && path.infinite() {
+            return pdf_w;
+        }
+        let d = path.p(to) - path.p(from);
+        pdf_w * ng(to).dot(d.normalize()).abs() as f64 / d.length_squared() as f64
+    };
+    let (p0, n0) = match path.end {
+        LightEnd::Point { p, n } => (p, n),
+        LightEnd::Direction { .. } => (Vec3::ZERO, Vec3::ZERO),
+    };
+    let le = light.pdf_le(p0, n0, path.dir(0, 1), &ctx.sphere);
+    // Forward densities (light side) of x_i for techniques with s > i.
+    let forward = |i: usize, s: usize, lambda: &mut SampledWavelengths| -> f64 {
+        match i {
+            0 if s == 1 && n >= 3 => {
+                let wi = path.dir(1, 0);
+                let rctx = LightSampleContext {
+                    p: path.p(1),
+                    n: ng(1),
+                };
+                let hit = LightHit {
+                    p: p0,
+                    n: n0,
+                    t: 0.0,
+                };
+                let pdf_w = if light.is_delta() {
+                    1.0
+                } else {
+                    light.pdf_li(&rctx, wi, &hit) as f64
+                };
+                to_area(pmf * pdf_w, 1, 0)
+            }
+            0 if path.infinite() => {
+                if s == 1 {
+                    0.0
+                } else {
+                    pmf * le.dir_w as f64
+                }
+            }
+            0 => pmf * le.pos_a as f64,
+            1 if path.infinite() => le.pos_a as f64 * ng(1).dot(path.dir(0, 1)).abs() as f64,
+            1 => to_area(le.dir_w as f64, 0, 1),
+            _ => {
+                let b = bsdf(i - 1, lambda);
+                let pdf = b.pdf(
+                    path.dir(i - 1, i - 2),
+                    path.dir(i - 1, i),
+                    TransportMode::Importance,
+                );
+                to_area(pdf as f64, i - 1, i)
+            }
+        }
+    };
+    // Reverse densities (camera side) of x_i for techniques with s ≤ i.
+    let reverse = |i: usize, lambda: &mut SampledWavelengths| -> f64 {
+        if i == n - 1 {
+            return 1.0; // the lens point: the same density for every technique with t ≥ 1
+        }
+        if i == 0 && light.is_delta() {
+            return 0.0;
+        }
+        if i == n - 2 {
+            let pdf_dir = scene.camera.pdf_we(path.lens, path.dir(n - 1, i)).1 as f64;
+            return to_area(pdf_dir, n - 1, i);
+        }
+        let b = bsdf(i + 1, lambda);
+        let pdf = b.pdf(
+            path.dir(i + 1, i + 2),
+            path.dir(i + 1, i),
+            TransportMode::Radiance,
+        );
+        to_area(pdf as f64, i + 1, i)
+    };
+    (0..n)
+        .map(|s| {
+            if s == 1 && n == 2 && path.infinite() {
+                return 0.0;
+            }
+            let f: f64 = (0..s).map(|i| forward(i, s, &mut lambda)).product();
+            let r: f64 = (s..n).map(|i| reverse(i, &mut lambda)).product();
+            f * r
+        })
+        .collect()
+}
+
+/// Production weights for every technique of `path`: the subpaths are replayed through the
+/// integrators' own walk, MIS update and weight functions.
+fn recurrent_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
+    (0..path.n())
+        .map(|s| recurrent_weight(ctx, path, s) as f64)
+        .collect()
+}
+
+fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
+    let scene = ctx.scene;
+    let n = path.n();
+    let t = n - s;
+    let li = path.light;
+    let light = &scene.lights[li as usize];
+    let pmf = scene.light_sampler.pmf(li as usize);
+    let mut lambda = SampledWavelengths::sample_visible(0.5);
+    let vertex = |i: usize, wo: Vec3, walk: &Walk, lambda: &mut SampledWavelengths| {
+        let si = &path.surfaces[i - 1];
+        PathVertex::new(
+            si,
+            wo,
+            bsdf_at(scene, si, lambda),
+            walk.beta,
+            walk.mis,
+            walk.depth,
+        )
+    };
+    let step = |walk: &mut Walk, v: &PathVertex, wi: Vec3, mode: TransportMode| {
+        let bs = BsdfSample::reflection(
+            v.bsdf.f(v.wo, wi, mode),
+            wi,
+            v.bsdf.pdf(v.wo, wi, mode),
+            false,
+        );
+        walk.advance(&ctx.mis, v, bs, mode);
+    };
+    // Light side y_0 … y_{s−1} = x_0 … x_{s−1}.
+    let mut light_vertex = None;
+    let mut origin = None;
+    if s >= 1 {
+        let (p, n0) = match path.end {
+            LightEnd::Point { p, n } => (p, n),
+            LightEnd::Direction { .. } => (path.p(1) + 10.0 * path.dir(1, 0), path.dir(0, 1)),
+        };
+        let w = path.dir(0, 1);
+        let pdf = light.pdf_le(p, n0, w, &ctx.sphere);
+        let le = LightLeSample {
+            p,
+            p_error: Vec3::ZERO,
+            n: n0,
+            w,
+            l: spectral_render::spectral::SampledSpectrum::ONE,
+            pdf_pos_a: pdf.pos_a,
+            pdf_dir_w: pdf.dir_w,
+            delta_dir: light.is_delta(),
+            infinite: path.infinite(),
+        };
+        let (o, mut walk) = Walk::light(ctx, li, pmf, &le).expect("emission");
+        origin = Some(o);
+        for i in 1..s {
+            if i == 1 {
+                let si = &path.surfaces[0];
+                let direct = first_hit_direct(ctx, &o, si.p, si.ng, walk.ray.d);
+                walk.mis.light_direct(&ctx.mis, direct);
+            } else {
+                let prev = light_vertex.unwrap();
+                step(
+                    &mut walk,
+                    &prev,
+                    path.dir(i - 1, i),
+                    TransportMode::Importance,
+                );
+            }
+            let si = &path.surfaces[i - 1];
+            walk.arrive(&ctx.mis, si.p, si.ng);
+            light_vertex = Some(vertex(i, path.dir(i, i - 1), &walk, &mut lambda));
+        }
+    }
+    // Camera side z_0 … z_{t−1} = x_{n−1} … x_s, and the weight.
+    let cam_dir = path.dir(n - 1, n - 2);
+    let mut walk = Walk::camera(ctx, Ray::new(path.lens, cam_dir), f32::INFINITY, path.lens)
+        .expect("camera ray");
+    let mut camera_vertex: Option<PathVertex> = None;
+    for j in 1..t {
+        let i = n - 1 - j;
+        if j >= 2 {
+            let prev = camera_vertex.unwrap();
+            step(
+                &mut walk,
+                &prev,
+                path.dir(i + 1, i),
+                TransportMode::Radiance,
+            );
+        }
+        if i == 0 {
+            // s = 0: the walk reaches the light.
+            return match path.end {
+                LightEnd::Point { p, n: n0 } => {
+                    walk.arrive(&ctx.mis, p, n0);
+                    let hit = LightHit { p, n: n0, t: 0.0 };
+                    emitter_weight(ctx, &walk, li, &hit, path.dir(0, 1))
+                }
+                LightEnd::Direction { to_light } => escaped_weight(ctx, &walk, li, to_light),
+            };
+        }
+        let si = &path.surfaces[i - 1];
+        walk.arrive(&ctx.mis, si.p, si.ng);
+        camera_vertex = Some(vertex(i, path.dir(i, i + 1), &walk, &mut lambda));
+    }
+    let pdf_dir = |p: Vec3| {
+        scene
+            .camera
+            .pdf_we(path.lens, (p - path.lens).normalize())
+            .1
+    };
+    match (s, t) {
+        (1, 1) => origin.map_or(0.0, |o| {
+            if o.infinite {
+                0.0
+            } else {
+                origin_weight(ctx, &o, path.lens, pdf_dir(o.p))
+            }
+        }),
+        (_, 1) => {
+            let y = light_vertex.unwrap();
+            sensor_weight(ctx, &y, path.lens, pdf_dir(y.p))
+        }
+        (1, _) => {
+            let z = camera_vertex.unwrap();
+            let (wi, p_light, n_light) = match path.end {
+                LightEnd::Point { p, n } => ((p - z.p).normalize(), p, n),
+                LightEnd::Direction { to_light } => (to_light, z.p + 1e6 * to_light, Vec3::ZERO),
+            };
+            let hit = LightHit {
+                p: p_light,
+                n: n_light,
+                t: 0.0,
+            };
+            let lctx = LightSampleContext { p: z.p, n: z.ng };
+            let ls = LightLiSample {
+                l: spectral_render::spectral::SampledSpectrum::ONE,
+                wi,
+                pdf_w: if light.is_delta() {
+                    1.0
+                } else {
+                    light.pdf_li(&lctx, wi, &hit)
+                },
+                p_light,
+                n_light,
+                delta: light.is_delta(),
+                infinite: path.infinite(),
+            };
+            direct_weight(ctx, &z, li, &ls)
+        }
+        _ => connect_weight(ctx, &light_vertex.unwrap(), &camera_vertex.unwrap()),
+    }
+}
+
+#[test]
+fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
+    let scene = load_text("every-light", &every_light_stage(), (32, 32));
+    let kinds: Vec<&str> = scene
+        .lights
+        .iter()
+        .map(|l| match l {
+            Light::Triangle(_) => "mesh",
+            Light::Rect(_) => "rect",
+            Light::Disk(_) => "disk",
+            Light::Sphere(_) => "sphere",
+            Light::Cylinder(_) => "cylinder",
+            Light::Distant(d) if d.is_delta() => "distant (delta)",
+            Light::Distant(_) => "distant",
+            Light::Dome(_) => "dome",
+        })
+        .collect();
+    for heuristic in [MisHeuristic::Power, MisHeuristic::Balance] {
+        let ctx = BidirContext::new(&scene, Mis::bdpt(heuristic), 100);
+        let mut sampler = Sampler::new(11, 0, heuristic as u64);
+        let mut checked = vec![0usize; 6];
+        let mut per_kind = std::collections::BTreeMap::<&str, usize>::new();
+        let (mut worst_diff, mut worst_sum) = (0.0f64, 0.0f64);
+        for (k, count) in checked.iter_mut().enumerate() {
+            let mut tries = 0;
+            while *count < 300 && tries < 200_000 {
+                tries += 1;
+                let Some(path) = random_path(&scene, k, &mut sampler) else {
+                    continue;
+                };
+                let pdfs = technique_pdfs(&ctx, &path);
+                let m: Vec<f64> = pdfs.iter().map(|&p| ctx.mis.m(p as f32) as f64).collect();
+                let total: f64 = m.iter().sum();
+                if !(total > 0.0 && total.is_finite()) {
+                    continue;
+                }
+                let brute: Vec<f64> = m.iter().map(|x| x / total).collect();
+                let recurrent = recurrent_weights(&ctx, &path);
+                for s in 0..path.n() {
+                    let diff = (brute[s] - recurrent[s]).abs();
+                    worst_diff = worst_diff.max(diff);
+                    assert!(
+                        diff < 2e-3,
+                        "{heuristic:?}, n = {}, s = {s}, light {}: recurrent {:?} vs brute force {:?} (pdfs {:?})",
+                        path.n(),
+                        kinds[path.light as usize],
+                        recurrent,
+                        brute,
+                        pdfs
+                    );
+                }
+                let sum: f64 = recurrent.iter().sum();
+                worst_sum = worst_sum.max((sum - 1.0).abs());
+                assert!(
+                    (sum - 1.0).abs() < 2e-3,
+                    "weights sum to {sum}: {recurrent:?}"
+                );
+                *count += 1;
+                *per_kind.entry(kinds[path.light as usize]).or_default() += 1;
+            }
+            assert!(*count >= 100, "too few paths with {k} surface vertices");
+        }
+        eprintln!(
+            "{heuristic:?}: paths per length (n = 2..7) {checked:?}, per light {per_kind:?}; \
+             max |recurrent − brute force| {worst_diff:.2e}, max |Σ w − 1| {worst_sum:.2e}"
+        );
+        for kind in [
+            "mesh",
+            "rect",
+            "disk",
+            "sphere",
+            "dome",
+            "distant",
+            "distant (delta)",
+        ] {
+            assert!(
+                per_kind.get(kind).copied().unwrap_or(0) >= 10,
+                "few paths to {kind}: {per_kind:?}"
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Closed forms
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn white_furnace_with_bdpt_and_light_tracing() {
+    let le = 2.0f32;
+    let scene = load_text("furnace", &furnace_stage(le), (16, 16));
+    let expected = le as f64 / (1.0 - 0.8);
+    for (kind, spp) in [(IntegratorKind::Bdpt, 256), (IntegratorKind::Light, 4096)] {
+        let out = render_with(&scene, kind, spp, 5, 10_000);
+        let (mean, sem) = mean_and_sem(out.xyz.iter().map(|p| p[1]));
+        eprintln!("furnace {kind:?}: Y {mean:.4} ± {sem:.4}, expected {expected}");
+        assert!(sem / expected < 3e-3, "too noisy to judge: sem {sem}");
+        assert!(
+            (mean / expected - 1.0).abs() < 0.01,
+            "{kind:?}: furnace Y = {mean}, expected {expected}"
+        );
+    }
+}
+
+/// A grey plane under a uniform dome of L nits reads ρ L: the dome's emission sampling (a
+/// disk at the scene's bounding sphere) carries exactly the radiance it should.
+#[test]
+fn plane_under_a_uniform_dome_reads_albedo_times_radiance() {
+    let l = 50.0f32;
+    let mut s = header();
+    s += &camera(1.0, 0.2, 0.0);
+    s += &format!("def DomeLight \"Sky\"\n{{\n    float inputs:intensity = {l}\n}}\n\n");
+    s += "def Scope \"Looks\"\n{\n";
+    s += &material(
+        "Paint",
+        "spectral:diffuse",
+        "        float2[] inputs:reflectance:samples = [(360, 0.5), (830, 0.5)]\n",
+    );
+    s += "}\n\n";
+    s += &quad(
+        "Plane",
+        0.0,
+        1.0,
+        &binding("Paint"),
+        "\"MaterialBindingAPI\"",
+    );
+    let scene = load_text("dome-plane", &s, (12, 12));
+    let expected = 0.5 * l as f64;
+    // Light tracing reaches the small visible part of the plane rarely: more paths.
+    for (kind, spp) in [(IntegratorKind::Bdpt, 256), (IntegratorKind::Light, 4096)] {
+        let out = render_with(&scene, kind, spp, 3, 7);
+        let (mean, sem) = mean_and_sem(out.xyz.iter().map(|p| p[1]));
+        eprintln!("dome plane {kind:?}: Y {mean:.4} ± {sem:.4}, expected {expected}");
+        assert!(
+            (mean - expected).abs() < 2e-3 * expected + 4.0 * sem,
+            "{kind:?}: {mean} vs {expected} (sem {sem})"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Strategy decomposition, robustness, determinism
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn strategy_images_sum_to_the_bdpt_image() {
+    let dir = temp_dir("strategies");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_spectral-render"))
+        .args([
+            "--integrator",
+            "bdpt",
+            "--spp",
+            "16",
+            "--resolution",
+            "12x12",
+            "--max-depth",
+            "4",
+        ])
+        .arg("--strategies")
+        .arg(dir.join("st"))
+        .arg("-o")
+        .arg(dir.join("bdpt.exr"))
+        .arg(cbox())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |p: &Path| spectral_render::output::exr::read(p).unwrap();
+    let image = read(&dir.join("bdpt.exr"));
+    let mut sum = vec![0.0f64; 144];
+    let mut files = 0;
+    for entry in std::fs::read_dir(dir.join("st")).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.ends_with("_weighted.exr") {
+            for (acc, v) in sum.iter_mut().zip(&read(&path).channels["XYZ.Y"]) {
+                *acc += *v as f64;
+            }
+            files += 1;
+        }
+    }
+    // Depths 0..=4: 2 + 3 + 4 + 5 + 6 strategies.
+    assert_eq!(files, 20);
+    let y = &image.channels["XYZ.Y"];
+    let max_rel = sum
+        .iter()
+        .zip(y)
+        .map(|(s, &v)| (s - v as f64).abs() / (v as f64).max(1e-3))
+        .fold(0.0f64, f64::max);
+    eprintln!("strategy images: max relative difference of the sum {max_rel:.2e}");
+    assert!(max_rel < 1e-4, "strategy sum differs by {max_rel}");
+}
+
+#[test]
+fn no_nan_with_a_point_like_light_on_a_wall_or_a_camera_inside_a_box() {
+    // A 0.1 mm sphere light 0.15 mm above a floor, seen from above.
+    let mut s = header();
+    s += &camera_at([0.0, 0.5, 0.0], 0.3, "").replace(
+        "    uniform token[] xformOpOrder = [\"xformOp:translate\"]",
+        "    float3 xformOp:rotateXYZ = (-90, 0, 0)\n    uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:rotateXYZ\"]",
+    );
+    s += &looks();
+    s += &polygon(
+        "Floor",
+        &[
+            [-1.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 0.0, -1.0],
+            [-1.0, 0.0, -1.0],
+        ],
+        None,
+        &binding("White"),
+    );
+    s += &lux(
+        "SphereLight",
+        "Dot",
+        "    bool treatAsPoint = 1\n    float inputs:intensity = 1e9\n",
+        [0.01, 0.00015, 0.0],
+        [0.0; 3],
+    );
+    let near_wall = load_text("point-light", &s, (16, 16));
+    // A closed box (walls facing inwards) with a small light inside and the camera inside.
+    let mut b = header();
+    b += &camera(0.5, 0.8, 0.0);
+    b += &looks();
+    for (i, f) in cube_faces(1.0).iter().enumerate() {
+        b += &polygon(&format!("Wall{i}"), f, None, &binding("Grey"));
+    }
+    b += &lux(
+        "SphereLight",
+        "Bulb",
+        "    float inputs:radius = 0.05\n    float inputs:intensity = 100\n",
+        [0.3, 0.6, -0.2],
+        [0.0; 3],
+    );
+    let inside = load_text("inside-box", &b, (16, 16));
+    for (name, scene) in [
+        ("point-like light", &near_wall),
+        ("camera inside a box", &inside),
+    ] {
+        for kind in [
+            IntegratorKind::Path,
+            IntegratorKind::Light,
+            IntegratorKind::Bdpt,
+        ] {
+            let out = render_with(scene, kind, 64, 1, 7);
+            assert!(
+                out.xyz.iter().any(|p| p[1] > 0.0),
+                "{name} {kind:?}: black image"
+            );
+        }
+    }
+}
+
+#[test]
+fn bidirectional_images_are_bit_identical_for_one_and_two_threads() {
+    let scene = scene::load(&cbox(), Some((24, 24))).unwrap();
+    for kind in [IntegratorKind::Light, IntegratorKind::Bdpt] {
+        let run = |threads| {
+            let opts = RenderOptions {
+                spp: Some(4),
+                seed: 3,
+                threads: Some(threads),
+                integrator: kind,
+                ..Default::default()
+            };
+            let out = render::render(&scene, &opts).unwrap();
+            assert_finite(&out);
+            out.xyz
+                .iter()
+                .flatten()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(run(1), run(2), "{kind:?}");
+    }
+}
+
+#[test]
+fn command_line_options_of_the_bidirectional_integrators() {
+    let dir = temp_dir("bidir-cli");
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_spectral-render"))
+            .args(args)
+            .arg(cbox())
+            .current_dir(&dir)
+            .output()
+            .unwrap()
+    };
+    for (integrator, mis) in [("light", "power"), ("bdpt", "balance")] {
+        let o = run(&[
+            "--integrator",
+            integrator,
+            "--mis",
+            mis,
+            "--spp",
+            "2",
+            "--resolution",
+            "8x8",
+            "-o",
+            "x.exr",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = spectral_render::output::exr::read(&dir.join("x.exr")).unwrap();
+        assert!(img.channels["XYZ.Y"].iter().all(|v| v.is_finite()));
+    }
+    for (args, message) in [
+        (&["--integrator", "vcm"][..], "unknown integrator"),
+        (&["--mis", "cutoff"][..], "unknown MIS heuristic"),
+        (
+            &["--strategies", "st"][..],
+            "--strategies needs --integrator bdpt",
+        ),
+        (
+            &[
+                "--integrator",
+                "bdpt",
+                "--strategies",
+                "st",
+                "--max-depth",
+                "40",
+            ][..],
+            "strategy images need --max-depth 15 or less",
+        ),
+    ] {
+        let o = run(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(message),
+            "{args:?}: {err}"
+        );
+    }
+}
