@@ -295,12 +295,14 @@ mod tests {
                 frame: Frame::from_normal(Vec3::new(0.0, 0.6, 0.8)),
                 radius: 0.3,
                 radiance: white.clone(),
+                shaping: None,
             }),
             Light::Sphere(SphereLight {
                 prim_path: "/s".into(),
                 center: Vec3::splat(0.5),
                 radius: 0.2,
                 radiance: white,
+                shaping: None,
             }),
         ]
     }
