@@ -12,6 +12,12 @@
 //! | `opacity`, `opacityThreshold` | threshold > 0: present where opacity ≥ threshold, a cutout elsewhere; threshold 0: present with probability `opacity` |
 //! | `normal` | a constant tangent-space normal, applied in the frame built around the shading normal |
 //!
+//! **Textures.** `diffuseColor`, `metallic`, `clearcoat` and `opacity` may be connected to a
+//! `UsdUVTexture` ([`PreviewTextures`]): they are looked up at the hit's st per BSDF, the colour
+//! uplifted per lookup (`crate::texture`). Inputs whose value feeds precomputed coat albedos
+//! (`roughness`, `clearcoatRoughness`, `specularColor`) and `emissiveColor` stay constant:
+//! a texture there is rejected by the scene builder with a warning (the value default is used).
+//!
 //! Roughness is squared (α = r²) as in the specification's reference implementation and in
 //! Burley 2012 (§5.4), where `roughness` is perceptually linear; `spectral:` materials take α
 //! directly (DESIGN.md §3). The plastic coat uses the exact dielectric Fresnel of `ior`
@@ -27,8 +33,10 @@ use crate::bxdf::{
 };
 use crate::math::Frame;
 use crate::scene::desc::PreviewSurfaceDesc;
+use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
-use glam::Vec3;
+use crate::texture::TextureInput;
+use glam::{Vec2, Vec3};
 
 /// The fixed IOR of the clearcoat layer (UsdPreviewSurface specification).
 pub const CLEARCOAT_IOR: f32 = 1.5;
@@ -53,6 +61,29 @@ pub struct PreviewMaterial {
     pub opacity: f32,
     /// Unit tangent-space normal; `Vec3::Z` leaves the shading normal unchanged.
     pub normal: Vec3,
+    /// Inputs read from textures at the hit (override the constants above).
+    pub textures: PreviewTextures,
+}
+
+/// The textured inputs of a UsdPreviewSurface; `None` where the input is a constant.
+#[derive(Clone, Debug, Default)]
+pub struct PreviewTextures {
+    pub diffuse: Option<TextureInput>,
+    pub metallic: Option<TextureInput>,
+    pub clearcoat: Option<TextureInput>,
+    pub opacity: Option<TextureInput>,
+    /// `opacityThreshold`, applied to a textured opacity per lookup.
+    pub opacity_threshold: f32,
+}
+
+impl PreviewTextures {
+    /// True when no input is textured.
+    pub fn is_empty(&self) -> bool {
+        self.diffuse.is_none()
+            && self.metallic.is_none()
+            && self.clearcoat.is_none()
+            && self.opacity.is_none()
+    }
 }
 
 impl PreviewMaterial {
@@ -101,14 +132,67 @@ impl PreviewMaterial {
             clearcoat_albedo,
             opacity: presence(d.opacity, d.opacity_threshold),
             normal: tangent_normal(d.normal),
+            textures: PreviewTextures {
+                opacity_threshold: d.opacity_threshold,
+                ..PreviewTextures::default()
+            },
         }
     }
 
-    /// The BSDF at a hit with shading normal `ns`.
+    /// The probability that the surface is present at st = `uv`.
     #[inline]
-    pub fn bsdf(&self, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
+    pub fn opacity(&self, uv: Vec2) -> f32 {
+        match &self.textures.opacity {
+            Some(t) => presence(t.float(uv), self.textures.opacity_threshold),
+            None => self.opacity,
+        }
+    }
+
+    /// True when the surface is present everywhere.
+    pub fn is_opaque(&self) -> bool {
+        self.textures.opacity.is_none() && self.opacity >= 1.0
+    }
+
+    /// The diffuse reflectance at st = `uv`, clamped to [0, 1].
+    #[inline]
+    fn rho(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+        let s = match &self.textures.diffuse {
+            Some(t) => {
+                let sigmoid = reflectance_lookup(t.rgb(uv));
+                SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]))
+            }
+            None => self.diffuse.sample(lambda),
+        };
+        s.map(|v| v.clamp(0.0, 1.0))
+    }
+
+    /// A scalar input: the texture's float output at `uv` or the constant, clamped to [0, 1].
+    #[inline]
+    fn scalar(t: &Option<TextureInput>, constant: f32, uv: Vec2) -> f32 {
+        match t {
+            Some(t) => {
+                let v = t.float(uv);
+                if v.is_finite() {
+                    v.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            }
+            None => constant,
+        }
+    }
+
+    /// The BSDF at a hit with st = `uv` and shading normal `ns`.
+    #[inline]
+    pub fn bsdf(&self, uv: Vec2, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
         let clamp01 = |s: &Spectrum| s.sample(lambda).map(|v| v.clamp(0.0, 1.0));
-        let rho = clamp01(&self.diffuse);
+        let rho = self.rho(uv, lambda);
+        let metallic = if self.specular.is_some() {
+            0.0
+        } else {
+            Self::scalar(&self.textures.metallic, self.metallic, uv)
+        };
+        let clearcoat = Self::scalar(&self.textures.clearcoat, self.clearcoat, uv);
         let fresnel = match &self.specular {
             Some(s) => CoatFresnel::Schlick { f0: clamp01(s) },
             None => CoatFresnel::Dielectric { eta: self.ior },
@@ -123,13 +207,13 @@ impl PreviewMaterial {
         let bxdf = PreviewBxdf {
             base,
             metal: SpecularCoat::new(self.distrib, CoatFresnel::Schlick { f0: rho }),
-            metallic: self.metallic,
+            metallic,
             clearcoat: SpecularCoat::new(
                 self.clearcoat_distrib,
                 CoatFresnel::Dielectric { eta: CLEARCOAT_IOR },
             ),
             clearcoat_albedo: self.clearcoat_albedo,
-            clearcoat_weight: self.clearcoat,
+            clearcoat_weight: clearcoat,
         };
         let n = if self.normal == Vec3::Z {
             ns
