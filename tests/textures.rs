@@ -173,9 +173,9 @@ fn textured_diffuse_colour_round_trips_under_a_uniform_dome() {
     );
     let out = render_file(&write(&dir, "tex.usda", &stage), (32, 32), 64, 7, None);
     for (k, texel) in q.iter().enumerate() {
-        for ch in 0..3 {
+        for (ch, &byte) in texel[..3].iter().enumerate() {
             let (mean, sem) = quadrant(&out, k, ch);
-            let expected = f64::from(l) * f64::from(texel[ch]) / 255.0;
+            let expected = f64::from(l) * f64::from(byte) / 255.0;
             let tol = 6e-3 * f64::from(l) + 5.0 * sem;
             assert!(
                 (mean - expected).abs() < tol,
