@@ -187,6 +187,15 @@ fn dielectric(
     Ok(Material::ThinDielectric { ior })
 }
 
+/// The UsdPreviewSurface inputs that may be read from a texture.
+const TEXTURED_PREVIEW_INPUTS: [&str; 5] = [
+    "diffuseColor",
+    "metallic",
+    "roughness",
+    "clearcoat",
+    "opacity",
+];
+
 /// UsdPreviewSurface (mapping in `material/preview.rs`).
 fn preview_surface(
     path: &str,
@@ -205,29 +214,30 @@ fn preview_surface(
     let specular = reflectance(&SpectrumDesc::Rgb(ps.specular_color))?;
     let mut m = PreviewMaterial::new(ps, diffuse, specular);
     for (input, tex) in &ps.textures {
-        let slot = match input.as_str() {
-            "diffuseColor" => &mut m.textures.diffuse,
-            "metallic" => &mut m.textures.metallic,
-            "clearcoat" => &mut m.textures.clearcoat,
-            "opacity" => &mut m.textures.opacity,
-            _ => {
-                warnings.push(format!(
-                    "{path}: a texture on inputs:{input} is not supported yet (supported: \
-                     diffuseColor, metallic, clearcoat, opacity); using the default"
-                ));
-                continue;
-            }
-        };
+        if !TEXTURED_PREVIEW_INPUTS.contains(&input.as_str()) {
+            warnings.push(format!(
+                "{path}: a texture on inputs:{input} is not supported yet (supported: {}); \
+                 using the default",
+                TEXTURED_PREVIEW_INPUTS.join(", ")
+            ));
+            continue;
+        }
         if tex.st_primvar != "st" {
             warnings.push(format!(
                 "{}: primvar '{}' is not read (only primvars:st); using st",
                 tex.shader_path, tex.st_primvar
             ));
         }
-        let input = textures
+        let t = textures
             .input(tex)
             .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))?;
-        *slot = Some(input);
+        match input.as_str() {
+            "diffuseColor" => m.textures.diffuse = Some(t),
+            "metallic" => m.textures.metallic = Some(t),
+            "clearcoat" => m.textures.clearcoat = Some(t),
+            "opacity" => m.textures.opacity = Some(t),
+            _ => m.set_roughness_texture(t),
+        }
     }
     Ok(Material::Preview(Box::new(m)))
 }
