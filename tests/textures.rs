@@ -249,3 +249,26 @@ fn an_unsupported_wrap_token_is_an_error() {
     let stage = textured_stage(1.0, "checker.png", wrap, diffuse);
     assert_cli_error(&dir, &stage, &["bad.usda", "/Looks/Paint/Tex", "wobble"]);
 }
+
+#[test]
+fn textures_on_unsupported_inputs_warn_and_use_the_default() {
+    let dir = temp_dir("tex-warn");
+    quadrant_png(&dir.join("checker.png"), [[255, 255, 255, 255]; 4]);
+    let inputs = "            color3f inputs:emissiveColor.connect = </Looks/Paint/Tex.outputs:rgb>\n            float inputs:clearcoatRoughness.connect = </Looks/Paint/Tex.outputs:r>\n";
+    let stage = textured_stage(1.0, "checker.png", "", inputs);
+    let scene =
+        spectral_render::scene::load(&write(&dir, "warn.usda", &stage), Some((4, 4))).unwrap();
+    let warnings = &scene.summary.warnings;
+    for input in ["inputs:emissiveColor", "inputs:clearcoatRoughness"] {
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.contains(input) && w.contains("not supported yet")),
+            "{input}: {warnings:?}"
+        );
+    }
+    assert!(
+        scene.lights.len() == 1,
+        "a textured emissiveColor does not emit"
+    );
+}

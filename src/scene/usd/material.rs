@@ -325,7 +325,7 @@ impl Inputs<'_, '_> {
                 .err(&node_prim, format!("unknown shader info:id '{id}'")));
         }
         let message = format!(
-            "inputs:{name} is connected to <{}> ({id}): texture inputs not supported yet, using the default",
+            "inputs:{name} is connected to <{}> ({id}): only UsdPreviewSurface inputs read UsdUVTexture nodes; using the default",
             node.as_str()
         );
         self.ctx.warn(self.shader, message);
