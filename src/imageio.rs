@@ -37,6 +37,45 @@ pub fn read_rgb_linear(path: &Path) -> Result<RgbImage, String> {
     })
 }
 
+/// A decoded image as undecoded RGBA (no transfer function applied), row-major, top row
+/// first; `is_float` tells whether the file stored floats (EXR) rather than 8/16-bit integers.
+pub struct RgbaImage {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 4]>,
+    pub is_float: bool,
+}
+
+/// Reads PNG, JPEG or EXR as stored: integers mapped to [0, 1], floats as they are, alpha 1
+/// when the file has none. The caller decides whether to linearise (material textures).
+pub fn read_rgba_raw(path: &Path) -> Result<RgbaImage, String> {
+    let img =
+        image::open(path).map_err(|e| format!("cannot read image {}: {e}", path.display()))?;
+    let is_float = matches!(
+        img,
+        image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+    );
+    let rgba = img.to_rgba32f();
+    let (width, height) = (rgba.width() as usize, rgba.height() as usize);
+    let pixels = rgba.pixels().map(|p| p.0).collect();
+    Ok(RgbaImage {
+        width,
+        height,
+        pixels,
+        is_float,
+    })
+}
+
+/// PNG-encodes 8-bit RGBA `bytes` into `path` (test images, texture tooling).
+pub fn write_png_rgba8(path: &Path, bytes: &[u8], width: u32, height: u32) -> io::Result<()> {
+    let mut file = File::create(path)?;
+    let mut buffered = BufWriter::new(&mut file);
+    PngEncoder::new(&mut buffered)
+        .write_image(bytes, width, height, ExtendedColorType::Rgba8)
+        .map_err(|e| io::Error::other(e.to_string()))?;
+    buffered.flush()
+}
+
 /// PNG-encodes 8-bit RGB `bytes` into `file`, flushing the buffer explicitly so that write
 /// errors are reported.
 pub fn encode_png_rgb8(file: &mut File, bytes: &[u8], width: u32, height: u32) -> io::Result<()> {

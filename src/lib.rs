@@ -59,5 +59,6 @@ pub mod sampling;
 pub mod scene;
 pub mod sensor;
 pub mod spectral;
+pub mod texture;
 
 pub use error::{Error, Result};

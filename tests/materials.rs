@@ -343,7 +343,7 @@ fn rough_models_converge_to_their_smooth_counterparts() {
             k: dense(k),
             distrib: TrowbridgeReitz::isotropic(alpha),
         }
-        .bsdf(Vec3::Z, &lambda)
+        .bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda)
         .bxdf
     };
     let plastic = |alpha: f32| {
@@ -425,7 +425,7 @@ fn normal_incidence_metal_reflectance_matches_the_tables() {
                 lambda: [l as f32; 4],
                 pdf: [1.0; 4],
             };
-            let bsdf = m.bsdf(Vec3::Z, &lambda);
+            let bsdf = m.bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda);
             let s = bsdf
                 .bxdf
                 .sample_f(Vec3::Z, 0.5, [0.5; 2], RADIANCE)
@@ -631,7 +631,7 @@ fn dispersion_terminates_secondary_wavelengths_only_when_the_ior_varies() {
         lambda: [450.0, 550.0, 650.0, 750.0],
         pdf: [1.0; 4],
     };
-    match bk7.bsdf(Vec3::Z, &lambda).bxdf {
+    match bk7.bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda).bxdf {
         Bxdf::Dielectric(d) => assert_eq!(d.eta, data::glass("BK7").unwrap().ior(450.0)),
         _ => panic!(),
     }
@@ -711,7 +711,7 @@ fn preview_surface_normal_input_tilts_the_shading_normal() {
     };
     assert!((p.normal - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6);
     let lambda = SampledWavelengths::sample_visible(0.3);
-    let bsdf = scene.materials[0].bsdf(Vec3::Z, &lambda);
+    let bsdf = scene.materials[0].bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda);
     assert!((bsdf.frame.n.dot(Vec3::Z) - 0.8).abs() < 1e-5);
     // A normal pointing into the surface is replaced by (0, 0, 1), with a warning.
     let scene = load_looks("normal-down", &looks, "Down").unwrap();

@@ -45,7 +45,7 @@ pub fn metal(metal: &str, alpha_x: f32, alpha_y: f32) -> Bxdf {
         k: dense(k),
         distrib: TrowbridgeReitz::new(alpha_x, alpha_y),
     };
-    m.bsdf(glam::Vec3::Z, &lambda()).bxdf
+    m.bsdf(glam::Vec2::ZERO, glam::Vec3::Z, &lambda()).bxdf
 }
 
 fn dielectric(eta: f32, alpha: f32) -> Bxdf {
@@ -55,13 +55,13 @@ fn dielectric(eta: f32, alpha: f32) -> Bxdf {
 fn plastic(alpha: f32) -> Bxdf {
     let rho = Spectrum::Sigmoid(crate::spectral::uplift::reflectance([0.7, 0.2, 0.1]));
     let m = Material::Plastic(PlasticMaterial::new(rho, 1.5, alpha));
-    m.bsdf(glam::Vec3::Z, &lambda()).bxdf
+    m.bsdf(glam::Vec2::ZERO, glam::Vec3::Z, &lambda()).bxdf
 }
 
 fn preview(d: PreviewSurfaceDesc) -> Bxdf {
     let uplift = |c| Spectrum::Sigmoid(crate::spectral::uplift::reflectance(c));
     let m = PreviewMaterial::new(&d, uplift(d.diffuse_color), uplift(d.specular_color));
-    m.bsdf(glam::Vec3::Z, &lambda()).bxdf
+    m.bsdf(glam::Vec2::ZERO, glam::Vec3::Z, &lambda()).bxdf
 }
 
 /// Every model, smooth and rough, with the corner cases of issue 3.

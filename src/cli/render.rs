@@ -101,6 +101,12 @@ fn run(args: &RenderArgs) -> Result<(), String> {
     validate(args)?;
     let scene = scene::load(&args.scene, args.resolution).map_err(|e| e.to_string())?;
     print_summary(&scene);
+    if args.integrator != IntegratorKind::Path && scene.materials.iter().any(|m| !m.is_opaque()) {
+        eprintln!(
+            "warning: --integrator {} treats partially opaque surfaces (UsdPreviewSurface opacity) as opaque; use --integrator path for cutouts",
+            args.integrator.name()
+        );
+    }
     let opts = RenderOptions {
         spp: args.spp,
         time_budget: args.time,

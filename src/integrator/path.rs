@@ -23,7 +23,7 @@ use crate::material::Material;
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug)]
 pub struct PathIntegrator {
@@ -106,7 +106,7 @@ impl PathIntegrator {
                 Hit::Surface(si) => si,
             };
             let material = &scene.materials[si.material as usize];
-            if !surface_present(material, sampler) {
+            if !surface_present(material, si.uv, sampler) {
                 pass_throughs += 1;
                 if pass_throughs > MAX_PASS_THROUGHS {
                     break;
@@ -131,7 +131,7 @@ impl PathIntegrator {
             if material.is_dispersive() {
                 lambda.terminate_secondary();
             }
-            let bsdf = material.bsdf(si.ns, lambda);
+            let bsdf = material.bsdf(si.uv, si.ns, lambda);
             if !bsdf.is_specular() {
                 l += beta * self.sample_ld(scene, &si, &bsdf, wo, lambda, sampler);
             }
@@ -256,8 +256,8 @@ const MAX_PASS_THROUGHS: u32 = 256;
 
 /// The stochastic opacity test: true when the surface is there for this path.
 #[inline]
-fn surface_present(material: &Material, sampler: &mut Sampler) -> bool {
-    let a = material.opacity();
+fn surface_present(material: &Material, uv: Vec2, sampler: &mut Sampler) -> bool {
+    let a = material.opacity(uv);
     a >= 1.0 || (a > 0.0 && sampler.get_1d() < a)
 }
 
@@ -288,7 +288,7 @@ pub(crate) fn transmittance(
     if !scene.occluded(&ray, t, Some(light)) {
         return 1.0;
     }
-    if scene.materials.iter().all(|m| m.opacity() >= 1.0) {
+    if scene.materials.iter().all(Material::is_opaque) {
         return 0.0;
     }
     let mut tr = 1.0;
@@ -298,7 +298,7 @@ pub(crate) fn transmittance(
             Some(Hit::Light { light: l, .. }) => return if l == light { tr } else { 0.0 },
             Some(Hit::Surface(si)) => si,
         };
-        let opacity = scene.materials[si.material as usize].opacity();
+        let opacity = scene.materials[si.material as usize].opacity(si.uv);
         tr *= 1.0 - opacity.clamp(0.0, 1.0);
         if tr == 0.0 {
             return 0.0;

@@ -25,7 +25,7 @@ use crate::bxdf::{
 };
 use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 pub use preview::PreviewMaterial;
 
@@ -95,9 +95,10 @@ impl PlasticMaterial {
 }
 
 impl Material {
-    /// The BSDF at a surface point with shading normal `ns`.
+    /// The BSDF at a surface point with texture coordinates `uv` (USD st) and shading
+    /// normal `ns`.
     #[inline]
-    pub fn bsdf(&self, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
+    pub fn bsdf(&self, uv: Vec2, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
         let bxdf = match self {
             Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf {
                 r: reflectance_at(reflectance, lambda),
@@ -120,7 +121,7 @@ impl Material {
                 })))
             }
             Material::Plastic(p) => Bxdf::Plastic(p.bxdf(lambda)),
-            Material::Preview(p) => return p.bsdf(ns, lambda),
+            Material::Preview(p) => return p.bsdf(uv, ns, lambda),
         };
         Bsdf::new(bxdf, ns)
     }
@@ -133,12 +134,21 @@ impl Material {
     }
 
     /// The probability that the surface is present (1 for everything but a
-    /// UsdPreviewSurface with opacity).
+    /// UsdPreviewSurface with opacity) at texture coordinates `uv`.
     #[inline]
-    pub fn opacity(&self) -> f32 {
+    pub fn opacity(&self, uv: Vec2) -> f32 {
         match self {
-            Material::Preview(p) => p.opacity,
+            Material::Preview(p) => p.opacity(uv),
             _ => 1.0,
+        }
+    }
+
+    /// True when the surface is present everywhere (opacity 1 and no opacity texture).
+    #[inline]
+    pub fn is_opaque(&self) -> bool {
+        match self {
+            Material::Preview(p) => p.is_opaque(),
+            _ => true,
         }
     }
 }

@@ -19,6 +19,7 @@ use crate::sensor::Camera;
 use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
 use crate::spectral::{data, DenseSpectrum, Spectrum};
+use crate::texture::TextureCache;
 use crate::{Error, Result};
 use glam::{Mat3, Mat4, Vec3};
 use std::f32::consts::PI;
@@ -30,10 +31,14 @@ const DEFAULT_WIDTH: u32 = 640;
 pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<Scene> {
     let file = &desc.source;
     let mut warnings = desc.warnings.clone();
+    let mut textures = TextureCache::default();
     let mut materials = desc
         .materials
         .iter()
-        .map(|m| material(m, &mut warnings).map_err(|r| Error::prim(file, &m.prim_path, r)))
+        .map(|m| {
+            material(m, &mut textures, &mut warnings)
+                .map_err(|r| Error::prim(file, &m.prim_path, r))
+        })
         .collect::<Result<Vec<_>>>()?;
     let default_material = materials.len() as u32;
     materials.push(Material::Diffuse {
@@ -118,7 +123,11 @@ pub fn reflectance(s: &SpectrumDesc) -> std::result::Result<Spectrum, String> {
 }
 
 /// The render material of a material prim (the models of `material/` and `bxdf/`).
-fn material(m: &MaterialDesc, warnings: &mut Vec<String>) -> std::result::Result<Material, String> {
+fn material(
+    m: &MaterialDesc,
+    textures: &mut TextureCache,
+    warnings: &mut Vec<String>,
+) -> std::result::Result<Material, String> {
     let path = &m.prim_path;
     match &m.kind {
         MaterialKind::Diffuse {
@@ -152,7 +161,7 @@ fn material(m: &MaterialDesc, warnings: &mut Vec<String>) -> std::result::Result
             *ior,
             non_negative("roughness", *roughness)?,
         ))),
-        MaterialKind::PreviewSurface(ps) => preview_surface(path, ps, warnings),
+        MaterialKind::PreviewSurface(ps) => preview_surface(path, ps, textures, warnings),
     }
 }
 
@@ -178,10 +187,20 @@ fn dielectric(
     Ok(Material::ThinDielectric { ior })
 }
 
+/// The UsdPreviewSurface inputs that may be read from a texture.
+const TEXTURED_PREVIEW_INPUTS: [&str; 5] = [
+    "diffuseColor",
+    "metallic",
+    "roughness",
+    "clearcoat",
+    "opacity",
+];
+
 /// UsdPreviewSurface (mapping in `material/preview.rs`).
 fn preview_surface(
     path: &str,
     ps: &PreviewSurfaceDesc,
+    textures: &mut TextureCache,
     warnings: &mut Vec<String>,
 ) -> std::result::Result<Material, String> {
     let n = Vec3::from_array(ps.normal);
@@ -193,7 +212,33 @@ fn preview_surface(
     }
     let diffuse = reflectance(&SpectrumDesc::Rgb(ps.diffuse_color))?;
     let specular = reflectance(&SpectrumDesc::Rgb(ps.specular_color))?;
-    let m = PreviewMaterial::new(ps, diffuse, specular);
+    let mut m = PreviewMaterial::new(ps, diffuse, specular);
+    for (input, tex) in &ps.textures {
+        if !TEXTURED_PREVIEW_INPUTS.contains(&input.as_str()) {
+            warnings.push(format!(
+                "{path}: a texture on inputs:{input} is not supported yet (supported: {}); \
+                 using the default",
+                TEXTURED_PREVIEW_INPUTS.join(", ")
+            ));
+            continue;
+        }
+        if tex.st_primvar != "st" {
+            warnings.push(format!(
+                "{}: primvar '{}' is not read (only primvars:st); using st",
+                tex.shader_path, tex.st_primvar
+            ));
+        }
+        let t = textures
+            .input(tex)
+            .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))?;
+        match input.as_str() {
+            "diffuseColor" => m.textures.diffuse = Some(t),
+            "metallic" => m.textures.metallic = Some(t),
+            "clearcoat" => m.textures.clearcoat = Some(t),
+            "opacity" => m.textures.opacity = Some(t),
+            _ => m.set_roughness_texture(t),
+        }
+    }
     Ok(Material::Preview(Box::new(m)))
 }
 

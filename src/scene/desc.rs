@@ -123,6 +123,79 @@ pub struct PreviewSurfaceDesc {
     pub ior: f32,
     /// Tangent-space normal, components in [−1, 1].
     pub normal: [f32; 3],
+    /// Inputs connected to a `UsdUVTexture`, by input name (`"diffuseColor"`, ...); the
+    /// value fields above then hold the spec default and are unused.
+    pub textures: Vec<(String, TextureDesc)>,
+}
+
+impl PreviewSurfaceDesc {
+    /// The texture connected to input `name`, if any.
+    pub fn texture(&self, name: &str) -> Option<&TextureDesc> {
+        self.textures
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| t)
+    }
+}
+
+/// A `UsdUVTexture` node feeding a material input.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureDesc {
+    /// The texture shader's prim path (for messages).
+    pub shader_path: String,
+    /// `inputs:file`, resolved to an absolute path.
+    pub file: PathBuf,
+    /// The `UsdPrimvarReader_float2` varname feeding `inputs:st` ("st" by default).
+    pub st_primvar: String,
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+    pub color_space: ColorSpace,
+    pub scale: [f32; 4],
+    pub bias: [f32; 4],
+    pub fallback: [f32; 4],
+    /// The output the material input is connected to.
+    pub channel: TextureChannel,
+}
+
+/// UsdUVTexture `wrapS` / `wrapT` (`useMetadata` is read as repeat).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    Repeat,
+    Clamp,
+    Mirror,
+    Black,
+}
+
+/// UsdUVTexture `sourceColorSpace`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ColorSpace {
+    /// sRGB for 8/16-bit files, raw for float files.
+    Auto,
+    Srgb,
+    Raw,
+}
+
+/// The UsdUVTexture output a material input reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureChannel {
+    Rgb,
+    R,
+    G,
+    B,
+    A,
+}
+
+impl TextureChannel {
+    /// The channel index of a single-channel output; `None` for `rgb`.
+    pub fn index(self) -> Option<usize> {
+        match self {
+            TextureChannel::Rgb => None,
+            TextureChannel::R => Some(0),
+            TextureChannel::G => Some(1),
+            TextureChannel::B => Some(2),
+            TextureChannel::A => Some(3),
+        }
+    }
 }
 
 impl Default for PreviewSurfaceDesc {
@@ -141,6 +214,7 @@ impl Default for PreviewSurfaceDesc {
             opacity_threshold: 0.0,
             ior: 1.5,
             normal: [0.0, 0.0, 1.0],
+            textures: Vec::new(),
         }
     }
 }

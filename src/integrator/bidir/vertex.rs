@@ -140,7 +140,7 @@ pub fn bsdf_at(scene: &Scene, si: &SurfaceHit, lambda: &mut SampledWavelengths) 
     if material.is_dispersive() {
         lambda.terminate_secondary();
     }
-    material.bsdf(si.ns, lambda)
+    material.bsdf(si.uv, si.ns, lambda)
 }
 
 /// Area density at `p_to` (geometric normal `n_to`) of a direction density `pdf_w` at

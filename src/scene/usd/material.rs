@@ -5,7 +5,10 @@ use openusd::{sdf, usd};
 
 use super::values::{self, Ctx};
 use super::vocab;
-use crate::scene::desc::{IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc};
+use crate::scene::desc::{
+    ColorSpace, IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc,
+    TextureChannel, TextureDesc, Wrap,
+};
 use crate::Result;
 
 /// How many connection hops (through NodeGraph / Material interfaces) are followed.
@@ -187,7 +190,11 @@ fn check_inputs(ctx: &Ctx, shader: &usd::Prim, id: &str, vocabulary: &[&str]) ->
 
 /// A `spectral:*` material model.
 fn spectral_material(ctx: &mut Ctx, shader: &usd::Prim, id: &str) -> Result<MaterialKind> {
-    let mut inputs = Inputs { ctx, shader };
+    let mut inputs = Inputs {
+        ctx,
+        shader,
+        textured: Vec::new(),
+    };
     let roughness = inputs.f32("roughness")?.unwrap_or(0.0);
     Ok(match id {
         "spectral:diffuse" => MaterialKind::Diffuse {
@@ -211,11 +218,33 @@ fn spectral_material(ctx: &mut Ctx, shader: &usd::Prim, id: &str) -> Result<Mate
     })
 }
 
+/// The UsdPreviewSurface inputs that may be connected to a `UsdUVTexture`.
+const TEXTURABLE_INPUTS: [&str; 8] = [
+    "diffuseColor",
+    "emissiveColor",
+    "specularColor",
+    "metallic",
+    "roughness",
+    "clearcoat",
+    "clearcoatRoughness",
+    "opacity",
+];
+
 /// Reads a UsdPreviewSurface, warning about inputs it cannot honour.
 fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDesc> {
     warn_unsupported_preview_inputs(ctx, shader)?;
     let d = PreviewSurfaceDesc::default();
-    let mut inputs = Inputs { ctx, shader };
+    let mut textures = Vec::new();
+    for name in TEXTURABLE_INPUTS {
+        if let Some(t) = texture_input(ctx, shader, name)? {
+            textures.push((name.to_string(), t));
+        }
+    }
+    let mut inputs = Inputs {
+        ctx,
+        shader,
+        textured: textures.iter().map(|(n, _)| n.clone()).collect(),
+    };
     Ok(PreviewSurfaceDesc {
         diffuse_color: inputs.rgb("diffuseColor")?.unwrap_or(d.diffuse_color),
         emissive_color: inputs.rgb("emissiveColor")?.unwrap_or(d.emissive_color),
@@ -235,6 +264,7 @@ fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDe
             .unwrap_or(d.opacity_threshold),
         ior: inputs.positive("ior")?.unwrap_or(d.ior),
         normal: inputs.vec3("normal")?.unwrap_or(d.normal),
+        textures,
     })
 }
 
@@ -259,13 +289,15 @@ enum Resolved {
     Unset,
     Value(sdf::Value),
     /// Connected to the output of another shader node (a texture, a primvar reader, ...).
-    Node(sdf::Path),
+    Node(sdf::Path, String),
 }
 
 /// Typed access to a shader's inputs; texture connections warn and fall back to the default.
 struct Inputs<'a, 's> {
     ctx: &'a mut Ctx<'s>,
     shader: &'a usd::Prim,
+    /// Inputs already read as textures (their value is unset here, without a warning).
+    textured: Vec<String>,
 }
 
 impl Inputs<'_, '_> {
@@ -275,7 +307,8 @@ impl Inputs<'_, '_> {
         match resolve_input(self.ctx, self.shader, &format!("inputs:{name}"))? {
             Resolved::Unset => Ok(None),
             Resolved::Value(v) => Ok(Some(v)),
-            Resolved::Node(node) => {
+            Resolved::Node(_, _) if self.textured.iter().any(|t| t == name) => Ok(None),
+            Resolved::Node(node, _) => {
                 self.warn_node(name, &node)?;
                 Ok(None)
             }
@@ -292,7 +325,7 @@ impl Inputs<'_, '_> {
                 .err(&node_prim, format!("unknown shader info:id '{id}'")));
         }
         let message = format!(
-            "inputs:{name} is connected to <{}> ({id}): texture inputs not supported yet, using the default",
+            "inputs:{name} is connected to <{}> ({id}): only UsdPreviewSurface inputs read UsdUVTexture nodes; using the default",
             node.as_str()
         );
         self.ctx.warn(self.shader, message);
@@ -476,10 +509,124 @@ fn resolve_input(ctx: &Ctx, prim: &usd::Prim, attr: &str) -> Result<Resolved> {
         };
         let next = ctx.stage.prim(source_prim.clone());
         if ctx.type_name(&next)? == "Shader" {
-            return Ok(Resolved::Node(source_prim));
+            return Ok(Resolved::Node(source_prim, source_attr.to_string()));
         }
         attr = source_attr.to_string();
         prim = next;
     }
     Err(ctx.err(&prim, format!("{attr}: connection chain too long (cycle?)")))
+}
+
+/// The `UsdUVTexture` driving `inputs:<name>` of `shader`, if it is connected to one.
+fn texture_input(ctx: &mut Ctx, shader: &usd::Prim, name: &str) -> Result<Option<TextureDesc>> {
+    let Resolved::Node(node, output) = resolve_input(ctx, shader, &format!("inputs:{name}"))?
+    else {
+        return Ok(None);
+    };
+    let prim = ctx.stage.prim(node);
+    if ctx.token(&prim, "info:id")?.as_deref() != Some("UsdUVTexture") {
+        return Ok(None);
+    }
+    Ok(Some(uv_texture(ctx, &prim, &output)?))
+}
+
+/// Reads a `UsdUVTexture` node whose output `output` is used.
+fn uv_texture(ctx: &mut Ctx, prim: &usd::Prim, output: &str) -> Result<TextureDesc> {
+    let Some(file) = ctx.asset(prim, "inputs:file")? else {
+        return Err(ctx.err(prim, "UsdUVTexture has no inputs:file"));
+    };
+    let channel = match output {
+        "outputs:rgb" => TextureChannel::Rgb,
+        "outputs:r" => TextureChannel::R,
+        "outputs:g" => TextureChannel::G,
+        "outputs:b" => TextureChannel::B,
+        "outputs:a" => TextureChannel::A,
+        _ => {
+            let reason = format!("unsupported UsdUVTexture output '{output}' (rgb, r, g, b, a)");
+            return Err(ctx.err(prim, reason));
+        }
+    };
+    Ok(TextureDesc {
+        shader_path: prim.path().as_str().to_string(),
+        file,
+        st_primvar: st_primvar(ctx, prim)?,
+        wrap_s: wrap(ctx, prim, "inputs:wrapS")?,
+        wrap_t: wrap(ctx, prim, "inputs:wrapT")?,
+        color_space: color_space(ctx, prim)?,
+        scale: vec4(ctx, prim, "inputs:scale", [1.0; 4])?,
+        bias: vec4(ctx, prim, "inputs:bias", [0.0; 4])?,
+        fallback: vec4(ctx, prim, "inputs:fallback", [0.0, 0.0, 0.0, 1.0])?,
+        channel,
+    })
+}
+
+/// A constant (or interface-connected) token input of a texture node.
+fn node_token(ctx: &Ctx, prim: &usd::Prim, attr: &str) -> Result<Option<String>> {
+    match resolve_input(ctx, prim, attr)? {
+        Resolved::Value(v) => values::to_token(&v).map(Some).ok_or_else(|| {
+            ctx.err(
+                prim,
+                format!("'{attr}' is {}, expected a token", values::kind(&v)),
+            )
+        }),
+        _ => Ok(None),
+    }
+}
+
+/// `inputs:wrapS` / `wrapT`; `useMetadata` and unset are repeat.
+fn wrap(ctx: &Ctx, prim: &usd::Prim, attr: &str) -> Result<Wrap> {
+    match node_token(ctx, prim, attr)?.as_deref() {
+        None | Some("repeat") | Some("useMetadata") => Ok(Wrap::Repeat),
+        Some("clamp") => Ok(Wrap::Clamp),
+        Some("mirror") => Ok(Wrap::Mirror),
+        Some("black") => Ok(Wrap::Black),
+        Some(other) => Err(ctx.err(
+            prim,
+            format!("{attr} '{other}' is not one of repeat, clamp, mirror, black, useMetadata"),
+        )),
+    }
+}
+
+/// `inputs:sourceColorSpace`: auto (default), sRGB or raw.
+fn color_space(ctx: &Ctx, prim: &usd::Prim) -> Result<ColorSpace> {
+    let attr = "inputs:sourceColorSpace";
+    match node_token(ctx, prim, attr)?.as_deref() {
+        None | Some("auto") => Ok(ColorSpace::Auto),
+        Some("sRGB") => Ok(ColorSpace::Srgb),
+        Some("raw") => Ok(ColorSpace::Raw),
+        Some(other) => Err(ctx.err(
+            prim,
+            format!("{attr} '{other}' is not one of auto, sRGB, raw"),
+        )),
+    }
+}
+
+/// A finite float4 input (a float3 gets w from `default`).
+fn vec4(ctx: &Ctx, prim: &usd::Prim, attr: &str, default: [f32; 4]) -> Result<[f32; 4]> {
+    let Resolved::Value(v) = resolve_input(ctx, prim, attr)? else {
+        return Ok(default);
+    };
+    match values::to_vec4(&v, f64::from(default[3])) {
+        Some(x) if x.iter().all(|c| c.is_finite()) => Ok(x.map(|c| c as f32)),
+        _ => Err(ctx.err(
+            prim,
+            format!("'{attr}' is {}, expected a finite float4", values::kind(&v)),
+        )),
+    }
+}
+
+/// The primvar named by the `UsdPrimvarReader_float2` feeding the texture's `inputs:st`
+/// ("st" when st is unconnected or the reader names none).
+fn st_primvar(ctx: &mut Ctx, prim: &usd::Prim) -> Result<String> {
+    let Resolved::Node(reader, _) = resolve_input(ctx, prim, "inputs:st")? else {
+        return Ok("st".into());
+    };
+    let reader = ctx.stage.prim(reader);
+    let id = ctx.token(&reader, "info:id")?.unwrap_or_default();
+    if id != "UsdPrimvarReader_float2" {
+        let reason =
+            format!("inputs:st comes from '{id}'; only UsdPrimvarReader_float2 is supported");
+        return Err(ctx.err(&reader, reason));
+    }
+    Ok(node_token(ctx, &reader, "inputs:varname")?.unwrap_or_else(|| "st".into()))
 }

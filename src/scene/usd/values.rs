@@ -405,6 +405,17 @@ pub(super) fn to_int_array(v: &sdf::Value) -> Option<Vec<i64>> {
     }
 }
 
+/// Any 4-vector (a float 3-vector is extended with w = `w3`).
+pub(super) fn to_vec4(v: &sdf::Value, w3: f64) -> Option<[f64; 4]> {
+    use sdf::Value as V;
+    match v {
+        V::Vec4f(a) => Some([a.x, a.y, a.z, a.w].map(f64::from)),
+        V::Vec4d(a) => Some([a.x, a.y, a.z, a.w]),
+        V::Vec4h(a) => Some([a.x, a.y, a.z, a.w].map(|h| f64::from(h.to_f32()))),
+        _ => to_vec3(v).map(|[x, y, z]| [x, y, z, w3]),
+    }
+}
+
 /// A quaternion as `(w, x, y, z)`.
 pub(super) fn to_quat(v: &sdf::Value) -> Option<[f64; 4]> {
     use sdf::Value as V;

@@ -196,22 +196,88 @@ fn preview_surface_inputs_and_emission() {
 }
 
 #[test]
-fn texture_inputs_warn_and_use_defaults_interface_inputs_resolve() {
-    let desc = load_body(
-        r#"def Scope "Looks" {
+fn a_missing_texture_file_names_the_shader_and_the_file() {
+    let err = load_body_err(WOOD);
+    let text = err.to_string();
+    assert!(text.contains("/Looks/Wood/Tex"), "{text}");
+    assert!(text.contains("wood.png"), "{text}");
+}
+
+#[test]
+fn texture_inputs_are_read_and_interface_inputs_resolve() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("wood.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let text = format!("{METRES_Y_UP}{WOOD}");
+    let path = dir.join("stage.usda");
+    std::fs::write(&path, text).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let wood = material_of(&desc, "Wood");
+    let MaterialKind::PreviewSurface(p) = &wood.kind else {
+        panic!("preview surface")
+    };
+    assert_eq!(p.diffuse_color, PreviewSurfaceDesc::default().diffuse_color);
+    assert_eq!(p.specular_color, [0.7, 0.6, 0.5]);
+    let tex = p.texture("diffuseColor").expect("a diffuseColor texture");
+    assert_eq!(tex.file, dir.join("wood.png"));
+    assert_eq!(tex.shader_path, "/Looks/Wood/Tex");
+    assert_eq!(tex.wrap_s, crate::scene::desc::Wrap::Mirror);
+    assert_eq!(tex.wrap_t, crate::scene::desc::Wrap::Repeat);
+    assert_eq!(tex.color_space, crate::scene::desc::ColorSpace::Raw);
+    assert_eq!(tex.st_primvar, "uv");
+    assert_eq!(tex.scale, [2.0, 2.0, 2.0, 1.0]);
+    assert_eq!(tex.bias, [0.0, 0.1, 0.0, 0.0]);
+    let opacity = p.texture("opacity").expect("an opacity texture");
+    assert_eq!(opacity.channel, crate::scene::desc::TextureChannel::A);
+    assert!(
+        desc.warnings.iter().all(|w| !w.contains("not supported")),
+        "{:?}",
+        desc.warnings
+    );
+}
+
+#[test]
+fn an_unknown_wrap_token_is_an_error() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("wood.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let text = format!("{METRES_Y_UP}{}", WOOD.replace("\"mirror\"", "\"wrap\""));
+    let path = dir.join("stage.usda");
+    std::fs::write(&path, text).unwrap();
+    let err = super::super::load(&path).expect_err("bad wrap");
+    assert_one_line(&err, "stage.usda");
+    let text = err.to_string();
+    assert!(
+        text.contains("/Looks/Wood/Tex") && text.contains("wrapS 'wrap'"),
+        "{text}"
+    );
+}
+
+/// A UsdPreviewSurface with textured diffuseColor and opacity, and an interface input.
+const WOOD: &str = r#"def Scope "Looks" {
     def Material "Wood" {
         color3f inputs:tint = (0.7, 0.6, 0.5)
         token outputs:surface.connect = </Looks/Wood/S.outputs:surface>
         def Shader "S" {
             uniform token info:id = "UsdPreviewSurface"
             color3f inputs:diffuseColor.connect = </Looks/Wood/Tex.outputs:rgb>
+            float inputs:opacity.connect = </Looks/Wood/Tex.outputs:a>
             color3f inputs:specularColor.connect = </Looks/Wood.inputs:tint>
             token outputs:surface
+        }
+        def Shader "Reader" {
+            uniform token info:id = "UsdPrimvarReader_float2"
+            string inputs:varname = "uv"
+            float2 outputs:result
         }
         def Shader "Tex" {
             uniform token info:id = "UsdUVTexture"
             asset inputs:file = @wood.png@
+            float2 inputs:st.connect = </Looks/Wood/Reader.outputs:result>
+            token inputs:wrapS = "mirror"
+            token inputs:sourceColorSpace = "raw"
+            float4 inputs:scale = (2, 2, 2, 1)
+            float4 inputs:bias = (0, 0.1, 0, 0)
             float3 outputs:rgb
+            float outputs:a
         }
     }
 }
@@ -221,19 +287,7 @@ def Mesh "Wood" {
     point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
     rel material:binding = </Looks/Wood>
 }
-"#,
-    );
-    let wood = material_of(&desc, "Wood");
-    let MaterialKind::PreviewSurface(p) = &wood.kind else {
-        panic!("preview surface")
-    };
-    assert_eq!(p.diffuse_color, PreviewSurfaceDesc::default().diffuse_color);
-    assert_eq!(p.specular_color, [0.7, 0.6, 0.5]);
-    assert_warned(
-        &desc,
-        &["/Looks/Wood/S", "texture inputs not supported yet"],
-    );
-}
+"#;
 
 #[test]
 fn bindings_are_inherited_deduplicated_and_optional() {

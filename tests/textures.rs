@@ -1,0 +1,274 @@
+//! UsdPreviewSurface textures end to end: decoding (sRGB / raw, PNG / EXR), the image cache,
+//! rendered textured colour and cutouts under a uniform dome, and bad input through the CLI.
+
+mod common;
+use common::*;
+use glam::Vec2;
+use spectral_render::imageio;
+use spectral_render::output::exr;
+use spectral_render::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
+use spectral_render::texture::{ImageTexture, TextureCache};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A 16×16 RGBA8 PNG whose four 8×8 quadrants (top-left, top-right, bottom-left,
+/// bottom-right) have the given texels.
+fn quadrant_png(path: &Path, q: [[u8; 4]; 4]) {
+    let mut bytes = Vec::new();
+    for y in 0..16 {
+        for x in 0..16 {
+            bytes.extend_from_slice(&q[(y / 8) * 2 + x / 8]);
+        }
+    }
+    imageio::write_png_rgba8(path, &bytes, 16, 16).unwrap();
+}
+
+fn desc(file: PathBuf, color_space: ColorSpace) -> TextureDesc {
+    TextureDesc {
+        shader_path: "/Looks/M/Tex".into(),
+        file,
+        st_primvar: "st".into(),
+        wrap_s: Wrap::Clamp,
+        wrap_t: Wrap::Clamp,
+        color_space,
+        scale: [1.0; 4],
+        bias: [0.0; 4],
+        fallback: [0.0, 0.0, 0.0, 1.0],
+        channel: TextureChannel::Rgb,
+    }
+}
+
+#[test]
+fn srgb_and_raw_decoding_scale_bias_and_the_cache() {
+    let dir = temp_dir("tex-decode");
+    let png = dir.join("grey.png");
+    imageio::write_png_rgba8(&png, &[128, 128, 128, 128], 1, 1).unwrap();
+    let mut cache = TextureCache::default();
+    let uv = Vec2::splat(0.5);
+    let srgb = cache.input(&desc(png.clone(), ColorSpace::Srgb)).unwrap();
+    let auto = cache.input(&desc(png.clone(), ColorSpace::Auto)).unwrap();
+    let raw = cache.input(&desc(png.clone(), ColorSpace::Raw)).unwrap();
+    let again = cache.input(&desc(png.clone(), ColorSpace::Srgb)).unwrap();
+    assert_eq!(cache.len(), 3, "one image per (file, colour space)");
+    assert!(std::sync::Arc::ptr_eq(&srgb.image, &again.image));
+    let v = 128.0f32 / 255.0;
+    // 0.5 sRGB is 0.214 linear; byte 128 is 0.502, i.e. 0.2158.
+    assert!(
+        (srgb.rgb(uv)[0] - 0.2158).abs() < 1e-4,
+        "{:?}",
+        srgb.rgb(uv)
+    );
+    assert!((srgb.rgb(uv)[0] - 0.214).abs() < 3e-3);
+    assert_eq!(auto.rgb(uv), srgb.rgb(uv), "auto is sRGB for an 8-bit file");
+    assert!((raw.rgb(uv)[0] - v).abs() < 1e-6);
+    // Alpha is never decoded.
+    assert!((srgb.rgba(uv)[3] - v).abs() < 1e-6);
+    let mut d = desc(png, ColorSpace::Raw);
+    d.scale = [2.0, 1.0, 1.0, 1.0];
+    d.bias = [-0.5, 0.25, 0.0, 0.0];
+    let sb = cache.input(&d).unwrap();
+    let t = sb.rgba(uv);
+    assert!((t[0] - (2.0 * v - 0.5)).abs() < 1e-6 && (t[1] - (v + 0.25)).abs() < 1e-6);
+}
+
+#[test]
+fn float_exr_textures_are_raw_under_auto() {
+    let dir = temp_dir("tex-exr");
+    let path = dir.join("hdr.exr");
+    let rgb = [[2.5f32, 0.5, 0.25], [0.0, 1.0, 4.0]];
+    exr::write(
+        &path,
+        2,
+        1,
+        &rgb,
+        &rgb,
+        [0.3127, 0.329],
+        &Default::default(),
+    )
+    .unwrap();
+    let img = ImageTexture::load(&path, ColorSpace::Auto).unwrap();
+    let left = img.bilinear(Vec2::new(0.25, 0.5), [Wrap::Clamp; 2]);
+    let right = img.bilinear(Vec2::new(0.75, 0.5), [Wrap::Clamp; 2]);
+    assert_eq!(&left[..3], &rgb[0]);
+    assert_eq!(&right[..3], &rgb[1]);
+}
+
+/// A quad filling the view of `camera(1, 0.2)` exactly with st ∈ [0, 1]², textured by
+/// `Tex` (`tex_inputs`) on the shader inputs `connections`.
+fn textured_stage(l: f32, file: &str, tex_inputs: &str, surface_inputs: &str) -> String {
+    let mut s = header();
+    s += &camera(1.0, 0.2, 0.0);
+    s += &format!("def DomeLight \"Sky\"\n{{\n    float inputs:intensity = {l}\n}}\n\n");
+    s += &format!(
+        r#"def Scope "Looks"
+{{
+    def Material "Paint"
+    {{
+        token outputs:surface.connect = </Looks/Paint/S.outputs:surface>
+        def Shader "S"
+        {{
+            uniform token info:id = "UsdPreviewSurface"
+            float inputs:ior = 1
+{surface_inputs}            token outputs:surface
+        }}
+        def Shader "Reader"
+        {{
+            uniform token info:id = "UsdPrimvarReader_float2"
+            token inputs:varname = "st"
+            float2 outputs:result
+        }}
+        def Shader "Tex"
+        {{
+            uniform token info:id = "UsdUVTexture"
+            asset inputs:file = @{file}@
+            float2 inputs:st.connect = </Looks/Paint/Reader.outputs:result>
+{tex_inputs}            float3 outputs:rgb
+            float outputs:a
+        }}
+    }}
+}}
+
+"#
+    );
+    // The view spans x, y ∈ [−0.2, 0.2] on the plane: st = (x + 0.2) / 0.4 there.
+    let st = "    texCoord2f[] primvars:st = [(-2, -2), (3, -2), (3, 3), (-2, 3)] (\n        interpolation = \"vertex\"\n    )\n";
+    s += &quad(
+        "Plane",
+        0.0,
+        1.0,
+        &format!("{st}{}", binding("Paint")),
+        "\"MaterialBindingAPI\"",
+    );
+    s
+}
+
+/// Mean and SEM of channel `ch` over the pixels of a 32×32 image in quadrant `q`
+/// (0 top-left, 1 top-right, 2 bottom-left, 3 bottom-right), away from the bilinear seam.
+fn quadrant(out: &spectral_render::render::RenderOutput, q: usize, ch: usize) -> (f64, f64) {
+    assert_eq!((out.width, out.height), (32, 32));
+    let (qx, qy) = (q % 2, q / 2);
+    let pixels = (0..32 * 32).filter(move |i| {
+        let (x, y) = (i % 32, i / 32);
+        x / 16 == qx && y / 16 == qy && !(14..18).contains(&x) && !(14..18).contains(&y)
+    });
+    mean_and_sem(pixels.map(|i| out.rgb[i][ch]))
+}
+
+#[test]
+fn textured_diffuse_colour_round_trips_under_a_uniform_dome() {
+    let l = 50.0f32;
+    let dir = temp_dir("tex-render");
+    let q = [
+        [204, 51, 25, 255],
+        [25, 153, 76, 255],
+        [13, 26, 230, 255],
+        [128, 128, 128, 255],
+    ];
+    quadrant_png(&dir.join("checker.png"), q);
+    let stage = textured_stage(
+        l,
+        "checker.png",
+        "            token inputs:sourceColorSpace = \"raw\"\n",
+        "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n",
+    );
+    let out = render_file(&write(&dir, "tex.usda", &stage), (32, 32), 64, 7, None);
+    for (k, texel) in q.iter().enumerate() {
+        for (ch, &byte) in texel[..3].iter().enumerate() {
+            let (mean, sem) = quadrant(&out, k, ch);
+            let expected = f64::from(l) * f64::from(byte) / 255.0;
+            let tol = 6e-3 * f64::from(l) + 5.0 * sem;
+            assert!(
+                (mean - expected).abs() < tol,
+                "quadrant {k} channel {ch}: {mean} vs {expected} (sem {sem})"
+            );
+        }
+    }
+}
+
+#[test]
+fn textured_opacity_cuts_out_with_a_threshold() {
+    let l = 20.0f32;
+    let dir = temp_dir("tex-cutout");
+    // Left half opaque, right half transparent (alpha 0), read through outputs:a.
+    let (on, off) = ([255, 255, 255, 255], [255, 255, 255, 0]);
+    quadrant_png(&dir.join("mask.png"), [on, off, on, off]);
+    let stage = textured_stage(
+        l,
+        "mask.png",
+        "",
+        "            color3f inputs:diffuseColor = (0.5, 0.5, 0.5)\n            float inputs:opacity.connect = </Looks/Paint/Tex.outputs:a>\n            float inputs:opacityThreshold = 0.5\n",
+    );
+    let out = render_file(&write(&dir, "cut.usda", &stage), (32, 32), 32, 7, None);
+    for (k, expected) in [(0, 0.5 * l), (1, l), (2, 0.5 * l), (3, l)] {
+        let (mean, sem) = quadrant(&out, k, 1);
+        let tol = 6e-3 * f64::from(l) + 5.0 * sem;
+        assert!(
+            (mean - f64::from(expected)).abs() < tol,
+            "quadrant {k}: {mean} vs {expected} (sem {sem})"
+        );
+    }
+}
+
+/// Runs the CLI on `stage` in `dir` and checks for one clean error line mentioning `parts`.
+fn assert_cli_error(dir: &Path, stage: &str, parts: &[&str]) {
+    write(dir, "bad.usda", stage);
+    let o = Command::new(env!("CARGO_BIN_EXE_spectral-render"))
+        .args(["bad.usda", "--spp", "1"])
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for p in parts {
+        assert!(err.contains(p), "'{p}' not in {err}");
+    }
+}
+
+#[test]
+fn a_missing_texture_is_one_error_line_naming_stage_shader_and_file() {
+    let dir = temp_dir("tex-missing");
+    let diffuse =
+        "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
+    let stage = textured_stage(1.0, "nowhere/missing.png", "", diffuse);
+    assert_cli_error(
+        &dir,
+        &stage,
+        &["bad.usda", "/Looks/Paint/Tex", "nowhere/missing.png"],
+    );
+}
+
+#[test]
+fn an_unsupported_wrap_token_is_an_error() {
+    let dir = temp_dir("tex-wrap");
+    quadrant_png(&dir.join("checker.png"), [[0, 0, 0, 255]; 4]);
+    let diffuse =
+        "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
+    let wrap = "            token inputs:wrapT = \"wobble\"\n";
+    let stage = textured_stage(1.0, "checker.png", wrap, diffuse);
+    assert_cli_error(&dir, &stage, &["bad.usda", "/Looks/Paint/Tex", "wobble"]);
+}
+
+#[test]
+fn textures_on_unsupported_inputs_warn_and_use_the_default() {
+    let dir = temp_dir("tex-warn");
+    quadrant_png(&dir.join("checker.png"), [[255, 255, 255, 255]; 4]);
+    let inputs = "            color3f inputs:emissiveColor.connect = </Looks/Paint/Tex.outputs:rgb>\n            float inputs:clearcoatRoughness.connect = </Looks/Paint/Tex.outputs:r>\n";
+    let stage = textured_stage(1.0, "checker.png", "", inputs);
+    let scene =
+        spectral_render::scene::load(&write(&dir, "warn.usda", &stage), Some((4, 4))).unwrap();
+    let warnings = &scene.summary.warnings;
+    for input in ["inputs:emissiveColor", "inputs:clearcoatRoughness"] {
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.contains(input) && w.contains("not supported yet")),
+            "{input}: {warnings:?}"
+        );
+    }
+    assert!(
+        scene.lights.len() == 1,
+        "a textured emissiveColor does not emit"
+    );
+}
