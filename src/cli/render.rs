@@ -101,7 +101,7 @@ fn run(args: &RenderArgs) -> Result<(), String> {
     validate(args)?;
     let scene = scene::load(&args.scene, args.resolution).map_err(|e| e.to_string())?;
     print_summary(&scene);
-    if args.integrator != IntegratorKind::Path && scene.materials.iter().any(|m| !m.is_opaque()) {
+    if args.integrator != IntegratorKind::Path && !scene.all_opaque {
         eprintln!(
             "warning: --integrator {} treats partially opaque surfaces (UsdPreviewSurface opacity) as opaque; use --integrator path for cutouts",
             args.integrator.name()

@@ -288,7 +288,7 @@ pub(crate) fn transmittance(
     if !scene.occluded(&ray, t, Some(light)) {
         return 1.0;
     }
-    if scene.materials.iter().all(Material::is_opaque) {
+    if scene.all_opaque {
         return 0.0;
     }
     let mut tr = 1.0;

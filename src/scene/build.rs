@@ -71,11 +71,13 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         camera: camera.prim_path.clone(),
         warnings,
     };
+    let all_opaque = materials.iter().all(Material::is_opaque);
     Ok(Scene {
         source: file.clone(),
         meshes,
         tri_refs,
         bvh,
+        all_opaque,
         materials,
         lights,
         light_sampler,

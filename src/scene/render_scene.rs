@@ -85,6 +85,8 @@ pub struct Scene {
     pub center: Vec3,
     pub radius: f32,
     pub summary: Summary,
+    /// True when no material has an opacity below 1 (shadow rays then need no pass-through).
+    pub all_opaque: bool,
     /// Stage space to world space (see `SceneDescription::stage_to_world`).
     pub stage_to_world: DMat4,
 }
