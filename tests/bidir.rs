@@ -20,7 +20,9 @@ use spectral_render::integrator::bidir::connect::{
 };
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
-use spectral_render::integrator::bidir::{BidirContext, Mis, MisHeuristic, PathVertex, Walk};
+use spectral_render::integrator::bidir::{
+    BidirContext, Mis, MisHeuristic, PathVertex, SensorRay, Walk,
+};
 use spectral_render::integrator::IntegratorKind;
 use spectral_render::light::emit::LightLeSample;
 use spectral_render::light::{Light, LightHit, LightLiSample, LightSampleContext};
@@ -999,8 +1001,12 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
     }
     // Camera side z_0 … z_{t−1} = x_{n−1} … x_s, and the weight.
     let cam_dir = path.dir(n - 1, n - 2);
-    let mut walk = Walk::camera(ctx, Ray::new(path.lens, cam_dir), f32::INFINITY, path.lens)
-        .expect("camera ray");
+    let sr = SensorRay {
+        ray: Ray::new(path.lens, cam_dir),
+        t_max: f32::INFINITY,
+        p: path.lens,
+    };
+    let mut walk = Walk::sensor(ctx, &sr).expect("camera ray");
     let mut camera_vertex: Option<PathVertex> = None;
     for j in 1..t {
         let i = n - 1 - j;

@@ -7,13 +7,14 @@
 //! One light subpath per camera sample, both with the camera sample's wavelengths; the light
 //! subpath is traced first, stored in the per-thread workspace, splatted (t = 1), then the
 //! camera subpath is traced and each of its vertices connected to the light and to every
-//! stored light vertex within the depth limit.
+//! stored light vertex within the depth limit. The sensor is whatever the context names: the
+//! camera, or a light meter (`integrator::meter_bidir`), through the same loop.
 
-use super::bidir::connect::{
-    connect, emitter_hit, escaped, next_event, origin_to_sensor, vertex_to_sensor,
-};
+use super::bidir::connect::{connect, emitter_hit, escaped, next_event};
 use super::bidir::vertex::bsdf_at;
-use super::bidir::{trace_light_subpath, BidirContext, PathVertex, Walk, Workspace};
+use super::bidir::{
+    splat_light_subpath, trace_light_subpath, BidirContext, PathVertex, Walk, Workspace,
+};
 use crate::bxdf::TransportMode;
 use crate::light::LightHit;
 use crate::sampling::Sampler;
@@ -26,45 +27,25 @@ pub struct BdptIntegrator {
 }
 
 impl BdptIntegrator {
-    /// One BDPT sample for the camera ray through raster point `film` with lens sample
-    /// `u_lens`; contributions go to `ws.record` (cleared by the caller).
+    /// One BDPT sample for the sensor of `ctx`: the camera ray through raster point `film`
+    /// with lens sample `u_sensor`, or a meter's ray from `u_sensor` (`film` unused);
+    /// contributions go to `ws.record` (cleared by the caller).
     pub fn sample(
         &self,
         ctx: &BidirContext,
         film: [f32; 2],
-        u_lens: [f32; 2],
+        u_sensor: [f32; 2],
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
         ws: &mut Workspace,
     ) {
         trace_light_subpath(ctx, lambda, sampler, &mut ws.light);
-        self.splat_light_subpath(ctx, lambda, sampler, ws);
-        let camera = &ctx.scene.camera;
-        let (ray, t_max) = camera.generate_ray(film, u_lens);
-        if let Some(walk) = Walk::camera(ctx, ray, t_max, camera.lens_point(u_lens)) {
+        splat_light_subpath(ctx, lambda, sampler, ws, true);
+        let Some(sr) = ctx.sensor.generate_ray(film, u_sensor) else {
+            return;
+        };
+        if let Some(walk) = Walk::sensor(ctx, &sr) {
             self.camera_subpath(ctx, walk, lambda, sampler, ws);
-        }
-    }
-
-    /// t = 1: the light's point and every light vertex connected to the camera.
-    fn splat_light_subpath(
-        &self,
-        ctx: &BidirContext,
-        lambda: &SampledWavelengths,
-        sampler: &mut Sampler,
-        ws: &mut Workspace,
-    ) {
-        if let Some(o) = ws.light.origin {
-            let u = sampler.get_2d();
-            if let Some(sc) = origin_to_sensor(ctx, &o, lambda, u, true) {
-                ws.record.add_splat(sc.bin, 1, sc.c);
-            }
-        }
-        for y in &ws.light.vertices {
-            let u = sampler.get_2d();
-            if let Some(sc) = vertex_to_sensor(ctx, y, u, true) {
-                ws.record.add_splat(sc.bin, y.depth + 1, sc.c);
-            }
         }
     }
 

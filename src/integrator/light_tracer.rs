@@ -6,9 +6,12 @@
 //! Infinite lights seen directly are not rendered (no point of theirs can be connected to the
 //! lens); everything they light is. Samples are indexed like the path tracer's: one light path
 //! per (pixel, sample), with the pixel's sampler stream.
+//!
+//! The sensor may also be an irradiance meter (`integrator::meter_bidir`), which does see
+//! infinite lights directly (`bidir::connect::infinite_to_sensor`); a luminance meter, a delta
+//! in position and direction, cannot be estimated by light tracing at all.
 
-use super::bidir::connect::{origin_to_sensor, vertex_to_sensor};
-use super::bidir::{trace_light_subpath, BidirContext, Workspace};
+use super::bidir::{splat_light_subpath, trace_light_subpath, BidirContext, Workspace};
 use crate::sampling::Sampler;
 use crate::spectral::SampledWavelengths;
 
@@ -18,8 +21,8 @@ pub struct LightTracer {
 }
 
 impl LightTracer {
-    /// Traces one light path with the wavelengths `lambda` and records its splats in
-    /// `ws.record` (which the caller has cleared).
+    /// Traces one light path with the wavelengths `lambda` and records its contributions to
+    /// the sensor of `ctx` (camera or meter) in `ws.record` (which the caller has cleared).
     pub fn sample(
         &self,
         ctx: &BidirContext,
@@ -28,17 +31,6 @@ impl LightTracer {
         ws: &mut Workspace,
     ) {
         trace_light_subpath(ctx, lambda, sampler, &mut ws.light);
-        if let Some(o) = ws.light.origin {
-            let u = sampler.get_2d();
-            if let Some(sc) = origin_to_sensor(ctx, &o, lambda, u, false) {
-                ws.record.add_splat(sc.bin, 1, sc.c);
-            }
-        }
-        for y in &ws.light.vertices {
-            let u = sampler.get_2d();
-            if let Some(sc) = vertex_to_sensor(ctx, y, u, false) {
-                ws.record.add_splat(sc.bin, y.depth + 1, sc.c);
-            }
-        }
+        splat_light_subpath(ctx, lambda, sampler, ws, false);
     }
 }

@@ -3,12 +3,15 @@
 //! - `path`: unidirectional path tracing with NEE and MIS;
 //! - `light_tracer`: light (particle) tracing, splatting to the film;
 //! - `bdpt`: bidirectional path tracing, every (s, t) technique with MIS;
-//! - `bidir/`: what the bidirectional ones share (vertices, walks, MIS recurrences).
+//! - `bidir/`: what the bidirectional ones share (vertices, walks, MIS recurrences);
+//! - `meter`, `meter_bidir`: light-meter estimators (path tracing; light tracing and BDPT
+//!   with the meter as sensor).
 
 pub mod bdpt;
 pub mod bidir;
 pub mod light_tracer;
 pub mod meter;
+pub mod meter_bidir;
 pub mod path;
 
 pub use bdpt::BdptIntegrator;

@@ -1,7 +1,9 @@
 //! Light meters: illuminance (lx) on a virtual surface and luminance (cd/m²) along a ray,
 //! with a 95% confidence interval. They are sensors, like Mitsuba 3's `irradiancemeter` and
-//! `radiancemeter`: the path tracer estimates them (`integrator::meter`) and nothing but the
-//! rays they need is traced — there is no film.
+//! `radiancemeter`: the path tracer (`integrator::meter`, the default), light tracing or BDPT
+//! (`integrator::meter_bidir`, with the meter as the sensor of `point.rs`) estimates them
+//! ([`MeterOptions::integrator`]), and nothing but the rays they need is traced — there is no
+//! film. Light tracing cannot estimate luminance ([`check_integrator`]).
 //!
 //! A reading is the mean of independent per-sample estimates of the photometric quantity
 //! (K_m ∫ E(λ) ȳ(λ) dλ from one set of hero wavelengths, `spectral::xyz::sampled_to_xyz`).
@@ -37,12 +39,16 @@
 //! assert!((reading.value / 1000.0 - 1.0).abs() < 0.02);
 //! ```
 
+pub mod point;
 pub mod stats;
 
+pub use point::MeterSensor;
 pub use stats::Stats;
 
+use crate::integrator::bidir::Workspace;
 use crate::integrator::meter::MeterIntegrator;
-use crate::integrator::PathIntegrator;
+use crate::integrator::meter_bidir::BidirMeter;
+use crate::integrator::{IntegratorKind, MisHeuristic, PathIntegrator};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::spectral::{xyz::sampled_to_xyz, SampledWavelengths};
@@ -173,6 +179,10 @@ pub struct MeterOptions {
     pub seed: u64,
     pub max_depth: u32,
     pub threads: Option<usize>,
+    /// The estimator: path tracing (default), light tracing or BDPT.
+    pub integrator: IntegratorKind,
+    /// The MIS heuristic of BDPT.
+    pub mis: MisHeuristic,
 }
 
 impl Default for MeterOptions {
@@ -184,8 +194,23 @@ impl Default for MeterOptions {
             seed: 0,
             max_depth: 7,
             threads: None,
+            integrator: IntegratorKind::Path,
+            mis: MisHeuristic::Power,
         }
     }
+}
+
+/// Refuses what an integrator cannot estimate: a luminance meter is a delta sensor (one
+/// point, one direction), which light tracing's connections (t = 1) reach with probability 0.
+pub fn check_integrator(kind: MeterKind, integrator: IntegratorKind) -> Result<(), String> {
+    if kind == MeterKind::Luminance && integrator == IntegratorKind::Light {
+        return Err(
+            "a luminance meter is a delta sensor (one point, one direction) that light \
+                    tracing can never connect to; use --integrator path or bdpt"
+                .into(),
+        );
+    }
+    Ok(())
 }
 
 /// What stopped a reading before its target.
@@ -221,6 +246,9 @@ pub struct MeterRun {
 
 /// Measures every meter on a thread pool of `opts.threads` workers.
 pub fn measure(scene: &Scene, meters: &[Meter], opts: &MeterOptions) -> Result<MeterRun, String> {
+    for m in meters {
+        check_integrator(m.kind, opts.integrator)?;
+    }
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = opts.threads {
         builder = builder.num_threads(n.max(1));
@@ -249,14 +277,56 @@ struct Block {
     end: u64,
 }
 
+/// The per-sample estimator of a run.
+#[derive(Clone, Copy)]
+enum Estimator<'a> {
+    Path(MeterIntegrator),
+    Bidir(BidirMeter<'a>),
+}
+
+impl<'a> Estimator<'a> {
+    fn new(scene: &'a Scene, opts: &MeterOptions) -> Estimator<'a> {
+        let path = MeterIntegrator {
+            path: PathIntegrator {
+                max_depth: opts.max_depth,
+            },
+        };
+        match BidirMeter::new(scene, opts.integrator, opts.mis, opts.max_depth) {
+            Some(b) => Estimator::Bidir(b),
+            None => Estimator::Path(path),
+        }
+    }
+
+    /// One sample of meter `m`: its photometric Y (lx or cd/m²), which may be non-finite.
+    fn sample(
+        &self,
+        scene: &Scene,
+        m: &MeterSensor,
+        sampler: &mut Sampler,
+        ws: &mut Workspace,
+    ) -> f32 {
+        let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+        let l = match (self, m.kind) {
+            (Estimator::Path(pt), MeterKind::Illuminance) => {
+                pt.irradiance(scene, m.p, m.p_error, m.dir, &lambda, sampler)
+            }
+            (Estimator::Path(pt), MeterKind::Luminance) => {
+                pt.radiance(scene, m.p, m.p_error, m.dir, &lambda, sampler)
+            }
+            (Estimator::Bidir(b), _) => b.sample(m, &mut lambda, sampler, ws),
+        };
+        // With the final wavelengths: a termination applies to the whole estimate.
+        sampled_to_xyz(l, &lambda)[1]
+    }
+}
+
 fn measure_in_pool(scene: &Scene, meters: &[Meter], opts: &MeterOptions) -> MeterRun {
     let start = Instant::now();
-    let integrator = MeterIntegrator {
-        path: PathIntegrator {
-            max_depth: opts.max_depth,
-        },
-    };
-    let errors: Vec<Vec3> = meters.iter().map(|m| origin_error(scene, m.p)).collect();
+    let estimator = Estimator::new(scene, opts);
+    let sensors: Vec<MeterSensor> = meters
+        .iter()
+        .map(|m| MeterSensor::new(m, origin_error(scene, m.p)))
+        .collect();
     let mut states = vec![State::default(); meters.len()];
     let mut dropped = 0;
     loop {
@@ -270,10 +340,10 @@ fn measure_in_pool(scene: &Scene, meters: &[Meter], opts: &MeterOptions) -> Mete
         }
         let results: Vec<(Stats, u64)> = blocks
             .par_iter()
-            .map(|b| {
-                let m = &meters[b.meter];
-                sample_block(scene, &integrator, m, errors[b.meter], b, opts.seed)
-            })
+            .map_init(
+                || Workspace::new(opts.max_depth, 0),
+                |ws, b| sample_block(scene, &estimator, &sensors[b.meter], b, opts.seed, ws),
+            )
             .collect();
         for (b, (stats, bad)) in blocks.iter().zip(results) {
             let st = &mut states[b.meter];
@@ -400,26 +470,17 @@ fn blocks(states: &[State], targets: &[u64]) -> Vec<Block> {
 /// The statistics of one block of samples and the number of non-finite ones dropped.
 fn sample_block(
     scene: &Scene,
-    integrator: &MeterIntegrator,
-    m: &Meter,
-    p_error: Vec3,
+    estimator: &Estimator,
+    m: &MeterSensor,
     b: &Block,
     seed: u64,
+    ws: &mut Workspace,
 ) -> (Stats, u64) {
     let mut stats = Stats::default();
     let mut dropped = 0;
     for s in b.first..b.end {
         let mut sampler = Sampler::new(seed, b.meter as u64, s);
-        let lambda = SampledWavelengths::sample_visible(sampler.get_1d());
-        let l = match m.kind {
-            MeterKind::Illuminance => {
-                integrator.irradiance(scene, m.p, p_error, m.dir, &lambda, &mut sampler)
-            }
-            MeterKind::Luminance => {
-                integrator.radiance(scene, m.p, p_error, m.dir, &lambda, &mut sampler)
-            }
-        };
-        let y = sampled_to_xyz(l, &lambda)[1];
+        let y = estimator.sample(scene, m, &mut sampler, ws);
         if y.is_finite() {
             stats.push(f64::from(y));
         } else {

@@ -4,15 +4,15 @@
 //! | s, t | function | how the path is closed |
 //! |---|---|---|
 //! | 0, ≥2 | [`emitter_hit`], [`escaped`] | the camera subpath finds an emitter |
-//! | 1, 1 | [`origin_to_sensor`] | the light's own point y_0 seen by the camera |
-//! | ≥2, 1 | [`vertex_to_sensor`] | a light vertex connected to the camera (light tracing) |
+//! | 1, 1 | [`origin_to_sensor`] | the light's own point y_0 seen by the sensor |
+//! | 1, 1 | [`infinite_to_sensor`] | an infinite light's direction y_0 seen by a meter |
+//! | ≥2, 1 | [`vertex_to_sensor`] | a light vertex connected to the sensor (light tracing) |
 //! | 1, ≥2 | [`next_event`] | a camera vertex samples a light (NEE) |
 //! | ≥2, ≥2 | [`connect`] | a light vertex connected to a camera vertex |
 //!
 //! Throughputs use shading cosines; area densities use geometric ones.
 
 use super::mis::{ConnectionPdfs, DirectPdfs};
-use super::sensor::SensorSample;
 use super::subpath::{direct_pdf_w, BidirContext, Walk};
 use super::vertex::{LightOrigin, PathVertex};
 use crate::bxdf::TransportMode;
@@ -68,7 +68,11 @@ pub fn vertex_to_sensor(
         return None;
     }
     let value = y.beta * f * (y.cos_shading(ss.wi) * ss.we_over_pdf);
-    if value.is_black() || sensor_occluded(ctx, y.p, y.p_error, y.ng, &ss, None) {
+    if value.is_black()
+        || ctx
+            .sensor
+            .occluded(ctx.scene, y.p, y.p_error, y.ng, &ss, None)
+    {
         return None;
     }
     let weight = if use_mis {
@@ -95,7 +99,7 @@ pub fn sensor_weight(ctx: &BidirContext, y: &PathVertex, p_sensor: Vec3, pdf_dir
 
 /// s = 1, t = 1: the light subpath's own origin y_0 seen by the sensor. Its estimate is
 /// L(y_0 → sensor) |cos θ| We / (pdf_w · pmf · p_pos); weight against the camera ray finding
-/// y_0 (eq. (37) with n = 2). Infinite lights have no such point.
+/// y_0 (eq. (37) with n = 2). An infinite light has no such point: see [`infinite_to_sensor`].
 pub fn origin_to_sensor(
     ctx: &BidirContext,
     o: &LightOrigin,
@@ -104,7 +108,7 @@ pub fn origin_to_sensor(
     use_mis: bool,
 ) -> Option<SensorContribution> {
     if o.infinite {
-        return None;
+        return infinite_to_sensor(ctx, o, use_mis);
     }
     let ss = ctx.sensor.sample_wi(o.p, u)?;
     let light = &ctx.scene.lights[o.light as usize];
@@ -116,7 +120,12 @@ pub fn origin_to_sensor(
     let pos_a = o.pmf * o.pdf_pos_a;
     let cos = o.n.dot(ss.wi).abs();
     let value = le * (cos * ss.we_over_pdf / pos_a);
-    if value.is_black() || sensor_occluded(ctx, o.p, o.p_error, o.n, &ss, Some(o.light)) {
+    let skip = Some(o.light);
+    if value.is_black()
+        || ctx
+            .sensor
+            .occluded(ctx.scene, o.p, o.p_error, o.n, &ss, skip)
+    {
         return None;
     }
     let weight = if use_mis {
@@ -136,6 +145,53 @@ pub fn origin_weight(ctx: &BidirContext, o: &LightOrigin, p_sensor: Vec3, pdf_di
     let dist2 = d.length_squared();
     let cam_a = pdf_dir_w * o.n.dot(d).abs() / (dist2 * dist2.sqrt());
     ctx.mis.origin_to_camera(cam_a, o.pmf * o.pdf_pos_a)
+}
+
+/// s = 1, t = 1 for an infinite light and an irradiance meter. The emitted point on the disk
+/// through which the light enters the scene cannot be connected: the meter's point lies on
+/// the sampled ray with probability 0, and moving the disk point changes the direction (and
+/// so the disk). But an infinite light's radiance depends on direction only, so y_0 is a
+/// direction at infinity with densities per solid angle (tech. rep. §5.1; PBR 3ed §16.3.1,
+/// `Vertex::ConvertDensity`), and the meter's delta position fixes the ray through it: the
+/// estimate is L(ω) W cos θ / (pmf · p_dir(ω)), ω the emitted direction, visibility along
+/// the ray from the meter towards the light. None for sensors that do not connect so (the
+/// camera; pbrt-v4 and SmallVCM light tracing neither).
+pub fn infinite_to_sensor(
+    ctx: &BidirContext,
+    o: &LightOrigin,
+    use_mis: bool,
+) -> Option<SensorContribution> {
+    let m = ctx.sensor.infinite_light_meter()?;
+    let w = -o.n; // from the meter towards the light
+    let we_cos = m.we_cos(w);
+    let emit_dir = o.pmf * o.pdf_dir_w;
+    if !(we_cos > 0.0 && emit_dir > 0.0) {
+        return None;
+    }
+    let value = o.le * (we_cos / emit_dir);
+    let shadow = m.ray_towards(w);
+    if value.is_black() || ctx.scene.occluded(&shadow, f32::INFINITY, None) {
+        return None;
+    }
+    let weight = if use_mis {
+        infinite_origin_weight(ctx, o, m.pdf_dir_w(w))
+    } else {
+        1.0
+    };
+    Some(SensorContribution {
+        bin: 0,
+        c: Contribution::new(value, weight),
+    })
+}
+
+/// MIS weight of an infinite light's direction connected to a meter whose own rays take that
+/// direction with density `pdf_dir_w` (eq. (37), n = 2, both densities per solid angle at the
+/// meter); 1 for a delta direction, which the meter's rays cannot find.
+pub fn infinite_origin_weight(ctx: &BidirContext, o: &LightOrigin, pdf_dir_w: f32) -> f32 {
+    if o.delta_dir {
+        return 1.0;
+    }
+    ctx.mis.origin_to_camera(pdf_dir_w, o.pmf * o.pdf_dir_w)
 }
 
 /// s = 1, t ≥ 2: next-event estimation at camera vertex `z`, one light chosen by power
@@ -297,36 +353,28 @@ pub fn escaped(
 }
 
 /// MIS weight of the camera walk escaping along `d` to infinite light `light`
-/// [tech. rep. (43), §5.1].
+/// [tech. rep. (43), §5.1]. The sensor's own ray escaping (t = 2) competes with nothing for
+/// the camera, and with the light's direction connected to the meter ([`infinite_to_sensor`],
+/// density pmf · p_dir per solid angle) for an irradiance meter.
 pub fn escaped_weight(ctx: &BidirContext, walk: &Walk, light: u32, d: Vec3) -> f32 {
-    if ctx.scene.lights[light as usize].is_delta() {
+    let lgt = &ctx.scene.lights[light as usize];
+    if lgt.is_delta() {
         return 0.0; // no ray finds a delta light
     }
+    let pmf = ctx.scene.light_sampler.pmf(light as usize);
+    let pdf = lgt.pdf_le(Vec3::ZERO, Vec3::ZERO, -d, &ctx.sphere);
     if walk.depth == 0 {
-        return 1.0;
+        return match ctx.sensor.infinite_light_meter() {
+            Some(_) => ctx.mis.emitter_hit(&walk.mis, pmf * pdf.dir_w, 0.0),
+            None => 1.0,
+        };
     }
     let far = LightHit {
         p: Vec3::ZERO,
         n: Vec3::ZERO,
         t: f32::INFINITY,
     };
-    let pmf = ctx.scene.light_sampler.pmf(light as usize);
     let direct_w = direct_pdf_w(ctx.scene, light, &walk.prev, d, &far);
-    let pdf = ctx.scene.lights[light as usize].pdf_le(Vec3::ZERO, Vec3::ZERO, -d, &ctx.sphere);
     ctx.mis
         .emitter_hit(&walk.mis, direct_w, pmf * pdf.pos_a * pdf.dir_w)
-}
-
-/// True when something blocks the segment from a surface point to the sensor sample, within
-/// the part of it beyond the near clipping plane.
-fn sensor_occluded(
-    ctx: &BidirContext,
-    p: Vec3,
-    p_error: Vec3,
-    n: Vec3,
-    ss: &SensorSample,
-    skip: Option<u32>,
-) -> bool {
-    let (ray, t) = spawn_ray_to_point(p, p_error, n, ss.p);
-    ctx.scene.occluded(&ray, t * ss.visible_fraction, skip)
 }

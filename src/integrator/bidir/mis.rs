@@ -96,7 +96,9 @@ impl Mis {
 
     /// The light's own point y_0 seen by the camera (s = 1, t = 1): the only other technique
     /// for this two-vertex path is the camera ray hitting it (s = 0), so
-    /// w = 1 / (1 + m(p_cam_a / (pmf · p_pos_a))) (eq. (37) with n = 2).
+    /// w = 1 / (1 + m(p_cam_a / (pmf · p_pos_a))) (eq. (37) with n = 2). For an infinite
+    /// light connected to a meter both densities are per solid angle at the meter: the
+    /// meter's ray density and pmf · p_dir of the light's emitted direction.
     #[inline]
     pub fn origin_to_camera(&self, cam_a: f32, emit_pos_a: f32) -> f32 {
         weight(1.0 + self.m(cam_a / emit_pos_a))
@@ -184,6 +186,17 @@ impl SubpathMis {
             dvc: 0.0,
             dvm: 0.0,
         }
+    }
+
+    /// A camera subpath whose sensor direction is a Dirac delta (a luminance meter: one point,
+    /// one direction). No technique with t ≤ 1 can produce its paths — the light side would
+    /// have to hit the sensor's single direction — so everything that would weigh them is 0:
+    /// the limit of (31)–(33) as p_dir → ∞, as the specular update (53)–(55) zeroes dVCM
+    /// (Veach 1997 §10.3.5: a technique needing to sample a delta by other means has
+    /// density 0). Techniques t ≥ 2 then share the weight among themselves.
+    #[inline]
+    pub fn delta_sensor_start() -> SubpathMis {
+        SubpathMis::default()
     }
 
     /// A light subpath emitted with `emit` = pmf · p_pos_a · p_dir_w [tech. rep. (31)–(33),

@@ -11,7 +11,7 @@ use super::connect::Contribution;
 use super::strategies;
 use crate::sensor::film::Splat;
 use crate::spectral::xyz::sampled_to_xyz;
-use crate::spectral::SampledWavelengths;
+use crate::spectral::{SampledSpectrum, SampledWavelengths};
 
 /// A contribution to a sensor bin other than the sample's pixel (t = 1), kept spectral.
 #[derive(Clone, Copy, Debug)]
@@ -46,6 +46,14 @@ impl SampleRecord {
         self.camera = Contribution::default();
         self.splats.clear();
         self.strategies.fill(Contribution::default());
+    }
+
+    /// The weighted sum of everything the sample contributed, whatever the bin: a meter's
+    /// estimate (its contributions all go to its one reading).
+    pub fn total(&self) -> SampledSpectrum {
+        self.splats
+            .iter()
+            .fold(self.camera.weighted, |acc, s| acc + s.c.weighted)
     }
 
     /// A technique (s, t ≥ 2) contributing to the sample's own pixel.
@@ -182,7 +190,6 @@ fn add3(acc: &mut [f64; 3], v: [f32; 3]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spectral::SampledSpectrum;
 
     #[test]
     fn terminated_wavelengths_apply_to_every_contribution_of_the_sample() {

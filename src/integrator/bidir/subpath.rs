@@ -8,7 +8,7 @@
 //! y_{max_depth} and camera subpaths at z_{max_depth+1}.
 
 use super::mis::{Mis, SubpathMis};
-use super::sensor::Sensor;
+use super::sensor::{Sensor, SensorRay};
 use super::vertex::{bsdf_at, shading_correction, LightOrigin, PathVertex};
 use crate::bxdf::{BsdfSample, TransportMode};
 use crate::geometry::offset::spawn_ray;
@@ -40,6 +40,11 @@ impl<'a> BidirContext<'a> {
             mis,
             max_depth,
         }
+    }
+
+    /// The same render with another sensor (a meter).
+    pub fn with_sensor(&self, sensor: Sensor<'a>) -> BidirContext<'a> {
+        BidirContext { sensor, ..*self }
     }
 }
 
@@ -78,22 +83,34 @@ pub struct Walk {
 }
 
 impl Walk {
-    /// A camera subpath: the camera ray from lens point `p_lens`, its direction density
-    /// [tech. rep. (31)–(33)].
-    pub fn camera(ctx: &BidirContext, ray: Ray, t_max: f32, p_lens: Vec3) -> Option<Walk> {
-        let pdf_dir_w = ctx.sensor.ray_pdf_dir_w(ray.d);
-        if pdf_dir_w <= 0.0 {
+    /// A camera subpath starting with the sensor's own ray `sr`: throughput
+    /// W |cos θ| / (p_pos p_dir) (1 for the camera, π for an irradiance meter) and the MIS
+    /// start [tech. rep. (31)–(33)] for its direction density, or the delta-direction start of
+    /// a luminance meter ([`SubpathMis::delta_sensor_start`]).
+    pub fn sensor(ctx: &BidirContext, sr: &SensorRay) -> Option<Walk> {
+        let d = sr.ray.d;
+        let mis = if ctx.sensor.delta_direction() {
+            SubpathMis::delta_sensor_start()
+        } else {
+            let pdf_dir_w = ctx.sensor.ray_pdf_dir_w(d);
+            if !(pdf_dir_w > 0.0) {
+                return None;
+            }
+            SubpathMis::camera_start(&ctx.mis, pdf_dir_w)
+        };
+        let weight = ctx.sensor.ray_weight(d);
+        if !(weight > 0.0 && weight.is_finite()) {
             return None;
         }
         Some(Walk {
-            ray,
-            t_max,
-            beta: SampledSpectrum::ONE,
+            ray: sr.ray,
+            t_max: sr.t_max,
+            beta: SampledSpectrum::splat(weight),
             rr_beta: SampledSpectrum::ONE,
-            mis: SubpathMis::camera_start(&ctx.mis, pdf_dir_w),
+            mis,
             depth: 0,
             prev: LightSampleContext {
-                p: p_lens,
+                p: sr.p,
                 n: Vec3::ZERO,
             },
             from_infinite: false,
@@ -256,6 +273,8 @@ impl Walk {
             n: le.n,
             pmf,
             pdf_pos_a: le.pdf_pos_a,
+            pdf_dir_w: le.pdf_dir_w,
+            le: le.l,
             infinite: le.infinite,
             delta_dir: le.delta_dir,
         };

@@ -101,6 +101,11 @@ pub struct LightOrigin {
     /// Probability of choosing this light.
     pub pmf: f32,
     pub pdf_pos_a: f32,
+    /// Density per solid angle of the emitted direction (1 relative to a delta).
+    pub pdf_dir_w: f32,
+    /// Radiance carried by the emitted ray (for a delta distant light: its irradiance). An
+    /// infinite light's connection to a meter reuses it, the direction being the same.
+    pub le: SampledSpectrum,
     pub infinite: bool,
     pub delta_dir: bool,
 }
