@@ -3,6 +3,7 @@
 //! ```text
 //! spectral-render meter stage.usda --at X,Y,Z --normal NX,NY,NZ [--at … --normal …]
 //!                                  [--spp N | --rel-error 0.005] [--seed N] [--json]
+//!                                  [--integrator path|light|bdpt] [--mis power|balance]
 //! spectral-render meter stage.usda --luminance --at X,Y,Z --dir DX,DY,DZ [--json]
 //! spectral-render meter stage.usda --grid X,Y,Z --u UX,UY,UZ --v VX,VY,VZ --n NU,NV
 //!                                  --normal NX,NY,NZ [-o map]
@@ -13,8 +14,9 @@
 //! `{"meters":[{"kind":"illuminance","at":[…],"normal":[…],"value":E,"unit":"lx","ci95":h,
 //! "samples":n}, …]}` (luminance entries have `"dir"` and `"unit":"cd/m2"`; under
 //! `--rel-error` each entry also has `"converged"`). Option errors, clap's included, are one
-//! line and exit 1.
+//! line and exit 1; so is a luminance meter asked of light tracing, which cannot estimate it.
 
+use crate::integrator::{IntegratorKind, MisHeuristic};
 use crate::output::map::{num, vec3, IlluminanceMap};
 use crate::scene;
 use crate::sensor::meter::{
@@ -83,6 +85,12 @@ struct MeterArgs {
     /// Print the readings as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// Estimator: path (path tracing), light (light tracing, illuminance only) or bdpt.
+    #[arg(long, default_value = "path", value_parser = super::render::parse_integrator)]
+    integrator: IntegratorKind,
+    /// MIS heuristic of --integrator bdpt: power or balance.
+    #[arg(long, default_value = "power", value_parser = super::render::parse_mis)]
+    mis: MisHeuristic,
 }
 
 /// The grid as given (stage coordinates).
@@ -126,8 +134,12 @@ fn clap_message(e: &clap::Error) -> String {
 fn run(args: &MeterArgs) -> Result<(), String> {
     let request = request(args)?;
     let opts = options(args)?;
+    if let Request::Points(kind, _) = &request {
+        meter::check_integrator(*kind, opts.integrator)?;
+    }
     let scene = scene::load(&args.scene, Some((1, 1))).map_err(|e| e.to_string())?;
     super::render::print_summary(&scene);
+    super::render::warn_opacity(&scene, opts.integrator);
     match request {
         Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
         Request::Grid(g) => run_grid(args, &scene, &opts, &g),
@@ -472,5 +484,7 @@ fn options(a: &MeterArgs) -> Result<MeterOptions, String> {
         seed: a.seed,
         max_depth: a.max_depth,
         threads: a.threads,
+        integrator: a.integrator,
+        mis: a.mis,
     })
 }

@@ -71,7 +71,7 @@ fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
+pub(super) fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
     match s {
         "path" => Ok(IntegratorKind::Path),
         "light" => Ok(IntegratorKind::Light),
@@ -82,13 +82,23 @@ fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
     }
 }
 
-fn parse_mis(s: &str) -> Result<MisHeuristic, String> {
+pub(super) fn parse_mis(s: &str) -> Result<MisHeuristic, String> {
     match s {
         "power" => Ok(MisHeuristic::Power),
         "balance" => Ok(MisHeuristic::Balance),
         other => Err(format!(
             "unknown MIS heuristic '{other}' (available: power, balance)"
         )),
+    }
+}
+
+/// Light tracing and BDPT treat partially opaque surfaces as opaque: say so.
+pub(super) fn warn_opacity(scene: &scene::Scene, integrator: IntegratorKind) {
+    if integrator != IntegratorKind::Path && !scene.all_opaque {
+        eprintln!(
+            "warning: --integrator {} treats partially opaque surfaces (UsdPreviewSurface opacity) as opaque; use --integrator path for cutouts",
+            integrator.name()
+        );
     }
 }
 
@@ -101,12 +111,7 @@ fn run(args: &RenderArgs) -> Result<(), String> {
     validate(args)?;
     let scene = scene::load(&args.scene, args.resolution).map_err(|e| e.to_string())?;
     print_summary(&scene);
-    if args.integrator != IntegratorKind::Path && !scene.all_opaque {
-        eprintln!(
-            "warning: --integrator {} treats partially opaque surfaces (UsdPreviewSurface opacity) as opaque; use --integrator path for cutouts",
-            args.integrator.name()
-        );
-    }
+    warn_opacity(&scene, args.integrator);
     let opts = RenderOptions {
         spp: args.spp,
         time_budget: args.time,
