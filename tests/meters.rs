@@ -1,7 +1,9 @@
 //! Light meters against closed-form answers (all references computed here): point-like,
 //! rectangle (Lambert's polygon formula), disk, sphere, dome and distant lights; flux
-//! conservation in a closed black box; an integrating sphere; coverage of the 95% interval;
-//! stage units; the CLI's JSON, grid outputs and errors.
+//! conservation in a closed black box; an integrating sphere; a white furnace; coverage of the
+//! 95% interval; stage units; the CLI's JSON, grid outputs and errors. The analytic cases are
+//! checked with the path tracer, light tracing and BDPT (`--integrator`), which must also agree
+//! with each other in the Cornell box.
 //!
 //! Accuracy: every analytic case must be within 0.5 %, and each reading is sampled until
 //! ci95/value < 0.2 % (σ ≤ 0.1 %), so 0.5 % is at least 4.9 σ of the estimator. Measured
@@ -10,6 +12,7 @@
 mod common;
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
+use spectral_render::integrator::IntegratorKind;
 use spectral_render::scene::{self, Scene};
 use spectral_render::sensor::meter::{measure, Meter, MeterOptions, Reading, Stop};
 use std::f64::consts::PI;
@@ -25,15 +28,41 @@ fn load(name: &str, text: &str) -> Scene {
     scene::load(&path, Some((1, 1))).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The integrators that estimate illuminance (light tracing cannot estimate luminance).
+const ALL: [IntegratorKind; 3] = [
+    IntegratorKind::Path,
+    IntegratorKind::Light,
+    IntegratorKind::Bdpt,
+];
+
 fn read(scene: &Scene, meters: &[Meter], stop: Stop, seed: u64, max_depth: u32) -> Vec<Reading> {
+    read_with(scene, meters, stop, seed, max_depth, IntegratorKind::Path)
+}
+
+fn read_with(
+    scene: &Scene,
+    meters: &[Meter],
+    stop: Stop,
+    seed: u64,
+    max_depth: u32,
+    integrator: IntegratorKind,
+) -> Vec<Reading> {
     let opts = MeterOptions {
         stop,
         seed,
         max_depth,
         max_samples: 1 << 23,
+        integrator,
         ..Default::default()
     };
+    let t = std::time::Instant::now();
     let run = measure(scene, meters, &opts).unwrap();
+    eprintln!(
+        "[{}: {} meters, {:.2} s]",
+        integrator.name(),
+        meters.len(),
+        t.elapsed().as_secs_f64()
+    );
     assert_eq!(run.dropped, 0, "non-finite samples");
     run.readings
 }
@@ -170,9 +199,20 @@ fn polygon_area(p: &[DVec3]) -> f64 {
 /// roulette over ~10 bounces), so it is held at 0.5 % ≥ 4.08 σ rather than 4.9 σ.
 const REL_SPHERE: f64 = 0.0024;
 
-#[test]
-fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
-    let (rho, flux, lamp) = (0.9, 1000.0, 0.02);
+/// An integrating sphere: a UV sphere of reflectance `rho` around a small isotropic lamp, and
+/// meters on facet centres next to the pole, at 45° and at the equator.
+struct IntegratingSphere {
+    scene: Scene,
+    meters: Vec<Meter>,
+    /// The exact illuminance at each meter.
+    exact: Vec<f64>,
+    /// The area-averaged illuminance and that of an ideal sphere.
+    mean_e: f64,
+    ideal: f64,
+}
+
+fn integrating_sphere(rho: f64) -> IntegratingSphere {
+    let (flux, lamp) = (1000.0, 0.02);
     let (n_lon, n_lat) = (32, 16);
     let (pts, faces) = uv_sphere(1.0, n_lon, n_lat);
     let mut s = header() + &looks("Wall", rho);
@@ -180,7 +220,7 @@ fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
     let inputs =
         format!("    float inputs:radius = {lamp}\n    float spectral:luminousFlux = {flux}\n");
     s += &prim("SphereLight", "Lamp", &inputs);
-    let scene = load("sphere", &s);
+    let scene = load(&format!("sphere-{rho}"), &s);
     let corners = |f: &Vec<usize>| f.iter().map(|&i| pts[i]).collect::<Vec<_>>();
     let area: f64 = faces.iter().map(|f| polygon_area(&corners(f))).sum();
     // Energy balance of a closed Lambertian enclosure gives the area-averaged illuminance:
@@ -214,25 +254,64 @@ fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
             (centroid, n)
         })
         .collect();
-    let meters: Vec<Meter> = points
-        .iter()
-        .map(|&(p, n)| Meter::illuminance(v3(p), v3(n)).unwrap())
-        .collect();
-    let readings = read(&scene, &meters, Stop::RelError(REL_SPHERE), 1, 1000);
-    for (i, (r, &(p, n))) in readings.iter().zip(&points).enumerate() {
-        let exact = exact_at(p, n);
-        assert!(
-            (exact / mean_e - 1.0).abs() < 0.005,
-            "the reference is not uniform"
-        );
+    let exact: Vec<f64> = points.iter().map(|&(p, n)| exact_at(p, n)).collect();
+    assert!(
+        exact.iter().all(|e| (e / mean_e - 1.0).abs() < 0.005),
+        "the reference is not uniform"
+    );
+    IntegratingSphere {
+        scene,
+        meters: points
+            .iter()
+            .map(|&(p, n)| Meter::illuminance(v3(p), v3(n)).unwrap())
+            .collect(),
+        exact,
+        mean_e,
+        ideal,
+    }
+}
+
+/// Measures meters `which` of `case` with `kind` and checks them against the exact values.
+fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: IntegratorKind) {
+    let meters: Vec<Meter> = which.iter().map(|&i| case.meters[i]).collect();
+    let stop = Stop::RelError(REL_SPHERE);
+    let readings = read_with(&case.scene, &meters, stop, 1, 1000, kind);
+    for (&i, r) in which.iter().zip(&readings) {
+        let exact = case.exact[i];
         let rel = r.value / exact - 1.0;
         let sigma = r.ci95 / 1.96 / exact;
-        eprintln!("integrating sphere, facet {i}: {:.4} vs {exact:.4} ({:+.4} %, σ {:.4} %, {} samples); ideal sphere {ideal:.4}", r.value, 100.0 * rel, 100.0 * sigma, r.samples);
+        eprintln!(
+            "{}: integrating sphere, facet {i}: {:.4} vs {exact:.4} ({:+.4} %, σ {:.4} %, {} samples); mean {:.4}, ideal sphere {:.4}",
+            kind.name(),
+            r.value,
+            100.0 * rel,
+            100.0 * sigma,
+            r.samples,
+            case.mean_e,
+            case.ideal
+        );
         assert!(
             r.capped.is_none() && 4.0 * sigma <= TOL,
             "facet {i}: too noisy"
         );
         assert!(rel.abs() < TOL, "facet {i}: {} vs exact {exact}", r.value);
+    }
+}
+
+#[test]
+fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
+    let case = integrating_sphere(0.9);
+    check_integrating_sphere(&case, &[0, 1, 2], IntegratorKind::Path);
+}
+
+/// The integrating sphere with light tracing and BDPT. Both cost O(path length) and
+/// O(length²) per sample, so a less reflective sphere (shorter paths) and one facet keep
+/// the test short; the identity checked is the same.
+#[test]
+fn integrating_sphere_with_light_tracing_and_bdpt() {
+    let case = integrating_sphere(0.7);
+    for kind in [IntegratorKind::Light, IntegratorKind::Bdpt] {
+        check_integrating_sphere(&case, &[2], kind);
     }
 }
 
@@ -334,10 +413,12 @@ fn rect_light_matches_lamberts_polygon_formula_on_a_floor_and_a_wall() {
         .iter()
         .map(|&(q, n)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
-    let readings = read(&scene, &meters, Stop::RelError(REL), 2, 7);
-    for (&(q, n), r) in points.iter().zip(&readings) {
-        let exact = l * lambert(q, n, &corners);
-        assert_exact(&format!("rect at {q} n {n}"), r, exact);
+    for kind in ALL {
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 2, 7, kind);
+        for (&(q, n), r) in points.iter().zip(&readings) {
+            let exact = l * lambert(q, n, &corners);
+            assert_exact(&format!("{}: rect at {q} n {n}", kind.name()), r, exact);
+        }
     }
 }
 
@@ -355,14 +436,14 @@ fn disk_light_on_axis() {
         .iter()
         .map(|&y| Meter::illuminance(Vec3::new(0.0, y as f32, 0.0), Vec3::Y).unwrap())
         .collect();
-    for (&y, r) in ys
-        .iter()
-        .zip(&read(&scene, &meters, Stop::RelError(REL), 3, 7))
-    {
-        let h: f64 = height - y;
-        // E = π L R² / (h² + R²): the disk's form factor on its axis.
-        let exact = PI * l * radius * radius / (h * h + radius * radius);
-        assert_exact(&format!("disk on axis, h = {h}"), r, exact);
+    for kind in ALL {
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 3, 7, kind);
+        for (&y, r) in ys.iter().zip(&readings) {
+            let h: f64 = height - y;
+            // E = π L R² / (h² + R²): the disk's form factor on its axis.
+            let exact = PI * l * radius * radius / (h * h + radius * radius);
+            assert_exact(&format!("{}: disk on axis, h = {h}", kind.name()), r, exact);
+        }
     }
 }
 
@@ -396,13 +477,16 @@ fn sphere_light_gives_pi_l_r_over_d_squared() {
         .iter()
         .map(|&(q, n)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
-    let readings = read(&scene, &meters, Stop::RelError(REL), 4, 7);
-    for ((&(d, _, tilt), &(_, n)), r) in cases.iter().zip(&points).zip(&readings) {
-        // E = π L sin²α cos θ with sin α = r/d (the cap is entirely above the horizon).
-        let cos = f64::to_radians(tilt).cos();
-        assert!((n.length() - 1.0).abs() < 1e-12);
-        let exact = PI * l * (radius / d).powi(2) * cos;
-        assert_exact(&format!("sphere light, d = {d}, tilt {tilt}°"), r, exact);
+    for kind in ALL {
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 4, 7, kind);
+        for ((&(d, _, tilt), &(_, n)), r) in cases.iter().zip(&points).zip(&readings) {
+            // E = π L sin²α cos θ with sin α = r/d (the cap is entirely above the horizon).
+            let cos = f64::to_radians(tilt).cos();
+            assert!((n.length() - 1.0).abs() < 1e-12);
+            let exact = PI * l * (radius / d).powi(2) * cos;
+            let label = format!("{}: sphere light, d = {d}, tilt {tilt}°", kind.name());
+            assert_exact(&label, r, exact);
+        }
     }
 }
 
@@ -428,13 +512,13 @@ fn point_like_source_follows_the_inverse_square_cosine_law() {
         .iter()
         .map(|&(q, n, _, _)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
-    for (&(_, _, d, theta), r) in
-        points
-            .iter()
-            .zip(&read(&scene, &meters, Stop::RelError(REL), 5, 7))
-    {
-        let exact = i_cd * theta.to_radians().cos() / (d * d);
-        assert_exact(&format!("point-like, d = {d}, θ = {theta}°"), r, exact);
+    for kind in ALL {
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 5, 7, kind);
+        for (&(_, _, d, theta), r) in points.iter().zip(&readings) {
+            let exact = i_cd * theta.to_radians().cos() / (d * d);
+            let label = format!("{}: point-like, d = {d}, θ = {theta}°", kind.name());
+            assert_exact(&label, r, exact);
+        }
     }
 }
 
@@ -475,11 +559,12 @@ fn uniform_dome_gives_pi_l() {
         .iter()
         .map(|&(q, n, _)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
-    for (&(q, n, frac), r) in cases
-        .iter()
-        .zip(&read(&scene, &meters, Stop::RelError(REL), 6, 7))
-    {
-        assert_exact(&format!("dome at {q} n {n}"), r, frac * PI * l);
+    for kind in ALL {
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 6, 7, kind);
+        for (&(q, n, frac), r) in cases.iter().zip(&readings) {
+            let label = format!("{}: dome at {q} n {n}", kind.name());
+            assert_exact(&label, r, frac * PI * l);
+        }
     }
 }
 
@@ -502,15 +587,12 @@ fn normalized_distant_light_gives_intensity_times_cosine() {
                 Meter::illuminance(Vec3::new(0.0, 1.0, 0.0), v3(n)).unwrap()
             })
             .collect();
-        for (t, r) in thetas
-            .iter()
-            .zip(&read(&scene, &meters, Stop::RelError(REL), 7, 7))
-        {
-            assert_exact(
-                &format!("distant (angle {angle}°), θ = {t}°"),
-                r,
-                e * t.to_radians().cos(),
-            );
+        for kind in ALL {
+            let readings = read_with(&scene, &meters, Stop::RelError(REL), 7, 7, kind);
+            for (t, r) in thetas.iter().zip(&readings) {
+                let label = format!("{}: distant (angle {angle}°), θ = {t}°", kind.name());
+                assert_exact(&label, r, e * t.to_radians().cos());
+            }
         }
     }
 }
@@ -602,6 +684,145 @@ fn flux_through_the_walls_of_a_closed_black_box_is_the_sources_flux() {
 }
 
 // ---------------------------------------------------------------------------------------
+// Furnace and agreement between estimators
+// ---------------------------------------------------------------------------------------
+
+/// A white furnace: the closed cube [−1, 1]³ whose walls emit `le` nits on both sides and
+/// reflect a flat `rho`.
+fn furnace(le: f64, rho: f64) -> Scene {
+    let (pts, faces) = cube(1.0);
+    let body = mesh("Walls", &pts, &faces, "Wall").replace(
+        "[\"MaterialBindingAPI\"]",
+        "[\"MeshLightAPI\", \"MaterialBindingAPI\"]",
+    );
+    let body = body.replacen(
+        "    rel material:binding",
+        &format!("    uniform bool doubleSided = 1\n    float inputs:intensity = {le}\n    rel material:binding"),
+        1,
+    );
+    load(
+        &format!("furnace-{rho}"),
+        &(header() + &looks("Wall", rho) + &body),
+    )
+}
+
+/// The cube [−h, h]³: corners and six quads.
+fn cube(h: f64) -> (Vec<DVec3>, Vec<Vec<usize>>) {
+    let pts = (0..8)
+        .map(|i| {
+            let c = |bit: usize| if i & bit != 0 { h } else { -h };
+            DVec3::new(c(1), c(2), c(4))
+        })
+        .collect();
+    let faces = [
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+    ];
+    (pts, faces.iter().map(|f| f.to_vec()).collect())
+}
+
+/// In a furnace every point sees L = Le / (1 − ρ) in every direction (the Neumann series of
+/// a closed, uniformly emitting and reflecting enclosure), so E = π Le / (1 − ρ) on any
+/// surface: luminance with the path tracer and BDPT (the delta-direction sensor), illuminance
+/// with all three estimators.
+#[test]
+fn furnace_meters_read_le_over_one_minus_rho_with_every_integrator() {
+    // ρ = 0.5 keeps paths short (this is about the estimators, not about long paths, which
+    // the integrating sphere covers).
+    let (le, rho) = (2.0, 0.5);
+    let scene = furnace(le, rho);
+    let l = le / (1.0 - rho);
+    let at = Vec3::new(0.2, -0.3, 0.1);
+    let e_meter = [Meter::illuminance(at, Vec3::new(0.3, 1.0, -0.2)).unwrap()];
+    let l_meter = [Meter::luminance(at, Vec3::new(-1.0, 0.2, 0.5)).unwrap()];
+    for kind in ALL {
+        let r = read_with(&scene, &e_meter, Stop::RelError(REL), 9, 10_000, kind)[0];
+        assert_exact(&format!("{}: furnace illuminance", kind.name()), &r, PI * l);
+        if kind != IntegratorKind::Light {
+            let r = read_with(&scene, &l_meter, Stop::RelError(REL), 9, 10_000, kind)[0];
+            assert_exact(&format!("{}: furnace luminance", kind.name()), &r, l);
+        }
+    }
+}
+
+/// z = (a − b)/√(σa² + σb²) from the readings' 95 % intervals.
+fn z_score(a: &Reading, b: &Reading) -> f64 {
+    let var = (a.ci95 / 1.96).powi(2) + (b.ci95 / 1.96).powi(2);
+    (a.value - b.value) / var.sqrt()
+}
+
+fn cbox() -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda");
+    scene::load(&path, Some((1, 1))).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Path tracing, light tracing and BDPT agree within their intervals where the light is
+/// mostly indirect, in the Cornell box: illuminance on the ceiling beside the lamp (which it
+/// cannot see: the lamp hangs 1 cm below the ceiling and emits downwards), on the front of the
+/// floor and on the red wall; luminance (path tracing and BDPT) of the back wall and of the
+/// ceiling. Eleven z-tests at a family-wise 1 % (Šidák): |z| < 3.5.
+#[test]
+fn path_light_and_bdpt_meters_agree_in_the_cornell_box() {
+    let scene = cbox();
+    let e_meters = [
+        Meter::illuminance(Vec3::new(0.6, 0.995, 0.6), Vec3::NEG_Y).unwrap(),
+        Meter::illuminance(Vec3::new(0.0, -0.999, 0.9), Vec3::Y).unwrap(),
+        Meter::illuminance(Vec3::new(-0.99, 0.2, 0.5), Vec3::X).unwrap(),
+    ];
+    let l_meters = [
+        Meter::luminance(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.1, 0.2, -1.0)).unwrap(),
+        Meter::luminance(Vec3::new(0.5, 0.5, 0.5), Vec3::new(0.2, 1.0, 0.1)).unwrap(),
+    ];
+    let stop = Stop::RelError(0.01);
+    let e: Vec<Vec<Reading>> = ALL
+        .iter()
+        .map(|&k| read_with(&scene, &e_meters, stop, 21, 7, k))
+        .collect();
+    let pairs = [(0, 1), (0, 2), (1, 2)];
+    let mut worst = 0.0f64;
+    for (i, m) in e_meters.iter().enumerate() {
+        let line: Vec<String> = (0..3)
+            .map(|k| {
+                format!(
+                    "{} {:.4} ± {:.4}",
+                    ALL[k].name(),
+                    e[k][i].value,
+                    e[k][i].ci95
+                )
+            })
+            .collect();
+        eprintln!("cbox illuminance at {}: {}", m.p, line.join(", "));
+        for (a, b) in pairs {
+            let z = z_score(&e[a][i], &e[b][i]);
+            worst = worst.max(z.abs());
+            assert!(
+                z.abs() < 3.4,
+                "{} vs {} at {}: z = {z:.2}",
+                ALL[a].name(),
+                ALL[b].name(),
+                m.p
+            );
+        }
+    }
+    let pt = read_with(&scene, &l_meters, stop, 22, 7, IntegratorKind::Path);
+    let bd = read_with(&scene, &l_meters, stop, 22, 7, IntegratorKind::Bdpt);
+    for ((m, a), b) in l_meters.iter().zip(&pt).zip(&bd) {
+        let z = z_score(a, b);
+        worst = worst.max(z.abs());
+        eprintln!(
+            "cbox luminance at {} along {}: path {:.4} ± {:.4}, bdpt {:.4} ± {:.4} (z = {z:.2})",
+            m.p, m.dir, a.value, a.ci95, b.value, b.ci95
+        );
+        assert!(z.abs() < 3.5, "luminance along {}: z = {z:.2}", m.dir);
+    }
+    eprintln!("cbox agreement: max |z| = {worst:.2}");
+}
+
+// ---------------------------------------------------------------------------------------
 // Honest intervals
 // ---------------------------------------------------------------------------------------
 
@@ -643,21 +864,29 @@ fn ci95_covers_the_exact_value_at_least_90_times_in_100() {
 fn readings_do_not_depend_on_the_number_of_threads() {
     let (scene, meter, _) = heavy_tailed_case();
     let other = Meter::illuminance(Vec3::new(1.0, 0.0, 0.5), Vec3::Y).unwrap();
-    let run = |threads| {
-        let opts = MeterOptions {
-            stop: Stop::RelError(0.01),
-            seed: 11,
-            threads: Some(threads),
-            ..Default::default()
+    // Light tracing and BDPT reuse a per-thread workspace: still no dependence.
+    for (integrator, stop) in [
+        (IntegratorKind::Path, Stop::RelError(0.01)),
+        (IntegratorKind::Light, Stop::Samples(2048)),
+        (IntegratorKind::Bdpt, Stop::Samples(2048)),
+    ] {
+        let run = |threads| {
+            let opts = MeterOptions {
+                stop,
+                seed: 11,
+                threads: Some(threads),
+                integrator,
+                ..Default::default()
+            };
+            measure(&scene, &[meter, other], &opts).unwrap().readings
         };
-        measure(&scene, &[meter, other], &opts).unwrap().readings
-    };
-    let bits = |rs: Vec<Reading>| {
-        rs.iter()
-            .map(|r| (r.value.to_bits(), r.ci95.to_bits(), r.samples))
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(bits(run(1)), bits(run(2)));
+        let bits = |rs: Vec<Reading>| {
+            rs.iter()
+                .map(|r| (r.value.to_bits(), r.ci95.to_bits(), r.samples))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(run(1)), bits(run(2)), "{integrator:?}");
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -826,6 +1055,82 @@ fn cli_json_readings_in_stage_units() {
         (number(entries[1], "value"), number(entries[1], "ci95")),
         (0.0, 0.0)
     );
+}
+
+/// `--integrator light|bdpt` (and `--mis`) give the same JSON, with readings within the
+/// analytic tolerance; a luminance meter asked of light tracing is refused in one line that
+/// says why and what to use instead, before the stage is even loaded.
+#[test]
+fn cli_integrator_flag_selects_light_tracing_or_bdpt() {
+    let dir = temp_dir("cli-meter-integrator");
+    write(&dir, "room.usda", &cm_stage());
+    let (at, n) = (DVec3::new(30.0, -40.0, 0.0), DVec3::Z);
+    let exact = cm_stage_exact(at, n);
+    for extra in [
+        &["--integrator", "light"][..],
+        &["--integrator", "bdpt", "--mis", "balance"][..],
+        &["--integrator", "bdpt"][..],
+    ] {
+        let base = [
+            "meter",
+            "room.usda",
+            "--at",
+            "30,-40,0",
+            "--normal",
+            "0,0,1",
+            "--rel-error",
+            "0.002",
+            "--seed",
+            "4",
+            "--json",
+        ];
+        let o = cli(&[&base[..], extra].concat(), &dir);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let out = stdout(&o);
+        assert!(out.trim_start().starts_with("{\"meters\":[") && out.trim_end().ends_with("]}"));
+        assert_eq!(field(&out, "kind"), "\"illuminance\"");
+        assert_eq!(numbers(&out, "at"), [at.x, at.y, at.z]);
+        assert_eq!(field(&out, "unit"), "\"lx\"");
+        assert_eq!(field(&out, "converged"), "true");
+        let (value, ci95) = (number(&out, "value"), number(&out, "ci95"));
+        eprintln!("CLI {extra:?}: {value} ± {ci95} vs {exact}");
+        assert!(ci95 / value < 0.002 && (value / exact - 1.0).abs() < TOL);
+    }
+    let lum = [
+        "meter",
+        "room.usda",
+        "--luminance",
+        "--at",
+        "0,0,100",
+        "--dir",
+        "0,0,1",
+        "--spp",
+        "2048",
+        "--json",
+    ];
+    let o = cli(&[&lum[..], &["--integrator", "bdpt"]].concat(), &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (l, ci) = (number(&stdout(&o), "value"), number(&stdout(&o), "ci95"));
+    assert!((l - 2000.0).abs() < 4.0 * ci / 1.96 + 1e-9, "{l} ± {ci}");
+    let o = cli(&[&lum[..], &["--integrator", "light"]].concat(), &dir);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for must in [
+        "error: ",
+        "luminance",
+        "delta sensor",
+        "light tracing",
+        "path",
+        "bdpt",
+    ] {
+        assert!(err.contains(must), "{must:?} missing: {err}");
+    }
+    assert!(
+        !err.contains("loaded"),
+        "refused after loading the stage: {err}"
+    );
+    assert!(stdout(&o).is_empty());
 }
 
 #[test]
@@ -1022,6 +1327,43 @@ fn cli_errors_are_one_line_with_exit_code_1() {
                 "0,0,1",
             ],
             "--v",
+        ),
+        (
+            &[
+                "room.usda",
+                "--at",
+                "0,0,0",
+                "--normal",
+                "0,0,1",
+                "--integrator",
+                "vcm",
+            ],
+            "unknown integrator",
+        ),
+        (
+            &[
+                "room.usda",
+                "--at",
+                "0,0,0",
+                "--normal",
+                "0,0,1",
+                "--mis",
+                "cutoff",
+            ],
+            "unknown MIS heuristic",
+        ),
+        (
+            &[
+                "room.usda",
+                "--luminance",
+                "--at",
+                "0,0,0",
+                "--dir",
+                "0,0,1",
+                "--integrator",
+                "light",
+            ],
+            "delta sensor",
         ),
         (
             &["missing.usda", "--at", "0,0,0", "--normal", "0,0,1"],
