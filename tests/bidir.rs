@@ -2,8 +2,10 @@
 //!
 //! - agreement: PT, LT and BDPT per pixel (z-tests with Šidák correction) and in the image
 //!   mean, on a table of scenes (adding a scene is one entry);
-//! - MIS: on random paths through a scene with every light type, the recurrent weights equal a
-//!   brute-force evaluation of m(p_s) / Σ_j m(p_j) from per-vertex densities, and sum to 1;
+//! - MIS: on random paths through a scene with every light type, a mirror and a glass pane,
+//!   from the camera and from irradiance and luminance meters, the recurrent weights equal a
+//!   brute-force evaluation of m(p_s) / Σ_j m(p_j) from per-vertex densities (techniques
+//!   connecting at a delta vertex excluded), and sum to 1;
 //! - closed forms with BDPT and LT: the white furnace, a plane under a uniform dome;
 //! - the strategy images (`--strategies`) sum to the BDPT image;
 //! - no NaN or Inf with a point-like light against a wall and a camera inside a closed box;
@@ -16,12 +18,13 @@ use spectral_render::bxdf::{BsdfSample, TransportMode};
 use spectral_render::geometry::offset::spawn_ray;
 use spectral_render::geometry::Ray;
 use spectral_render::integrator::bidir::connect::{
-    connect_weight, direct_weight, emitter_weight, escaped_weight, origin_weight, sensor_weight,
+    connect_weight, direct_weight, emitter_weight, escaped_weight, infinite_origin_weight,
+    origin_weight, sensor_weight,
 };
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
 use spectral_render::integrator::bidir::{
-    BidirContext, Mis, MisHeuristic, PathVertex, SensorRay, Walk,
+    BidirContext, Mis, MisHeuristic, PathVertex, Sensor, SensorRay, Walk,
 };
 use spectral_render::integrator::IntegratorKind;
 use spectral_render::light::emit::LightLeSample;
@@ -29,6 +32,7 @@ use spectral_render::light::{Light, LightHit, LightLiSample, LightSampleContext}
 use spectral_render::render::{self, RenderOptions, RenderOutput};
 use spectral_render::sampling::Sampler;
 use spectral_render::scene::{self, Hit, Scene, SurfaceHit};
+use spectral_render::sensor::meter::{origin_error, Meter, MeterKind, MeterSensor};
 use spectral_render::spectral::SampledWavelengths;
 use std::path::{Path, PathBuf};
 
@@ -93,6 +97,16 @@ fn looks() -> String {
         "Gold",
         "spectral:conductor",
         "        uniform token inputs:metal = \"Au\"\n        float inputs:roughness = 0.2\n",
+    );
+    s += &material(
+        "Mirror",
+        "spectral:conductor",
+        "        uniform token inputs:metal = \"Ag\"\n        float inputs:roughness = 0\n",
+    );
+    s += &material(
+        "Glass",
+        "spectral:dielectric",
+        "        float inputs:ior = 1.5\n        float inputs:roughness = 0\n",
     );
     s += "}\n\n";
     s
@@ -658,6 +672,35 @@ fn path_light_and_bdpt_agree_per_pixel() {
 // MIS: recurrence against brute force
 // ---------------------------------------------------------------------------------------------
 
+/// [`every_light_stage`] with a smooth silver mirror in front of the back wall and a smooth
+/// glass pane (IOR 1.5) standing on the floor: paths through delta (specular) vertices.
+fn specular_stage() -> String {
+    let mut s = every_light_stage();
+    s += &polygon(
+        "Mirror",
+        &[
+            [-1.6, 0.2, -1.9],
+            [-0.2, 0.2, -1.9],
+            [-0.2, 1.6, -1.9],
+            [-1.6, 1.6, -1.9],
+        ],
+        None,
+        &binding("Mirror"),
+    );
+    s += &polygon(
+        "Pane",
+        &[
+            [-0.4, 0.0, 0.9],
+            [0.9, 0.0, 0.6],
+            [0.9, 1.2, 0.6],
+            [-0.4, 1.2, 0.9],
+        ],
+        None,
+        &binding("Glass"),
+    );
+    s
+}
+
 /// The light end x_0 of a full path.
 #[derive(Clone, Copy, Debug)]
 enum LightEnd {
@@ -667,13 +710,64 @@ enum LightEnd {
     Direction { to_light: Vec3 },
 }
 
-/// A full path: x_0 on light `light`, surface vertices x_1 … x_{n−2} (light to camera order)
-/// and the pinhole x_{n−1}.
+/// The sensor end x_{n−1} of a full path: the camera's lens centre or a meter.
+#[derive(Clone, Copy, Debug)]
+enum SensorEnd {
+    Camera(Vec3),
+    Meter(MeterSensor),
+}
+
+impl SensorEnd {
+    fn p(&self) -> Vec3 {
+        match self {
+            SensorEnd::Camera(p) => *p,
+            SensorEnd::Meter(m) => m.p,
+        }
+    }
+
+    /// Brute force: the density per solid angle with which the sensor's own rays take unit
+    /// direction `w` — the camera's PDF_We, cos θ/π for an irradiance meter — or None for
+    /// the delta direction of a luminance meter.
+    fn pdf_dir(&self, scene: &Scene, w: Vec3) -> Option<f64> {
+        match self {
+            SensorEnd::Camera(p) => Some(scene.camera.pdf_we(*p, w).1 as f64),
+            SensorEnd::Meter(m) if m.kind == MeterKind::Luminance => None,
+            SensorEnd::Meter(m) => Some((w.dot(m.dir) as f64).max(0.0) / std::f64::consts::PI),
+        }
+    }
+
+    /// (1, 1) for an infinite light exists only for an irradiance meter.
+    fn connects_infinite_lights(&self) -> bool {
+        matches!(self, SensorEnd::Meter(m) if m.kind == MeterKind::Illuminance)
+    }
+
+    fn delta_direction(&self) -> bool {
+        matches!(self, SensorEnd::Meter(m) if m.kind == MeterKind::Luminance)
+    }
+
+    /// The production context with this sensor.
+    fn context<'a>(&self, base: &BidirContext<'a>) -> BidirContext<'a> {
+        match self {
+            SensorEnd::Camera(_) => *base,
+            SensorEnd::Meter(m) => base.with_sensor(Sensor::Meter(*m)),
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        match self {
+            SensorEnd::Camera(_) => "camera",
+            SensorEnd::Meter(m) => m.kind.name(),
+        }
+    }
+}
+
+/// A full path: x_0 on light `light`, surface vertices x_1 … x_{n−2} (light to sensor order)
+/// and the sensor point x_{n−1}.
 struct FullPath {
     light: u32,
     end: LightEnd,
     surfaces: Vec<SurfaceHit>,
-    lens: Vec3,
+    sensor: SensorEnd,
 }
 
 impl FullPath {
@@ -684,7 +778,7 @@ impl FullPath {
     fn p(&self, i: usize) -> Vec3 {
         let n = self.n();
         if i == n - 1 {
-            self.lens
+            self.sensor.p()
         } else if i == 0 {
             match self.end {
                 LightEnd::Point { p, .. } => p,
@@ -707,65 +801,116 @@ impl FullPath {
     fn infinite(&self) -> bool {
         matches!(self.end, LightEnd::Direction { .. })
     }
+
+    /// Per vertex: true for a surface vertex whose BSDF is a pure delta (smooth mirror, glass).
+    fn specular(&self, scene: &Scene) -> Vec<bool> {
+        let mut lambda = SampledWavelengths::sample_visible(0.5);
+        (0..self.n())
+            .map(|i| {
+                (1..self.n() - 1).contains(&i)
+                    && bsdf_at(scene, &self.surfaces[i - 1], &mut lambda).is_specular()
+            })
+            .collect()
+    }
+
+    /// True when technique s joins its subpaths at a delta vertex (a specular surface, or the
+    /// delta-direction sensor for t = 1): f (or W) is 0 there for every connecting direction,
+    /// so p_s = 0 (Veach 1997 §10.3.5).
+    fn connects_at_delta(&self, s: usize, specular: &[bool]) -> bool {
+        let n = self.n();
+        s >= 1
+            && (specular[s - 1]
+                || (s <= n - 2 && specular[s])
+                || (s == n - 1 && self.sensor.delta_direction()))
+    }
 }
 
-/// The light's front normal at point `p` (outward for spheres).
+/// The light's front normal at point `p` (outward for spheres and cylinders).
 fn light_normal(light: &Light, p: Vec3) -> Vec3 {
     match light {
         Light::Triangle(t) => t.n,
         Light::Rect(r) => r.n,
         Light::Disk(d) => d.frame.n,
         Light::Sphere(s) => (p - s.center).normalize(),
+        Light::Cylinder(c) => {
+            let v = p - c.center;
+            (v - c.frame.n * v.dot(c.frame.n)).normalize()
+        }
         _ => Vec3::ZERO,
     }
 }
 
-/// A random full path of `k` surface vertices through `scene` (None when this try failed):
-/// a camera walk by cosine sampling, closed by a light point or direction that illuminates the
-/// last vertex. Visibility of the closing segment is not required (weights do not depend on it).
-fn random_path(scene: &Scene, k: usize, sampler: &mut Sampler) -> Option<FullPath> {
-    let cam = &scene.camera;
-    let film = [
-        sampler.get_1d() * cam.width as f32,
-        sampler.get_1d() * cam.height as f32,
-    ];
-    let (mut ray, t_max) = cam.generate_ray(film, [0.5; 2]);
-    let lens = cam.lens_point([0.5; 2]);
+/// The sensor's first ray: through a random pixel of the camera, or the meter's own ray.
+fn sensor_ray(scene: &Scene, sensor: &SensorEnd, sampler: &mut Sampler) -> Option<(Ray, f32)> {
+    match sensor {
+        SensorEnd::Camera(_) => {
+            let cam = &scene.camera;
+            let film = [
+                sampler.get_1d() * cam.width as f32,
+                sampler.get_1d() * cam.height as f32,
+            ];
+            Some(cam.generate_ray(film, [0.5; 2]))
+        }
+        SensorEnd::Meter(m) => Some((m.generate_ray(sampler.get_2d())?.ray, f32::INFINITY)),
+    }
+}
+
+/// Follows `ray` to an emitter: a light shape, an emissive surface, or (escaping) an
+/// infinite light chosen uniformly among those that shine along it.
+fn trace_to_emitter(
+    scene: &Scene,
+    ray: &Ray,
+    t: f32,
+    lambda: &SampledWavelengths,
+    sampler: &mut Sampler,
+) -> Option<(u32, LightEnd)> {
+    match scene.intersect(ray, t) {
+        Some(Hit::Light { light, hit }) => Some((light, LightEnd::Point { p: hit.p, n: hit.n })),
+        Some(Hit::Surface(si)) => {
+            let light = si.light?;
+            let hit = LightHit {
+                p: si.p,
+                n: si.ng,
+                t: si.t,
+            };
+            if scene.lights[light as usize]
+                .l(&hit, -ray.d, lambda)
+                .is_black()
+            {
+                return None;
+            }
+            Some((light, LightEnd::Point { p: si.p, n: si.ng }))
+        }
+        None => {
+            let d = ray.d.normalize();
+            let shining: Vec<u32> = scene
+                .infinite_lights
+                .iter()
+                .copied()
+                .filter(|&i| !scene.lights[i as usize].le(d, lambda).is_black())
+                .collect();
+            let k = (sampler.get_1d() * shining.len() as f32) as usize;
+            let light = *shining.get(k.min(shining.len().max(1) - 1))?;
+            Some((light, LightEnd::Direction { to_light: d }))
+        }
+    }
+}
+
+/// A random full path of `k` surface vertices from `sensor` (None when this try failed): a
+/// walk by BSDF sampling (specular vertices included), closed by a light point or direction
+/// that illuminates the last vertex — or, when that vertex is specular (or, for k = 0, half
+/// the time), by following the walk's last ray to an emitter. Visibility of a closing segment
+/// found by light sampling is not required (weights do not depend on it).
+fn random_path(
+    scene: &Scene,
+    sensor: &SensorEnd,
+    k: usize,
+    sampler: &mut Sampler,
+) -> Option<FullPath> {
+    let (mut ray, mut t) = sensor_ray(scene, sensor, sampler)?;
     let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
     let mut surfaces = Vec::new();
-    let mut t = t_max;
-    if k == 0 {
-        // The camera sees an emitter directly.
-        return match scene.intersect(&ray, t) {
-            Some(Hit::Light { light, hit }) => Some(FullPath {
-                light,
-                end: LightEnd::Point { p: hit.p, n: hit.n },
-                surfaces,
-                lens,
-            }),
-            Some(Hit::Surface(si)) => {
-                let light = si.light?;
-                let hit = LightHit {
-                    p: si.p,
-                    n: si.ng,
-                    t: si.t,
-                };
-                if scene.lights[light as usize]
-                    .l(&hit, -ray.d, &lambda)
-                    .is_black()
-                {
-                    return None;
-                }
-                Some(FullPath {
-                    light,
-                    end: LightEnd::Point { p: si.p, n: si.ng },
-                    surfaces,
-                    lens,
-                })
-            }
-            None => None,
-        };
-    }
+    let mut last_specular = false;
     for _ in 0..k {
         let Some(Hit::Surface(si)) = scene.intersect(&ray, t) else {
             return None;
@@ -778,16 +923,35 @@ fn random_path(scene: &Scene, k: usize, sampler: &mut Sampler) -> Option<FullPat
             TransportMode::Radiance,
         )?;
         surfaces.push(si);
+        last_specular = bsdf.is_specular();
         ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
         t = f32::INFINITY;
     }
     surfaces.reverse();
-    // Close on a light, which must illuminate x_1 and be seen from its BSDF's side.
-    let x1 = surfaces[0];
-    // Uniformly, so that weak lights are checked as often as bright ones.
+    let meter_normal = match sensor {
+        SensorEnd::Meter(m) if m.kind == MeterKind::Illuminance => Some(m.dir),
+        _ => None,
+    };
+    let trace = last_specular || (k == 0 && (meter_normal.is_none() || sampler.get_1d() < 0.5));
+    if trace {
+        let (light, end) = trace_to_emitter(scene, &ray, t, &lambda, sampler)?;
+        return Some(FullPath {
+            light,
+            end,
+            surfaces,
+            sensor: *sensor,
+        });
+    }
+    // Close on a light seen from x_1 (from the meter point when k = 0), which must illuminate
+    // it from the side of its BSDF (of the meter's normal). Lights uniformly, so that weak
+    // lights are checked as often as bright ones.
+    let (p1, n1) = match surfaces.first() {
+        Some(x1) => (x1.p, x1.ng),
+        None => (sensor.p(), meter_normal?),
+    };
     let li = ((sampler.get_1d() * scene.lights.len() as f32) as usize).min(scene.lights.len() - 1);
     let light = &scene.lights[li];
-    let ctx = LightSampleContext { p: x1.p, n: x1.ng };
+    let ctx = LightSampleContext { p: p1, n: n1 };
     let ls = light.sample_li(&ctx, sampler.get_2d(), &lambda)?;
     if ls.l.is_black() {
         return None;
@@ -800,34 +964,47 @@ fn random_path(scene: &Scene, k: usize, sampler: &mut Sampler) -> Option<FullPat
             n: light_normal(light, ls.p_light),
         }
     };
-    let wo = if k >= 2 {
-        (surfaces[1].p - x1.p).normalize()
-    } else {
-        (lens - x1.p).normalize()
+    let lit = match surfaces.first() {
+        Some(x1) => {
+            let wo = match surfaces.get(1) {
+                Some(x2) => (x2.p - x1.p).normalize(),
+                None => (sensor.p() - x1.p).normalize(),
+            };
+            let bsdf = bsdf_at(scene, x1, &mut lambda);
+            !bsdf.f(wo, ls.wi, TransportMode::Radiance).is_black()
+        }
+        None => ls.wi.dot(n1) > 0.0,
     };
-    let bsdf = bsdf_at(scene, &x1, &mut lambda);
-    if bsdf.f(wo, ls.wi, TransportMode::Radiance).is_black() {
-        return None;
-    }
-    Some(FullPath {
+    lit.then(|| FullPath {
         light: li as u32,
         end,
         surfaces,
-        lens,
+        sensor: *sensor,
     })
 }
 
 /// Brute force: p_s for s = 0 … n−1 as products of per-vertex area (or, for x_0 at
-/// infinity, solid-angle) densities (Veach 1997 §10.2, eq. 10.9).
+/// infinity, solid-angle) densities (Veach 1997 §10.2, eq. 10.9). A delta vertex (specular
+/// surface, luminance meter's direction) contributes the same Dirac factor to every technique
+/// that samples through it, so its density is taken as 1 — it cancels in m(p_s)/Σ m(p_j) —
+/// with the area conversion kept; techniques that connect at it have p_s = 0
+/// (Veach 1997 §10.3.5; Georgiev 2012 tech. rep. (53)–(55) is the same rule as a recurrence).
 fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
     let scene = ctx.scene;
     let n = path.n();
     let li = path.light as usize;
     let light = &scene.lights[li];
     let pmf = scene.light_sampler.pmf(li) as f64;
+    let specular = path.specular(scene);
     let mut lambda = SampledWavelengths::sample_visible(0.5);
-    let bsdf =
-        |i: usize, lambda: &mut SampledWavelengths| bsdf_at(scene, &path.surfaces[i - 1], lambda);
+    // The BSDF density at x_i from x_{i_from} to x_{i_to}: 1 for a delta (see above).
+    let bsdf_pdf = |i: usize, from: usize, to: usize, mode, lambda: &mut SampledWavelengths| {
+        if specular[i] {
+            return 1.0;
+        }
+        let b = bsdf_at(scene, &path.surfaces[i - 1], lambda);
+        b.pdf(path.dir(i, from), path.dir(i, to), mode) as f64
+    };
     let ng = |i: usize| -> Vec3 {
         match (i, path.end) {
             (0, LightEnd::Point { n, .. }) => n,
@@ -868,50 +1045,39 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
                 };
                 to_area(pmf * pdf_w, 1, 0)
             }
-            0 if path.infinite() => {
-                if s == 1 {
-                    0.0
-                } else {
-                    pmf * le.dir_w as f64
-                }
-            }
+            // (1, 1) for an infinite light: its emitted direction, where the sensor takes it.
+            0 if path.infinite() && s == 1 && !path.sensor.connects_infinite_lights() => 0.0,
+            0 if path.infinite() => pmf * le.dir_w as f64,
             0 => pmf * le.pos_a as f64,
             1 if path.infinite() => le.pos_a as f64 * ng(1).dot(path.dir(0, 1)).abs() as f64,
             1 => to_area(le.dir_w as f64, 0, 1),
             _ => {
-                let b = bsdf(i - 1, lambda);
-                let pdf = b.pdf(
-                    path.dir(i - 1, i - 2),
-                    path.dir(i - 1, i),
-                    TransportMode::Importance,
-                );
-                to_area(pdf as f64, i - 1, i)
+                let pdf = bsdf_pdf(i - 1, i - 2, i, TransportMode::Importance, lambda);
+                to_area(pdf, i - 1, i)
             }
         }
     };
-    // Reverse densities (camera side) of x_i for techniques with s ≤ i.
+    // Reverse densities (sensor side) of x_i for techniques with s ≤ i.
     let reverse = |i: usize, lambda: &mut SampledWavelengths| -> f64 {
         if i == n - 1 {
-            return 1.0; // the lens point: the same density for every technique with t ≥ 1
+            return 1.0; // the sensor point: the same density for every technique with t ≥ 1
         }
         if i == 0 && light.is_delta() {
             return 0.0;
         }
         if i == n - 2 {
-            let pdf_dir = scene.camera.pdf_we(path.lens, path.dir(n - 1, i)).1 as f64;
+            let pdf_dir = path
+                .sensor
+                .pdf_dir(scene, path.dir(n - 1, i))
+                .unwrap_or(1.0);
             return to_area(pdf_dir, n - 1, i);
         }
-        let b = bsdf(i + 1, lambda);
-        let pdf = b.pdf(
-            path.dir(i + 1, i + 2),
-            path.dir(i + 1, i),
-            TransportMode::Radiance,
-        );
-        to_area(pdf as f64, i + 1, i)
+        let pdf = bsdf_pdf(i + 1, i + 2, i, TransportMode::Radiance, lambda);
+        to_area(pdf, i + 1, i)
     };
     (0..n)
         .map(|s| {
-            if s == 1 && n == 2 && path.infinite() {
+            if path.connects_at_delta(s, &specular) {
                 return 0.0;
             }
             let f: f64 = (0..s).map(|i| forward(i, s, &mut lambda)).product();
@@ -924,8 +1090,19 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
 /// Production weights for every technique of `path`: the subpaths are replayed through the
 /// integrators' own walk, MIS update and weight functions.
 fn recurrent_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
+    let ctx = path.sensor.context(ctx);
+    let specular = path.specular(ctx.scene);
     (0..path.n())
-        .map(|s| recurrent_weight(ctx, path, s) as f64)
+        .map(|s| {
+            // The integrators never evaluate these: specular vertices are neither stored on
+            // light subpaths nor connected from camera subpaths, and a luminance meter's
+            // `sample_wi` is None.
+            if path.connects_at_delta(s, &specular) {
+                0.0
+            } else {
+                recurrent_weight(&ctx, path, s) as f64
+            }
+        })
         .collect()
 }
 
@@ -948,13 +1125,24 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
             walk.depth,
         )
     };
+    // Leaves `v` towards `wi` as the walk would have sampled it (a delta lobe: specular, with
+    // a density that cancels, as `Walk::advance` assumes).
     let step = |walk: &mut Walk, v: &PathVertex, wi: Vec3, mode: TransportMode| {
-        let bs = BsdfSample::reflection(
-            v.bsdf.f(v.wo, wi, mode),
-            wi,
-            v.bsdf.pdf(v.wo, wi, mode),
-            false,
-        );
+        let bs = if v.bsdf.is_specular() {
+            BsdfSample::reflection(
+                spectral_render::spectral::SampledSpectrum::ONE,
+                wi,
+                1.0,
+                true,
+            )
+        } else {
+            BsdfSample::reflection(
+                v.bsdf.f(v.wo, wi, mode),
+                wi,
+                v.bsdf.pdf(v.wo, wi, mode),
+                false,
+            )
+        };
         walk.advance(&ctx.mis, v, bs, mode);
     };
     // Light side y_0 … y_{s−1} = x_0 … x_{s−1}.
@@ -978,7 +1166,8 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
             delta_dir: light.is_delta(),
             infinite: path.infinite(),
         };
-        let (o, mut walk) = Walk::light(ctx, li, pmf, &le).expect("emission");
+        let (o, mut walk) =
+            Walk::light(ctx, li, pmf, &le).unwrap_or_else(|| panic!("emission: light {li} {le:?}"));
         origin = Some(o);
         for i in 1..s {
             if i == 1 {
@@ -999,14 +1188,14 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
             light_vertex = Some(vertex(i, path.dir(i, i - 1), &walk, &mut lambda));
         }
     }
-    // Camera side z_0 … z_{t−1} = x_{n−1} … x_s, and the weight.
-    let cam_dir = path.dir(n - 1, n - 2);
+    // Sensor side z_0 … z_{t−1} = x_{n−1} … x_s, and the weight.
+    let sensor_p = path.sensor.p();
     let sr = SensorRay {
-        ray: Ray::new(path.lens, cam_dir),
+        ray: Ray::new(sensor_p, path.dir(n - 1, n - 2)),
         t_max: f32::INFINITY,
-        p: path.lens,
+        p: sensor_p,
     };
-    let mut walk = Walk::sensor(ctx, &sr).expect("camera ray");
+    let mut walk = Walk::sensor(ctx, &sr).expect("sensor ray");
     let mut camera_vertex: Option<PathVertex> = None;
     for j in 1..t {
         let i = n - 1 - j;
@@ -1034,23 +1223,16 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
         walk.arrive(&ctx.mis, si.p, si.ng);
         camera_vertex = Some(vertex(i, path.dir(i, i + 1), &walk, &mut lambda));
     }
-    let pdf_dir = |p: Vec3| {
-        scene
-            .camera
-            .pdf_we(path.lens, (p - path.lens).normalize())
-            .1
-    };
+    let pdf_dir = |p: Vec3| ctx.sensor.ray_pdf_dir_w((p - sensor_p).normalize());
     match (s, t) {
-        (1, 1) => origin.map_or(0.0, |o| {
-            if o.infinite {
-                0.0
-            } else {
-                origin_weight(ctx, &o, path.lens, pdf_dir(o.p))
-            }
+        (1, 1) => origin.map_or(0.0, |o| match ctx.sensor.infinite_light_meter() {
+            Some(m) if o.infinite => infinite_origin_weight(ctx, &o, m.pdf_dir_w(-o.n)),
+            None if o.infinite => 0.0,
+            _ => origin_weight(ctx, &o, sensor_p, pdf_dir(o.p)),
         }),
         (_, 1) => {
             let y = light_vertex.unwrap();
-            sensor_weight(ctx, &y, path.lens, pdf_dir(y.p))
+            sensor_weight(ctx, &y, sensor_p, pdf_dir(y.p))
         }
         (1, _) => {
             let z = camera_vertex.unwrap();
@@ -1083,10 +1265,28 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
     }
 }
 
-#[test]
-fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
-    let scene = load_text("every-light", &every_light_stage(), (32, 32));
-    let kinds: Vec<&str> = scene
+/// What the brute-force check saw for one sensor and heuristic.
+#[derive(Debug, Default)]
+struct MisCheck {
+    /// Paths per number of surface vertices (n = 2 … 7).
+    per_length: Vec<usize>,
+    per_light: std::collections::BTreeMap<&'static str, usize>,
+    /// Paths with at least one specular vertex, and techniques they excluded (p_s = 0).
+    specular_paths: usize,
+    excluded: usize,
+    worst_diff: f64,
+    worst_sum: f64,
+}
+
+/// Checks the recurrent weights of random paths from `sensor` against the brute-force sum.
+fn check_mis(
+    scene: &Scene,
+    sensor: &SensorEnd,
+    heuristic: MisHeuristic,
+    paths_per_length: usize,
+    seed: u64,
+) -> MisCheck {
+    let kinds: Vec<&'static str> = scene
         .lights
         .iter()
         .map(|l| match l {
@@ -1100,68 +1300,137 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
             Light::Dome(_) => "dome",
         })
         .collect();
-    for heuristic in [MisHeuristic::Power, MisHeuristic::Balance] {
-        let ctx = BidirContext::new(&scene, Mis::bdpt(heuristic), 100);
-        let mut sampler = Sampler::new(11, 0, heuristic as u64);
-        let mut checked = vec![0usize; 6];
-        let mut per_kind = std::collections::BTreeMap::<&str, usize>::new();
-        let (mut worst_diff, mut worst_sum) = (0.0f64, 0.0f64);
-        for (k, count) in checked.iter_mut().enumerate() {
-            let mut tries = 0;
-            while *count < 300 && tries < 200_000 {
-                tries += 1;
-                let Some(path) = random_path(&scene, k, &mut sampler) else {
-                    continue;
-                };
-                let pdfs = technique_pdfs(&ctx, &path);
-                let m: Vec<f64> = pdfs.iter().map(|&p| ctx.mis.m(p as f32) as f64).collect();
-                let total: f64 = m.iter().sum();
-                if !(total > 0.0 && total.is_finite()) {
-                    continue;
-                }
-                let brute: Vec<f64> = m.iter().map(|x| x / total).collect();
-                let recurrent = recurrent_weights(&ctx, &path);
-                for s in 0..path.n() {
-                    let diff = (brute[s] - recurrent[s]).abs();
-                    worst_diff = worst_diff.max(diff);
-                    assert!(
-                        diff < 2e-3,
-                        "{heuristic:?}, n = {}, s = {s}, light {}: recurrent {:?} vs brute force {:?} (pdfs {:?})",
-                        path.n(),
-                        kinds[path.light as usize],
-                        recurrent,
-                        brute,
-                        pdfs
-                    );
-                }
-                let sum: f64 = recurrent.iter().sum();
-                worst_sum = worst_sum.max((sum - 1.0).abs());
-                assert!(
-                    (sum - 1.0).abs() < 2e-3,
-                    "weights sum to {sum}: {recurrent:?}"
-                );
-                *count += 1;
-                *per_kind.entry(kinds[path.light as usize]).or_default() += 1;
+    let ctx = BidirContext::new(scene, Mis::bdpt(heuristic), 100);
+    let mut sampler = Sampler::new(seed, 0, heuristic as u64);
+    let mut out = MisCheck {
+        per_length: vec![0; 6],
+        ..Default::default()
+    };
+    for k in 0..6 {
+        let mut tries = 0;
+        while out.per_length[k] < paths_per_length && tries < 200_000 {
+            tries += 1;
+            let Some(path) = random_path(scene, sensor, k, &mut sampler) else {
+                continue;
+            };
+            let pdfs = technique_pdfs(&ctx, &path);
+            let m: Vec<f64> = pdfs.iter().map(|&p| ctx.mis.m(p as f32) as f64).collect();
+            let total: f64 = m.iter().sum();
+            if !(total > 0.0 && total.is_finite()) {
+                continue;
             }
-            assert!(*count >= 100, "too few paths with {k} surface vertices");
-        }
-        eprintln!(
-            "{heuristic:?}: paths per length (n = 2..7) {checked:?}, per light {per_kind:?}; \
-             max |recurrent − brute force| {worst_diff:.2e}, max |Σ w − 1| {worst_sum:.2e}"
-        );
-        for kind in [
-            "mesh",
-            "rect",
-            "disk",
-            "sphere",
-            "dome",
-            "distant",
-            "distant (delta)",
-        ] {
+            let brute: Vec<f64> = m.iter().map(|x| x / total).collect();
+            let recurrent = recurrent_weights(&ctx, &path);
+            for s in 0..path.n() {
+                let diff = (brute[s] - recurrent[s]).abs();
+                out.worst_diff = out.worst_diff.max(diff);
+                assert!(
+                    diff < 2e-3,
+                    "{} {heuristic:?}, n = {}, s = {s}, light {}, specular {:?}: recurrent {:?} vs brute force {:?} (pdfs {:?})",
+                    sensor.name(),
+                    path.n(),
+                    kinds[path.light as usize],
+                    path.specular(scene),
+                    recurrent,
+                    brute,
+                    pdfs
+                );
+            }
+            let sum: f64 = recurrent.iter().sum();
+            out.worst_sum = out.worst_sum.max((sum - 1.0).abs());
             assert!(
-                per_kind.get(kind).copied().unwrap_or(0) >= 10,
-                "few paths to {kind}: {per_kind:?}"
+                (sum - 1.0).abs() < 2e-3,
+                "{}: weights sum to {sum}: {recurrent:?}",
+                sensor.name()
             );
+            let specular = path.specular(scene);
+            if specular.iter().any(|&b| b) {
+                out.specular_paths += 1;
+                out.excluded += (0..path.n())
+                    .filter(|&s| path.connects_at_delta(s, &specular))
+                    .count();
+            }
+            out.per_length[k] += 1;
+            *out.per_light.entry(kinds[path.light as usize]).or_default() += 1;
+        }
+    }
+    out
+}
+
+/// The recurrent MIS weights (`bidir::mis`) against m(p_s) / Σ_j m(p_j) evaluated from
+/// per-vertex densities, on random paths through a scene with every light type, a mirror and
+/// a glass pane, for three sensors: the camera, an irradiance meter on the floor (whose
+/// (1, 1) technique includes infinite lights' directions) and a luminance meter (a delta
+/// direction: t = 1 has weight 0). Specular vertices exclude the techniques that would connect
+/// at them; the weights of the others must still sum to 1.
+#[test]
+fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
+    let scene = load_text("every-light", &specular_stage(), (32, 32));
+    let meter = |kind, p: Vec3, dir: Vec3| {
+        let m = Meter {
+            kind,
+            p,
+            dir: dir.normalize(),
+        };
+        SensorEnd::Meter(MeterSensor::new(&m, origin_error(&scene, p)))
+    };
+    let sensors = [
+        SensorEnd::Camera(scene.camera.lens_point([0.5; 2])),
+        meter(MeterKind::Illuminance, Vec3::new(0.3, 0.0, 0.2), Vec3::Y),
+        meter(
+            MeterKind::Luminance,
+            Vec3::new(-1.0, 1.4, 1.5),
+            Vec3::new(0.3, -0.6, -1.0),
+        ),
+    ];
+    for (i, sensor) in sensors.iter().enumerate() {
+        for heuristic in [MisHeuristic::Power, MisHeuristic::Balance] {
+            let c = check_mis(&scene, sensor, heuristic, 300, 11 + i as u64);
+            eprintln!(
+                "{} {heuristic:?}: paths per length (n = 2..7) {:?}, per light {:?}; {} with specular vertices ({} techniques excluded); max |recurrent − brute force| {:.2e}, max |Σ w − 1| {:.2e}",
+                sensor.name(),
+                c.per_length,
+                c.per_light,
+                c.specular_paths,
+                c.excluded,
+                c.worst_diff,
+                c.worst_sum
+            );
+            // A luminance meter looking at a plain floor sees no emitter directly (n = 2).
+            let first = if matches!(sensor, SensorEnd::Meter(m) if m.delta_direction()) {
+                1
+            } else {
+                0
+            };
+            for (k, &count) in c.per_length.iter().enumerate().skip(first) {
+                assert!(
+                    count >= 100,
+                    "{}: too few paths with {k} surface vertices",
+                    sensor.name()
+                );
+            }
+            assert!(
+                c.specular_paths >= 100,
+                "{}: few specular paths",
+                sensor.name()
+            );
+            for kind in [
+                "mesh",
+                "rect",
+                "disk",
+                "sphere",
+                "cylinder",
+                "dome",
+                "distant",
+                "distant (delta)",
+            ] {
+                assert!(
+                    c.per_light.get(kind).copied().unwrap_or(0) >= 10,
+                    "{}: few paths to {kind}: {:?}",
+                    sensor.name(),
+                    c.per_light
+                );
+            }
         }
     }
 }
