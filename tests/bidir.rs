@@ -975,7 +975,7 @@ fn random_path(
         }
         None => ls.wi.dot(n1) > 0.0,
     };
-    lit.then(|| FullPath {
+    lit.then_some(FullPath {
         light: li as u32,
         end,
         surfaces,

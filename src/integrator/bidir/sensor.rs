@@ -5,7 +5,7 @@
 //! MIS treats both alike (Georgiev 2012 tech. rep. (31)–(33)): the sensor point is a delta in
 //! position, its rays have a density per solid angle (the camera's 1/(A cos³θ), an irradiance
 //! meter's cos θ/π), except for a luminance meter, whose direction is a delta as well, so that
-//! no technique with t ≤ 1 can produce its paths (see [`super::mis::SubpathMis::sensor_start`]).
+//! no technique with t ≤ 1 can produce its paths (see [`super::mis::SubpathMis::delta_sensor_start`]).
 
 use crate::geometry::offset::spawn_ray_to_point;
 use crate::geometry::Ray;

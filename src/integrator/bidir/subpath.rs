@@ -93,7 +93,7 @@ impl Walk {
             SubpathMis::delta_sensor_start()
         } else {
             let pdf_dir_w = ctx.sensor.ray_pdf_dir_w(d);
-            if !(pdf_dir_w > 0.0) {
+            if pdf_dir_w.is_nan() || pdf_dir_w <= 0.0 {
                 return None;
             }
             SubpathMis::camera_start(&ctx.mis, pdf_dir_w)
