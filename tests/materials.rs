@@ -710,8 +710,21 @@ fn preview_surface_normal_input_tilts_the_shading_normal() {
         panic!("preview surface")
     };
     assert!((p.normal - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6);
+    // The quad has no st: the tangent frame is the arbitrary one around +Z (x = +X). The
+    // scene perturbs the hit's shading normal, which the BSDF frame then uses.
+    let ray = spectral_render::geometry::Ray::new(Vec3::new(0.2, 0.1, 1.0), -Vec3::Z);
+    let Some(spectral_render::scene::Hit::Surface(si)) = scene.intersect(&ray, f32::INFINITY)
+    else {
+        panic!("the ray hits the quad")
+    };
+    assert!(
+        (si.ns - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-5,
+        "{}",
+        si.ns
+    );
+    assert_eq!(si.ng, Vec3::Z);
     let lambda = SampledWavelengths::sample_visible(0.3);
-    let bsdf = scene.materials[0].bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda);
+    let bsdf = scene.materials[0].bsdf(si.uv, si.ns, &lambda);
     assert!((bsdf.frame.n.dot(Vec3::Z) - 0.8).abs() < 1e-5);
     // A normal pointing into the surface is replaced by (0, 0, 1), with a warning.
     let scene = load_looks("normal-down", &looks, "Down").unwrap();

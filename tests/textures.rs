@@ -3,10 +3,14 @@
 
 mod common;
 use common::*;
-use glam::Vec2;
+use glam::{Vec2, Vec3};
+use spectral_render::bxdf::TransportMode;
+use spectral_render::geometry::Ray;
 use spectral_render::imageio;
 use spectral_render::output::exr;
 use spectral_render::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
+use spectral_render::scene::{Hit, Scene, SurfaceHit};
+use spectral_render::spectral::SampledWavelengths;
 use spectral_render::texture::{ImageTexture, TextureCache};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -96,6 +100,20 @@ fn float_exr_textures_are_raw_under_auto() {
 /// A quad filling the view of `camera(1, 0.2)` exactly with st ∈ [0, 1]², textured by
 /// `Tex` (`tex_inputs`) on the shader inputs `connections`.
 fn textured_stage(l: f32, file: &str, tex_inputs: &str, surface_inputs: &str) -> String {
+    // The view spans x, y ∈ [−0.2, 0.2] on the plane: st = (x + 0.2) / 0.4 there.
+    let st = "    texCoord2f[] primvars:st = [(-2, -2), (3, -2), (3, 3), (-2, 3)] (\n        interpolation = \"vertex\"\n    )\n";
+    textured_stage_st(l, file, tex_inputs, surface_inputs, st)
+}
+
+/// [`textured_stage`] with the quad's st lines given (corners (−1, −1), (1, −1), (1, 1),
+/// (−1, 1) in z = 0, facing +Z).
+fn textured_stage_st(
+    l: f32,
+    file: &str,
+    tex_inputs: &str,
+    surface_inputs: &str,
+    st: &str,
+) -> String {
     let mut s = header();
     s += &camera(1.0, 0.2, 0.0);
     s += &format!("def DomeLight \"Sky\"\n{{\n    float inputs:intensity = {l}\n}}\n\n");
@@ -130,8 +148,6 @@ fn textured_stage(l: f32, file: &str, tex_inputs: &str, surface_inputs: &str) ->
 
 "#
     );
-    // The view spans x, y ∈ [−0.2, 0.2] on the plane: st = (x + 0.2) / 0.4 there.
-    let st = "    texCoord2f[] primvars:st = [(-2, -2), (3, -2), (3, 3), (-2, 3)] (\n        interpolation = \"vertex\"\n    )\n";
     s += &quad(
         "Plane",
         0.0,
@@ -271,4 +287,196 @@ fn textures_on_unsupported_inputs_warn_and_use_the_default() {
         scene.lights.len() == 1,
         "a textured emissiveColor does not emit"
     );
+}
+
+// ---- Normal maps -------------------------------------------------------------------------
+
+/// A 1×1 float EXR holding `rgb` (values exact in half precision), for raw texture tests.
+fn texel_exr(dir: &Path, name: &str, rgb: [f32; 3]) {
+    let texels = [rgb];
+    exr::write(
+        &dir.join(name),
+        1,
+        1,
+        &texels,
+        &texels,
+        [0.3127, 0.329],
+        &Default::default(),
+    )
+    .unwrap();
+}
+
+/// UsdUVTexture inputs of a tangent-space normal map (UsdPreviewSurface spec: raw, ×2 − 1).
+const NORMAL_TEX: &str = "            token inputs:sourceColorSpace = \"raw\"\n            float4 inputs:scale = (2, 2, 2, 1)\n            float4 inputs:bias = (-1, -1, -1, 0)\n";
+const NORMAL_CONNECTED: &str =
+    "            normal3f inputs:normal.connect = </Looks/Paint/Tex.outputs:rgb>\n";
+const GLOSSY: &str =
+    "            float inputs:metallic = 0.5\n            float inputs:roughness = 0.3\n";
+
+/// The surface hit by the ray from (x, y, 1) straight down.
+fn surface_at(scene: &Scene, x: f32, y: f32) -> SurfaceHit {
+    let ray = Ray::new(Vec3::new(x, y, 1.0), -Vec3::Z);
+    match scene.intersect(&ray, f32::INFINITY) {
+        Some(Hit::Surface(si)) => si,
+        other => panic!("expected the quad at ({x}, {y}), got {other:?}"),
+    }
+}
+
+fn load_scene(dir: &Path, name: &str, stage: &str) -> Scene {
+    spectral_render::scene::load(&write(dir, name, stage), Some((16, 16)))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+const POINTS: [(f32, f32); 4] = [(0.1, 0.05), (-0.15, 0.1), (0.12, -0.17), (-0.05, -0.08)];
+
+#[test]
+fn a_flat_normal_map_is_the_identity() {
+    let dir = temp_dir("nmap-flat");
+    texel_exr(&dir, "flat.exr", [0.5, 0.5, 1.0]);
+    let mapped = textured_stage(
+        10.0,
+        "flat.exr",
+        NORMAL_TEX,
+        &format!("{GLOSSY}{NORMAL_CONNECTED}"),
+    );
+    let plain = textured_stage(10.0, "flat.exr", NORMAL_TEX, GLOSSY);
+    let (a, b) = (
+        load_scene(&dir, "mapped.usda", &mapped),
+        load_scene(&dir, "plain.usda", &plain),
+    );
+    assert!(a.materials[0].perturbs_normal() && !b.materials[0].perturbs_normal());
+    for (x, y) in POINTS {
+        assert_eq!(surface_at(&a, x, y).ns, surface_at(&b, x, y).ns);
+    }
+    let opts = spectral_render::render::RenderOptions {
+        spp: Some(8),
+        seed: 7,
+        max_depth: 5,
+        ..Default::default()
+    };
+    let (ia, ib) = (
+        spectral_render::render::render(&a, &opts).unwrap(),
+        spectral_render::render::render(&b, &opts).unwrap(),
+    );
+    assert_finite(&ia);
+    for (pa, pb) in ia.rgb.iter().zip(&ib.rgb) {
+        for c in 0..3 {
+            assert!(
+                (pa[c] - pb[c]).abs() <= 1e-6 * pb[c].abs().max(1.0),
+                "{pa:?} {pb:?}"
+            );
+        }
+    }
+}
+
+/// BSDF values of two scenes' materials at the same hit, for a few direction pairs.
+fn assert_same_bsdf(a: &Scene, b: &Scene, x: f32, y: f32) {
+    let (sa, sb) = (surface_at(a, x, y), surface_at(b, x, y));
+    assert!((sa.ns - sb.ns).length() < 1e-6, "{} vs {}", sa.ns, sb.ns);
+    let lambda = SampledWavelengths::sample_visible(0.37);
+    let fa = a.materials[0].bsdf(sa.uv, sa.ns, &lambda);
+    let fb = b.materials[0].bsdf(sb.uv, sb.ns, &lambda);
+    let wo = Vec3::new(0.2, -0.3, 0.9).normalize();
+    for wi in [Vec3::new(-0.4, 0.1, 0.8), Vec3::new(0.6, 0.2, 0.3), Vec3::Z] {
+        let wi = wi.normalize();
+        let (va, vb) = (
+            fa.f(wo, wi, TransportMode::Radiance),
+            fb.f(wo, wi, TransportMode::Radiance),
+        );
+        for i in 0..4 {
+            assert!(
+                (va.0[i] - vb.0[i]).abs() <= 1e-6 * vb.0[i].max(1.0),
+                "{va:?} {vb:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_tilted_constant_normal_map_equals_the_constant_normal_input() {
+    let dir = temp_dir("nmap-tilt");
+    // (0.75, 0.5, 1) × 2 − 1 = (0.5, 0, 1): tilted towards +u, i.e. +X on this quad.
+    texel_exr(&dir, "tilt.exr", [0.75, 0.5, 1.0]);
+    let mapped = textured_stage(
+        1.0,
+        "tilt.exr",
+        NORMAL_TEX,
+        &format!("{GLOSSY}{NORMAL_CONNECTED}"),
+    );
+    let constant = format!("{GLOSSY}            normal3f inputs:normal = (0.5, 0, 1)\n");
+    let constant = textured_stage(1.0, "tilt.exr", NORMAL_TEX, &constant);
+    let (a, b) = (
+        load_scene(&dir, "mapped.usda", &mapped),
+        load_scene(&dir, "constant.usda", &constant),
+    );
+    let expected = Vec3::new(0.5, 0.0, 1.0).normalize();
+    for (x, y) in POINTS {
+        assert!((surface_at(&a, x, y).ns - expected).length() < 1e-6);
+        assert_same_bsdf(&a, &b, x, y);
+    }
+}
+
+#[test]
+fn the_tangent_frame_follows_st() {
+    let dir = temp_dir("nmap-st");
+    texel_exr(&dir, "u.exr", [0.75, 0.5, 1.0]);
+    texel_exr(&dir, "v.exr", [0.5, 0.75, 1.0]);
+    let st = |values: &str| {
+        format!("    texCoord2f[] primvars:st = [{values}] (\n        interpolation = \"vertex\"\n    )\n")
+    };
+    // Corners (−1, −1), (1, −1), (1, 1), (−1, 1); (∂p/∂u, ∂p/∂v) per parameterisation.
+    let cases = [
+        (
+            "plain",
+            st("(0, 0), (1, 0), (1, 1), (0, 1)"),
+            Vec3::X,
+            Vec3::Y,
+        ),
+        (
+            "rotated",
+            st("(-1, 1), (-1, -1), (1, -1), (1, 1)"),
+            Vec3::Y,
+            -Vec3::X,
+        ),
+        (
+            "mirrored",
+            st("(0, 1), (1, 1), (1, 0), (0, 0)"),
+            Vec3::X,
+            -Vec3::Y,
+        ),
+    ];
+    for (name, st, dpdu, dpdv) in cases {
+        for (file, axis) in [("u.exr", dpdu), ("v.exr", dpdv)] {
+            let stage = textured_stage_st(1.0, file, NORMAL_TEX, NORMAL_CONNECTED, &st);
+            let scene = load_scene(&dir, &format!("{name}.usda"), &stage);
+            let expected = (0.5 * axis + Vec3::Z).normalize();
+            for (x, y) in POINTS {
+                let ns = surface_at(&scene, x, y).ns;
+                assert!(
+                    (ns - expected).length() < 1e-5,
+                    "{name} {file}: {ns} vs {expected}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn degenerate_st_and_zero_area_triangles_give_no_nan() {
+    let dir = temp_dir("nmap-degenerate");
+    texel_exr(&dir, "steep.exr", [1.0, 0.25, 0.5]);
+    let stage = textured_stage_st(5.0, "steep.exr", NORMAL_TEX, NORMAL_CONNECTED, "");
+    // The same material on a mesh whose st is one point and which has a zero-area triangle.
+    let mut s = stage[..stage.find("def Mesh").unwrap()].to_string();
+    s += "def Mesh \"Bad\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{\n    int[] faceVertexCounts = [3, 3, 3]\n    int[] faceVertexIndices = [0, 1, 2, 0, 2, 3, 1, 1, 1]\n    point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]\n    texCoord2f[] primvars:st = [(0.5, 0.5)] (\n        interpolation = \"constant\"\n    )\n    rel material:binding = </Looks/Paint>\n}\n";
+    let path = write(&dir, "bad.usda", &s);
+    let scene = spectral_render::scene::load(&path, Some((16, 16))).unwrap();
+    for (x, y) in POINTS {
+        let ns = surface_at(&scene, x, y).ns;
+        assert!(
+            ns.is_finite() && (ns.length() - 1.0).abs() < 1e-5 && ns.z > 0.0,
+            "{ns}"
+        );
+    }
+    render_file(&path, (16, 16), 8, 5, None);
 }

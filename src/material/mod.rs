@@ -12,10 +12,15 @@
 //! constant IOR (and for thin dielectrics, whose directions do not depend on λ) the
 //! wavelengths are never collapsed. The material only reads `lambda`.
 //!
+//! **Normal maps.** [`Material::shading_normal`] perturbs the interpolated shading normal
+//! (`normal_map.rs`); the scene calls it when it builds the `SurfaceHit`, so that the BSDF
+//! frame and the integrators' cosines agree. [`Material::bsdf`] takes the final normal.
+//!
 //! **Opacity.** [`Material::opacity`] is the probability that the surface is there
 //! (UsdPreviewSurface `opacity`, `opacityThreshold`); the integrator lets rays through the
 //! rest of the time.
 
+pub mod normal_map;
 pub mod preview;
 
 use crate::bxdf::fresnel::diffuse_fresnel;
@@ -140,6 +145,22 @@ impl Material {
         match self {
             Material::Preview(p) => p.opacity(uv),
             _ => 1.0,
+        }
+    }
+
+    /// True when the material perturbs the shading normal (UsdPreviewSurface `normal`): the
+    /// scene then keeps tangent frames for the meshes it is bound to.
+    pub fn perturbs_normal(&self) -> bool {
+        matches!(self, Material::Preview(p) if p.perturbs_normal())
+    }
+
+    /// The shading normal at st = `uv` given the interpolated one `ns`, the geometric normal
+    /// `ng` and the triangle's (∂p/∂u, ∂p/∂v) (`normal_map`); `ns` for every other material.
+    #[inline]
+    pub fn shading_normal(&self, uv: Vec2, ns: Vec3, ng: Vec3, dpduv: [Vec3; 2]) -> Vec3 {
+        match self {
+            Material::Preview(p) => p.shading_normal(uv, ns, ng, dpduv),
+            _ => ns,
         }
     }
 

@@ -10,10 +10,10 @@
 //! | `roughness` | GGX α = roughness² for metal and plastic coat |
 //! | `clearcoat`, `clearcoatRoughness` | weight c of a GGX coat of IOR 1.5 (the spec's fixed clearcoat IOR), α = clearcoatRoughness² |
 //! | `opacity`, `opacityThreshold` | threshold > 0: present where opacity ≥ threshold, a cutout elsewhere; threshold 0: present with probability `opacity` |
-//! | `normal` | a constant tangent-space normal, applied in the frame built around the shading normal |
+//! | `normal` | a tangent-space normal (constant or a normal map), applied to the shading normal in the tangent frame of st by the scene (`normal_map.rs`) |
 //!
-//! **Textures.** `diffuseColor`, `metallic`, `roughness`, `clearcoat` and `opacity` may be
-//! connected to a `UsdUVTexture` ([`PreviewTextures`]): they are looked up at the hit's st per
+//! **Textures.** `diffuseColor`, `metallic`, `roughness`, `clearcoat`, `opacity` and `normal`
+//! may be connected to a `UsdUVTexture` ([`PreviewTextures`]): they are looked up at the hit's st per
 //! BSDF, the colour uplifted per lookup (`crate::texture`). A textured `roughness` sets the GGX
 //! α exactly; the plastic coat's energy compensation (albedo E(μ), T̄) is taken from the
 //! nearest of 33 roughness levels precomputed at build time. `clearcoatRoughness`,
@@ -25,15 +25,16 @@
 //! directly (DESIGN.md §3). The plastic coat uses the exact dielectric Fresnel of `ior`
 //! rather than the reference shader's Schlick fit of it; the spec's F0 of `specularColor`
 //! is Schlick by definition. Colours are uplifted with Jakob–Hanika 2019 and clamped to
-//! [0, 1]. Without tangents on the meshes the tangent frame of `normal` is the orthonormal
-//! basis of Duff et al. 2017 around the shading normal, so only the default (0, 0, 1) and
-//! normals symmetric about +Z are portable between renderers.
+//! [0, 1]. The tangent frame of `normal` is ∂p/∂u (Gram–Schmidt against the shading normal)
+//! and ±n × t on the side of ∂p/∂v; on a mesh without st (or where st is degenerate) it is the
+//! arbitrary basis of Duff et al. 2017 around the shading normal, so there only the default
+//! (0, 0, 1) and normals symmetric about +Z are portable between renderers.
 
+use super::normal_map;
 use crate::bxdf::fresnel::diffuse_fresnel;
 use crate::bxdf::{
     Bsdf, Bxdf, CoatAlbedo, CoatFresnel, PlasticBxdf, PreviewBxdf, SpecularCoat, TrowbridgeReitz,
 };
-use crate::math::Frame;
 use crate::scene::desc::PreviewSurfaceDesc;
 use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
@@ -76,6 +77,8 @@ pub struct PreviewTextures {
     pub clearcoat: Option<TextureInput>,
     pub opacity: Option<TextureInput>,
     pub roughness: Option<TextureInput>,
+    /// A tangent-space normal map (`normal`, usually raw with scale 2 and bias −1).
+    pub normal: Option<TextureInput>,
     /// Precomputed with the roughness texture ([`PreviewMaterial::set_roughness_texture`]).
     pub roughness_coats: Option<Arc<RoughnessCoats>>,
     /// `opacityThreshold`, applied to a textured opacity per lookup.
@@ -90,6 +93,7 @@ impl PreviewTextures {
             && self.clearcoat.is_none()
             && self.opacity.is_none()
             && self.roughness.is_none()
+            && self.normal.is_none()
     }
 }
 
@@ -242,12 +246,23 @@ impl PreviewMaterial {
             clearcoat_albedo: self.clearcoat_albedo,
             clearcoat_weight: clearcoat,
         };
-        let n = if self.normal == Vec3::Z {
-            ns
-        } else {
-            Frame::from_normal(ns).to_world(self.normal).normalize()
+        Bsdf::new(Bxdf::Preview(bxdf), ns)
+    }
+
+    /// True when `normal` (constant or textured) perturbs the shading normal.
+    pub fn perturbs_normal(&self) -> bool {
+        self.textures.normal.is_some() || self.normal != Vec3::Z
+    }
+
+    /// The shading normal perturbed by `normal` at st = `uv`, in the tangent frame `dpduv`
+    /// (`material::normal_map`).
+    #[inline]
+    pub fn shading_normal(&self, uv: Vec2, ns: Vec3, ng: Vec3, dpduv: [Vec3; 2]) -> Vec3 {
+        let n_t = match &self.textures.normal {
+            Some(t) => normal_map::texel_normal(t.rgb(uv)),
+            None => self.normal,
         };
-        Bsdf::new(Bxdf::Preview(bxdf), n)
+        normal_map::perturb(n_t, ns, ng, dpduv)
     }
 }
 

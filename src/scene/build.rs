@@ -12,6 +12,7 @@ use crate::light::ies::IesProfile;
 use crate::light::report;
 use crate::light::shaping::Shaping;
 use crate::light::*;
+use crate::material::normal_map::Tangents;
 use crate::material::{Material, PlasticMaterial, PreviewMaterial};
 use crate::math::Frame;
 use crate::sampling::distribution::Distribution2D;
@@ -49,7 +50,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
     let mut meshes = Vec::new();
     for m in &desc.meshes {
         meshes.push(
-            mesh(desc, m, default_material, &mut lights)
+            mesh(desc, m, &materials, default_material, &mut lights)
                 .map_err(|r| Error::prim(file, &m.prim_path, r))?,
         );
     }
@@ -190,12 +191,13 @@ fn dielectric(
 }
 
 /// The UsdPreviewSurface inputs that may be read from a texture.
-const TEXTURED_PREVIEW_INPUTS: [&str; 5] = [
+const TEXTURED_PREVIEW_INPUTS: [&str; 6] = [
     "diffuseColor",
     "metallic",
     "roughness",
     "clearcoat",
     "opacity",
+    "normal",
 ];
 
 /// UsdPreviewSurface (mapping in `material/preview.rs`).
@@ -238,6 +240,7 @@ fn preview_surface(
             "metallic" => m.textures.metallic = Some(t),
             "clearcoat" => m.textures.clearcoat = Some(t),
             "opacity" => m.textures.opacity = Some(t),
+            "normal" => m.textures.normal = Some(t),
             _ => m.set_roughness_texture(t),
         }
     }
@@ -330,6 +333,7 @@ fn ior(i: &IorDesc) -> std::result::Result<Sellmeier, String> {
 fn mesh(
     desc: &SceneDescription,
     m: &MeshDesc,
+    materials: &[Material],
     default_material: u32,
     lights: &mut Vec<Light>,
 ) -> std::result::Result<Mesh, String> {
@@ -343,6 +347,11 @@ fn mesh(
         return Err("points must be finite".into());
     }
     let material = m.material.map_or(default_material, |i| i as u32);
+    let tangents = if materials[material as usize].perturbs_normal() {
+        Tangents::of(&m.positions, &m.indices, m.uvs.as_deref())
+    } else {
+        Tangents::Unused
+    };
     let emission = mesh_emission(desc, m)?;
     let light_offset = emission.map(|(radiance, two_sided)| {
         let offset = lights.len() as u32;
@@ -363,6 +372,7 @@ fn mesh(
         indices: m.indices.clone(),
         normals: m.normals.clone(),
         uvs: m.uvs.clone(),
+        tangents,
         material,
         light_offset,
     })

@@ -219,7 +219,7 @@ fn spectral_material(ctx: &mut Ctx, shader: &usd::Prim, id: &str) -> Result<Mate
 }
 
 /// The UsdPreviewSurface inputs that may be connected to a `UsdUVTexture`.
-const TEXTURABLE_INPUTS: [&str; 8] = [
+const TEXTURABLE_INPUTS: [&str; 9] = [
     "diffuseColor",
     "emissiveColor",
     "specularColor",
@@ -228,6 +228,7 @@ const TEXTURABLE_INPUTS: [&str; 8] = [
     "clearcoat",
     "clearcoatRoughness",
     "opacity",
+    "normal",
 ];
 
 /// Reads a UsdPreviewSurface, warning about inputs it cannot honour.
