@@ -7,6 +7,7 @@ use glam::{Vec2, Vec3};
 use spectral_render::bxdf::TransportMode;
 use spectral_render::geometry::Ray;
 use spectral_render::imageio;
+use spectral_render::integrator::IntegratorKind;
 use spectral_render::output::exr;
 use spectral_render::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
 use spectral_render::scene::{Hit, Scene, SurfaceHit};
@@ -267,26 +268,165 @@ fn an_unsupported_wrap_token_is_an_error() {
 }
 
 #[test]
-fn textures_on_unsupported_inputs_warn_and_use_the_default() {
+fn textured_emission_and_clearcoat_roughness_are_read_and_ior_warns() {
     let dir = temp_dir("tex-warn");
     quadrant_png(&dir.join("checker.png"), [[255, 255, 255, 255]; 4]);
-    let inputs = "            color3f inputs:emissiveColor.connect = </Looks/Paint/Tex.outputs:rgb>\n            float inputs:clearcoatRoughness.connect = </Looks/Paint/Tex.outputs:r>\n";
+    let inputs = "            color3f inputs:emissiveColor.connect = </Looks/Paint/Tex.outputs:rgb>\n            float inputs:clearcoatRoughness.connect = </Looks/Paint/Tex.outputs:r>\n            float inputs:opacityThreshold.connect = </Looks/Paint/Tex.outputs:r>\n";
     let stage = textured_stage(1.0, "checker.png", "", inputs);
     let scene =
         spectral_render::scene::load(&write(&dir, "warn.usda", &stage), Some((4, 4))).unwrap();
     let warnings = &scene.summary.warnings;
-    for input in ["inputs:emissiveColor", "inputs:clearcoatRoughness"] {
-        assert!(
-            warnings
-                .iter()
-                .any(|w| w.contains(input) && w.contains("not supported yet")),
-            "{input}: {warnings:?}"
-        );
-    }
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
     assert!(
-        scene.lights.len() == 1,
-        "a textured emissiveColor does not emit"
+        warnings[0].contains("inputs:opacityThreshold") && warnings[0].contains("texture"),
+        "{warnings:?}"
     );
+    assert_eq!(
+        scene.lights.len(),
+        3,
+        "the dome and the quad's two triangles"
+    );
+    let spectral_render::material::Material::Preview(p) = &scene.materials[0] else {
+        panic!("a UsdPreviewSurface")
+    };
+    assert!(p.textures.clearcoat_roughness.is_some() && p.textures.clearcoat_coats.is_some());
+}
+
+/// A `w`×4 RGBA8 PNG whose left half is `left` and right half `right`.
+fn halves_png(path: &Path, w: usize, left: [u8; 4], right: [u8; 4]) {
+    let mut bytes = Vec::new();
+    for _ in 0..4 {
+        for x in 0..w {
+            bytes.extend_from_slice(if x < w / 2 { &left } else { &right });
+        }
+    }
+    imageio::write_png_rgba8(path, &bytes, w as u32, 4).unwrap();
+}
+
+#[test]
+fn textured_emission_is_seen_at_its_st() {
+    let dir = temp_dir("tex-emit");
+    let q = [
+        [204, 51, 25, 255],
+        [25, 153, 76, 255],
+        [13, 26, 230, 255],
+        [128, 128, 128, 255],
+    ];
+    quadrant_png(&dir.join("glow.png"), q);
+    let inputs = "            color3f inputs:diffuseColor = (0, 0, 0)\n            color3f inputs:emissiveColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
+    let raw = "            token inputs:sourceColorSpace = \"raw\"\n";
+    let stage = textured_stage(0.0, "glow.png", raw, inputs);
+    let out = render_file(&write(&dir, "glow.usda", &stage), (32, 32), 16, 3, None);
+    for (k, texel) in q.iter().enumerate() {
+        for (ch, &byte) in texel[..3].iter().enumerate() {
+            let (mean, sem) = quadrant(&out, k, ch);
+            let expected = f64::from(byte) / 255.0;
+            assert!(
+                (mean - expected).abs() < 6e-3 + 5.0 * sem,
+                "quadrant {k} channel {ch}: {mean} vs {expected} (sem {sem})"
+            );
+        }
+    }
+}
+
+/// A grey floor (z = 0) seen from above, lit by emitters beside the view at z = 0.6 facing
+/// down: `emitters` are the Mesh prims, `looks` their materials.
+fn lit_floor_stage(looks: &str, emitters: &str) -> String {
+    let mut s = header();
+    s += &camera(2.0, 0.1, 0.0);
+    s += &format!(
+        "def Scope \"Looks\"\n{{\n{looks}{}}}\n\n",
+        material(
+            "Floor",
+            "UsdPreviewSurface",
+            "            color3f inputs:diffuseColor = (0.5, 0.5, 0.5)\n"
+        )
+    );
+    s += &quad(
+        "Floor",
+        0.0,
+        1.0,
+        &binding("Floor"),
+        "\"MaterialBindingAPI\"",
+    );
+    s + emitters
+}
+
+/// A downward-facing rectangle x ∈ [x0, x1], y ∈ [−0.5, 0.5] at z = 0.6 with st over it.
+fn ceiling_panel(name: &str, x0: f32, x1: f32, look: &str) -> String {
+    format!(
+        "def Mesh \"{name}\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{{\n    int[] faceVertexCounts = [4]\n    int[] faceVertexIndices = [0, 1, 2, 3]\n    point3f[] points = [({x0}, -0.5, 0.6), ({x0}, 0.5, 0.6), ({x1}, 0.5, 0.6), ({x1}, -0.5, 0.6)]\n    texCoord2f[] primvars:st = [(0, 0), (0, 1), (1, 1), (1, 0)] (\n        interpolation = \"vertex\"\n    )\n{}}}\n\n",
+        binding(look)
+    )
+}
+
+/// Mean and SEM of the per-pixel difference of two images in channel `ch`.
+fn difference(
+    a: &spectral_render::render::RenderOutput,
+    b: &spectral_render::render::RenderOutput,
+    ch: usize,
+) -> (f64, f64) {
+    mean_and_sem(a.rgb.iter().zip(&b.rgb).map(|(x, y)| x[ch] - y[ch]))
+}
+
+#[test]
+fn a_textured_emitter_lights_like_the_constant_emitters_it_is_made_of() {
+    let dir = temp_dir("tex-emit-nee");
+    halves_png(
+        &dir.join("halves.png"),
+        64,
+        [255, 40, 20, 255],
+        [20, 60, 255, 255],
+    );
+    let emissive = |rgb: &str| {
+        format!("            color3f inputs:diffuseColor = (0, 0, 0)\n            color3f inputs:emissiveColor = {rgb}\n")
+    };
+    let red = material(
+        "Red",
+        "UsdPreviewSurface",
+        &emissive("(1, 0.156863, 0.078431)"),
+    );
+    let blue = material(
+        "Blue",
+        "UsdPreviewSurface",
+        &emissive("(0.078431, 0.235294, 1)"),
+    );
+    let two = lit_floor_stage(
+        &(red + &blue),
+        &(ceiling_panel("Left", 0.3, 0.8, "Red") + &ceiling_panel("Right", 0.8, 1.3, "Blue")),
+    );
+    let textured = textured_stage(0.0, "halves.png", "            token inputs:sourceColorSpace = \"raw\"\n            token inputs:wrapS = \"clamp\"\n", "            color3f inputs:diffuseColor = (0, 0, 0)\n            color3f inputs:emissiveColor.connect = </Looks/Paint/Tex.outputs:rgb>\n");
+    // Keep the textured stage's material, replace its geometry by the floor and one panel.
+    let looks = &textured
+        [textured.find("    def Material \"Paint\"").unwrap()..textured.find("def Mesh").unwrap()];
+    let looks = &looks[..looks.rfind('}').unwrap()];
+    let one = lit_floor_stage(looks, &ceiling_panel("Panel", 0.3, 1.3, "Paint"));
+    let (path_two, path_one) = (write(&dir, "two.usda", &two), write(&dir, "one.usda", &one));
+    let reference = render_file(&path_two, (24, 24), 256, 3, None);
+    for integrator in [IntegratorKind::Path, IntegratorKind::Light] {
+        let scene = spectral_render::scene::load(&path_one, Some((24, 24))).unwrap();
+        let opts = spectral_render::render::RenderOptions {
+            spp: Some(256),
+            seed: 11,
+            max_depth: 3,
+            integrator,
+            ..Default::default()
+        };
+        let out = spectral_render::render::render(&scene, &opts).unwrap();
+        assert_finite(&out);
+        for ch in 0..3 {
+            let (d, sem) = difference(&out, &reference, ch);
+            let level = mean_and_sem(reference.rgb.iter().map(|p| p[ch])).0;
+            println!(
+                "{integrator:?} channel {ch}: mean {level:.4}, difference {d:.2e} ± {sem:.1e}"
+            );
+            assert!(level > 1e-3, "the floor is lit");
+            assert!(
+                d.abs() < 4.0 * sem + 2e-3 * level,
+                "{integrator:?} channel {ch}"
+            );
+        }
+    }
 }
 
 // ---- Normal maps -------------------------------------------------------------------------

@@ -20,6 +20,7 @@
 //! (UsdPreviewSurface `opacity`, `opacityThreshold`); the integrator lets rays through the
 //! rest of the time.
 
+pub mod coat_levels;
 pub mod normal_map;
 pub mod preview;
 

@@ -11,8 +11,10 @@ use crate::light::emission::{self, Photometric};
 use crate::light::ies::IesProfile;
 use crate::light::report;
 use crate::light::shaping::Shaping;
+use crate::light::EmissiveTexture;
 use crate::light::*;
 use crate::material::normal_map::Tangents;
+use crate::material::preview::PreviewTextures;
 use crate::material::{Material, PlasticMaterial, PreviewMaterial};
 use crate::math::Frame;
 use crate::sampling::distribution::Distribution2D;
@@ -20,9 +22,9 @@ use crate::sensor::Camera;
 use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
 use crate::spectral::{data, DenseSpectrum, Spectrum};
-use crate::texture::TextureCache;
+use crate::texture::{TextureCache, TextureInput};
 use crate::{Error, Result};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -41,6 +43,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
                 .map_err(|r| Error::prim(file, &m.prim_path, r))
         })
         .collect::<Result<Vec<_>>>()?;
+    let emissive = emissive_textures(desc, &mut textures)?;
     let default_material = materials.len() as u32;
     materials.push(Material::Diffuse {
         reflectance: Spectrum::Constant(0.18),
@@ -50,8 +53,15 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
     let mut meshes = Vec::new();
     for m in &desc.meshes {
         meshes.push(
-            mesh(desc, m, &materials, default_material, &mut lights)
-                .map_err(|r| Error::prim(file, &m.prim_path, r))?,
+            mesh(
+                desc,
+                m,
+                &materials,
+                &emissive,
+                default_material,
+                &mut lights,
+            )
+            .map_err(|r| Error::prim(file, &m.prim_path, r))?,
         );
     }
     let (tri_refs, triangles) = flatten_triangles(&meshes);
@@ -190,15 +200,24 @@ fn dielectric(
     Ok(Material::ThinDielectric { ior })
 }
 
-/// The UsdPreviewSurface inputs that may be read from a texture.
-const TEXTURED_PREVIEW_INPUTS: [&str; 6] = [
-    "diffuseColor",
-    "metallic",
-    "roughness",
-    "clearcoat",
-    "opacity",
-    "normal",
-];
+/// The slot of a textured UsdPreviewSurface input; `None` for inputs the BSDF does not read
+/// from textures (`emissiveColor` is read by [`emissive_textures`]).
+fn preview_slot<'a>(
+    t: &'a mut PreviewTextures,
+    input: &str,
+) -> Option<&'a mut Option<TextureInput>> {
+    Some(match input {
+        "diffuseColor" => &mut t.diffuse,
+        "specularColor" => &mut t.specular,
+        "metallic" => &mut t.metallic,
+        "roughness" => &mut t.roughness,
+        "clearcoat" => &mut t.clearcoat,
+        "clearcoatRoughness" => &mut t.clearcoat_roughness,
+        "opacity" => &mut t.opacity,
+        "normal" => &mut t.normal,
+        _ => return None,
+    })
+}
 
 /// UsdPreviewSurface (mapping in `material/preview.rs`).
 fn preview_surface(
@@ -218,33 +237,51 @@ fn preview_surface(
     let specular = reflectance(&SpectrumDesc::Rgb(ps.specular_color))?;
     let mut m = PreviewMaterial::new(ps, diffuse, specular);
     for (input, tex) in &ps.textures {
-        if !TEXTURED_PREVIEW_INPUTS.contains(&input.as_str()) {
-            warnings.push(format!(
-                "{path}: a texture on inputs:{input} is not supported yet (supported: {}); \
-                 using the default",
-                TEXTURED_PREVIEW_INPUTS.join(", ")
-            ));
-            continue;
-        }
         if tex.st_primvar != "st" {
             warnings.push(format!(
                 "{}: primvar '{}' is not read (only primvars:st); using st",
                 tex.shader_path, tex.st_primvar
             ));
         }
-        let t = textures
-            .input(tex)
-            .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))?;
-        match input.as_str() {
-            "diffuseColor" => m.textures.diffuse = Some(t),
-            "metallic" => m.textures.metallic = Some(t),
-            "clearcoat" => m.textures.clearcoat = Some(t),
-            "opacity" => m.textures.opacity = Some(t),
-            "normal" => m.textures.normal = Some(t),
-            _ => m.set_roughness_texture(t),
+        let Some(slot) = preview_slot(&mut m.textures, input) else {
+            continue;
+        };
+        *slot = Some(texture_input(textures, tex)?);
+    }
+    m.prepare_textures();
+    Ok(Material::Preview(Box::new(m)))
+}
+
+/// The image and node parameters of a texture, loaded through the cache.
+fn texture_input(
+    cache: &mut TextureCache,
+    tex: &TextureDesc,
+) -> std::result::Result<TextureInput, String> {
+    cache
+        .input(tex)
+        .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))
+}
+
+/// The texture on each material's UsdPreviewSurface `emissiveColor`, if any.
+fn emissive_textures(
+    desc: &SceneDescription,
+    cache: &mut TextureCache,
+) -> Result<Vec<Option<Arc<TextureInput>>>> {
+    fn emissive(m: &MaterialDesc) -> Option<&TextureDesc> {
+        match &m.kind {
+            MaterialKind::PreviewSurface(ps) => ps.texture("emissiveColor"),
+            _ => None,
         }
     }
-    Ok(Material::Preview(Box::new(m)))
+    desc.materials
+        .iter()
+        .map(|m| match emissive(m) {
+            Some(tex) => texture_input(cache, tex)
+                .map(|t| Some(Arc::new(t)))
+                .map_err(|r| Error::prim(&desc.source, &m.prim_path, r)),
+            None => Ok(None),
+        })
+        .collect()
 }
 
 /// A roughness (α or σ) that must be ≥ 0.
@@ -334,6 +371,7 @@ fn mesh(
     desc: &SceneDescription,
     m: &MeshDesc,
     materials: &[Material],
+    emissive: &[Option<Arc<TextureInput>>],
     default_material: u32,
     lights: &mut Vec<Light>,
 ) -> std::result::Result<Mesh, String> {
@@ -352,17 +390,27 @@ fn mesh(
     } else {
         Tangents::Unused
     };
-    let emission = mesh_emission(desc, m)?;
-    let light_offset = emission.map(|(radiance, two_sided)| {
+    let emission = match m.material.and_then(|i| emissive[i].as_ref()) {
+        Some(t) if m.light.is_none() => Some((Emitter::Textured(t.clone()), m.double_sided)),
+        _ => mesh_emission(desc, m)?.map(|(r, two)| (Emitter::Constant(r), two)),
+    };
+    let light_offset = emission.map(|(emitter, two_sided)| {
         let offset = lights.len() as u32;
-        for t in &m.indices {
+        for (k, t) in m.indices.iter().enumerate() {
             let p = t.map(|i| m.positions[i as usize]);
-            lights.push(Light::Triangle(TriangleLight::new(
-                m.prim_path.clone(),
-                p,
-                radiance.clone(),
-                two_sided,
-            )));
+            let light = match &emitter {
+                Emitter::Constant(r) => {
+                    TriangleLight::new(m.prim_path.clone(), p, r.clone(), two_sided)
+                }
+                Emitter::Textured(texture) => {
+                    TriangleLight::new(m.prim_path.clone(), p, Spectrum::Constant(0.0), two_sided)
+                        .with_texture(EmissiveTexture {
+                            texture: texture.clone(),
+                            uv: corner_uvs(m, k),
+                        })
+                }
+            };
+            lights.push(Light::Triangle(light));
         }
         offset
     });
@@ -376,6 +424,21 @@ fn mesh(
         material,
         light_offset,
     })
+}
+
+/// What an emissive mesh emits.
+enum Emitter {
+    Constant(Spectrum),
+    /// A textured UsdPreviewSurface `emissiveColor` (RGB radiance in nits per unit).
+    Textured(Arc<TextureInput>),
+}
+
+/// The st of triangle `k`'s corners: the mesh's, or (0, 0), (1, 0), (0, 1) without st (the
+/// barycentric fallback of `SurfaceHit::uv`).
+fn corner_uvs(m: &MeshDesc, k: usize) -> [Vec2; 3] {
+    m.uvs
+        .as_ref()
+        .map_or([Vec2::ZERO, Vec2::X, Vec2::Y], |uvs| uvs[k])
 }
 
 /// The radiance of an emissive mesh (MeshLightAPI first, then the material's emissiveColor).

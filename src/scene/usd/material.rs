@@ -326,7 +326,7 @@ impl Inputs<'_, '_> {
                 .err(&node_prim, format!("unknown shader info:id '{id}'")));
         }
         let message = format!(
-            "inputs:{name} is connected to <{}> ({id}): only UsdPreviewSurface inputs read UsdUVTexture nodes; using the default",
+            "inputs:{name} is connected to <{}> ({id}), but this input cannot be read from a texture; using the default",
             node.as_str()
         );
         self.ctx.warn(self.shader, message);
