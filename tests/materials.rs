@@ -342,6 +342,7 @@ fn rough_models_converge_to_their_smooth_counterparts() {
             eta: dense(n),
             k: dense(k),
             distrib: TrowbridgeReitz::isotropic(alpha),
+            roughness: None,
         }
         .bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda)
         .bxdf
@@ -418,6 +419,7 @@ fn normal_incidence_metal_reflectance_matches_the_tables() {
             eta: dense(n),
             k: dense(k),
             distrib: TrowbridgeReitz::isotropic(0.0),
+            roughness: None,
         };
         let mut worst = 0.0f32;
         for l in 360..=830 {
@@ -616,10 +618,12 @@ fn dispersion_terminates_secondary_wavelengths_only_when_the_ior_varies() {
     let bk7 = Material::Dielectric {
         ior: data::glass("BK7").unwrap(),
         distrib: TrowbridgeReitz::isotropic(0.0),
+        roughness: None,
     };
     let constant = Material::Dielectric {
         ior: Sellmeier::constant(1.5),
         distrib: TrowbridgeReitz::isotropic(0.0),
+        roughness: None,
     };
     let thin = Material::ThinDielectric {
         ior: data::glass("BK7").unwrap(),

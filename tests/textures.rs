@@ -620,3 +620,122 @@ fn degenerate_st_and_zero_area_triangles_give_no_nan() {
     }
     render_file(&path, (16, 16), 8, 5, None);
 }
+
+// ---- Textures on spectral:* shaders ------------------------------------------------------
+
+/// [`textured_stage`] with the surface shader replaced by `spectral:*` shader `id`.
+fn spectral_stage(l: f32, file: &str, tex_inputs: &str, id: &str, inputs: &str) -> String {
+    let preview =
+        "uniform token info:id = \"UsdPreviewSurface\"\n            float inputs:ior = 1\n";
+    let stage = textured_stage(l, file, tex_inputs, inputs);
+    assert!(stage.contains(preview));
+    stage.replace(preview, &format!("uniform token info:id = \"{id}\"\n"))
+}
+
+#[test]
+fn textured_spectral_diffuse_reflectance_round_trips_under_a_uniform_dome() {
+    let l = 50.0f32;
+    let dir = temp_dir("tex-spectral-diffuse");
+    let q = [
+        [204, 51, 25, 255],
+        [25, 153, 76, 255],
+        [13, 26, 230, 255],
+        [128, 128, 128, 255],
+    ];
+    quadrant_png(&dir.join("checker.png"), q);
+    let stage = spectral_stage(
+        l,
+        "checker.png",
+        "            token inputs:sourceColorSpace = \"raw\"\n",
+        "spectral:diffuse",
+        "            color3f inputs:reflectance.connect = </Looks/Paint/Tex.outputs:rgb>\n",
+    );
+    let out = render_file(&write(&dir, "tex.usda", &stage), (32, 32), 64, 7, None);
+    for (k, texel) in q.iter().enumerate() {
+        for (ch, &byte) in texel[..3].iter().enumerate() {
+            let (mean, sem) = quadrant(&out, k, ch);
+            let expected = f64::from(l) * f64::from(byte) / 255.0;
+            let tol = 6e-3 * f64::from(l) + 5.0 * sem;
+            assert!(
+                (mean - expected).abs() < tol,
+                "quadrant {k} channel {ch}: {mean} vs {expected} (sem {sem})"
+            );
+        }
+    }
+}
+
+#[test]
+fn textured_spectral_roughness_equals_the_constant_it_holds() {
+    let dir = temp_dir("tex-spectral-rough");
+    // α = 0.25 lies on the plastic's coat levels (√α = 16/32); σ = 0.5 rad.
+    texel_exr(&dir, "alpha.exr", [0.25, 0.5, 0.0]);
+    let raw = "            token inputs:sourceColorSpace = \"raw\"\n";
+    let rough = |channel: &str| {
+        format!(
+            "            float inputs:roughness.connect = </Looks/Paint/Tex.outputs:{channel}>\n"
+        )
+    };
+    let cases = [
+        (
+            "spectral:conductor",
+            "            token inputs:metal = \"Au\"\n",
+            "r",
+            "0.25",
+        ),
+        (
+            "spectral:dielectric",
+            "            float inputs:ior = 1.33\n",
+            "r",
+            "0.25",
+        ),
+        (
+            "spectral:plastic",
+            "            color3f inputs:reflectance = (0.2, 0.5, 0.3)\n",
+            "r",
+            "0.25",
+        ),
+        (
+            "spectral:diffuse",
+            "            color3f inputs:reflectance = (0.2, 0.5, 0.3)\n",
+            "g",
+            "0.5",
+        ),
+    ];
+    for (id, inputs, channel, value) in cases {
+        let textured = spectral_stage(
+            1.0,
+            "alpha.exr",
+            raw,
+            id,
+            &format!("{inputs}{}", rough(channel)),
+        );
+        let constant = format!("{inputs}            float inputs:roughness = {value}\n");
+        let constant = spectral_stage(1.0, "alpha.exr", raw, id, &constant);
+        let (a, b) = (
+            load_scene(&dir, "textured.usda", &textured),
+            load_scene(&dir, "constant.usda", &constant),
+        );
+        println!("{id}");
+        for (x, y) in POINTS {
+            assert_same_bsdf(&a, &b, x, y);
+        }
+    }
+}
+
+#[test]
+fn a_texture_on_a_spectral_input_that_takes_only_a_value_is_an_error() {
+    let dir = temp_dir("tex-spectral-bad");
+    quadrant_png(&dir.join("checker.png"), [[0, 0, 0, 255]; 4]);
+    let ior = "            float inputs:ior.connect = </Looks/Paint/Tex.outputs:r>\n";
+    let stage = spectral_stage(1.0, "checker.png", "", "spectral:plastic", ior);
+    assert_cli_error(
+        &dir,
+        &stage,
+        &[
+            "bad.usda",
+            "/Looks/Paint/S",
+            "inputs:ior",
+            "spectral:plastic",
+        ],
+    );
+}

@@ -15,7 +15,9 @@ use crate::light::EmissiveTexture;
 use crate::light::*;
 use crate::material::normal_map::Tangents;
 use crate::material::preview::PreviewTextures;
-use crate::material::{Material, PlasticMaterial, PreviewMaterial};
+use crate::material::{
+    AlphaTexture, ColorInput, FloatInput, Material, PlasticMaterial, PreviewMaterial,
+};
 use crate::math::Frame;
 use crate::sampling::distribution::Distribution2D;
 use crate::sensor::Camera;
@@ -46,7 +48,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
     let emissive = emissive_textures(desc, &mut textures)?;
     let default_material = materials.len() as u32;
     materials.push(Material::Diffuse {
-        reflectance: Spectrum::Constant(0.18),
+        reflectance: ColorInput::Constant(Spectrum::Constant(0.18)),
     });
 
     let mut lights = Vec::new();
@@ -142,57 +144,102 @@ fn material(
     warnings: &mut Vec<String>,
 ) -> std::result::Result<Material, String> {
     let path = &m.prim_path;
+    let texture = |name: &str, cache: &mut TextureCache| {
+        m.texture(name).map(|t| texture_input(cache, t)).transpose()
+    };
     match &m.kind {
         MaterialKind::Diffuse {
             reflectance: r,
             roughness,
         } => {
-            let reflectance = reflectance(r)?;
+            let reflectance = color_input(r, texture("reflectance", textures)?)?;
             let sigma = non_negative("roughness", *roughness)?;
-            Ok(if sigma == 0.0 {
-                Material::Diffuse { reflectance }
-            } else {
-                Material::OrenNayar { reflectance, sigma }
+            Ok(match texture("roughness", textures)? {
+                Some(t) => Material::OrenNayar {
+                    reflectance,
+                    sigma: FloatInput::Texture(t),
+                },
+                None if sigma == 0.0 => Material::Diffuse { reflectance },
+                None => Material::OrenNayar {
+                    reflectance,
+                    sigma: FloatInput::Constant(sigma),
+                },
             })
         }
         MaterialKind::Conductor { eta, k, roughness } => Ok(Material::Conductor {
             eta: conductor_spectrum(eta, "eta", false)?,
             k: conductor_spectrum(k, "k", true)?,
             distrib: TrowbridgeReitz::isotropic(non_negative("roughness", *roughness)?),
+            roughness: alpha_texture(texture("roughness", textures)?),
         }),
         MaterialKind::Dielectric {
             ior,
             roughness,
             thin,
-        } => dielectric(path, ior, *roughness, *thin, warnings),
+        } => {
+            let alpha = texture("roughness", textures)?;
+            dielectric(path, ior, (*roughness, alpha), *thin, warnings)
+        }
         MaterialKind::Plastic {
             reflectance: r,
             ior,
             roughness,
-        } => Ok(Material::Plastic(PlasticMaterial::new(
-            reflectance(r)?,
-            *ior,
-            non_negative("roughness", *roughness)?,
-        ))),
+        } => {
+            let mut p = PlasticMaterial::new(
+                reflectance(r)?,
+                *ior,
+                non_negative("roughness", *roughness)?,
+            );
+            p.reflectance = color_input(r, texture("reflectance", textures)?)?;
+            Ok(Material::Plastic(match texture("roughness", textures)? {
+                Some(t) => p.with_roughness_texture(t),
+                None => p,
+            }))
+        }
         MaterialKind::PreviewSurface(ps) => preview_surface(path, ps, textures, warnings),
     }
 }
 
-/// `spectral:dielectric`: an interface, or a thin slab with `inputs:thin`.
+/// A reflectance input: the texture when there is one, else the spectrum `r`.
+fn color_input(
+    r: &SpectrumDesc,
+    texture: Option<TextureInput>,
+) -> std::result::Result<ColorInput, String> {
+    Ok(match texture {
+        Some(t) => ColorInput::Texture(t),
+        None => ColorInput::Constant(reflectance(r)?),
+    })
+}
+
+/// A textured GGX α (no coat levels).
+fn alpha_texture(texture: Option<TextureInput>) -> Option<AlphaTexture> {
+    texture.map(|texture| AlphaTexture {
+        texture,
+        coats: None,
+    })
+}
+
+/// `spectral:dielectric`: an interface, or a thin slab with `inputs:thin`; `roughness` is
+/// the constant α and the texture replacing it.
 fn dielectric(
     path: &str,
     i: &IorDesc,
-    roughness: f32,
+    roughness: (f32, Option<TextureInput>),
     thin: bool,
     warnings: &mut Vec<String>,
 ) -> std::result::Result<Material, String> {
     let ior = ior(i)?;
-    let alpha = non_negative("roughness", roughness)?;
+    let alpha = non_negative("roughness", roughness.0)?;
     if !thin {
         let distrib = TrowbridgeReitz::isotropic(alpha);
-        return Ok(Material::Dielectric { ior, distrib });
+        let roughness = alpha_texture(roughness.1);
+        return Ok(Material::Dielectric {
+            ior,
+            distrib,
+            roughness,
+        });
     }
-    if alpha > 0.0 {
+    if alpha > 0.0 || roughness.1.is_some() {
         warnings.push(format!(
             "{path}: a thin dielectric is always smooth; inputs:roughness ignored"
         ));

@@ -63,6 +63,29 @@ pub struct MaterialDesc {
     pub kind: MaterialKind,
     /// `emissiveColor` of a UsdPreviewSurface: an emitter of that RGB radiance in nits.
     pub emission: Option<[f32; 3]>,
+    /// The inputs of a `spectral:*` shader connected to a `UsdUVTexture`, by input name
+    /// (`"reflectance"`, `"roughness"`); a UsdPreviewSurface keeps its own in
+    /// [`PreviewSurfaceDesc::textures`].
+    pub textures: Vec<(String, TextureDesc)>,
+}
+
+impl MaterialDesc {
+    /// The texture on input `name` of a `spectral:*` shader, if any.
+    pub fn texture(&self, name: &str) -> Option<&TextureDesc> {
+        self.textures
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| t)
+    }
+
+    /// Every texture the material reads (of either kind of shader).
+    pub fn all_textures(&self) -> impl Iterator<Item = &TextureDesc> {
+        let preview = match &self.kind {
+            MaterialKind::PreviewSurface(ps) => ps.textures.as_slice(),
+            _ => &[],
+        };
+        self.textures.iter().chain(preview).map(|(_, t)| t)
+    }
 }
 
 #[derive(Clone, Debug)]

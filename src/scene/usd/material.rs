@@ -104,11 +104,12 @@ pub(super) fn read_material(ctx: &mut Ctx, path: &sdf::Path) -> Result<Option<Ma
         );
         return Ok(None);
     };
-    let (kind, emission) = read_surface(ctx, &shader)?;
+    let (kind, emission, textures) = read_surface(ctx, &shader)?;
     Ok(Some(MaterialDesc {
         prim_path: path.as_str().to_string(),
         kind,
         emission,
+        textures,
     }))
 }
 
@@ -139,8 +140,12 @@ fn surface_shader(ctx: &Ctx, material: &usd::Prim) -> Result<Option<usd::Prim>> 
     ))
 }
 
+/// What a surface shader defines: the material model, its emission, and the textures on the
+/// inputs of a `spectral:*` shader.
+type Surface = (MaterialKind, Option<[f32; 3]>, Vec<(String, TextureDesc)>);
+
 /// The material model of a surface shader, by `info:id`, and its emission.
-fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<(MaterialKind, Option<[f32; 3]>)> {
+fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<Surface> {
     let Some(id) = ctx.token(shader, "info:id")? else {
         return Err(ctx.err(
             shader,
@@ -154,7 +159,7 @@ fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<(MaterialKind, Opti
             .iter()
             .any(|&c| c != 0.0)
             .then_some(preview.emissive_color);
-        return Ok((MaterialKind::PreviewSurface(preview), emission));
+        return Ok((MaterialKind::PreviewSurface(preview), emission, Vec::new()));
     }
     let Some(vocabulary) = vocab::shader_inputs(&id) else {
         let reason = format!(
@@ -164,7 +169,14 @@ fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<(MaterialKind, Opti
         return Err(ctx.err(shader, reason));
     };
     check_inputs(ctx, shader, &id, vocabulary)?;
-    Ok((spectral_material(ctx, shader, &id)?, None))
+    let mut textures = Vec::new();
+    for name in vocab::texturable_inputs(&id) {
+        if let Some(t) = texture_input(ctx, shader, name)? {
+            textures.push((name.to_string(), t));
+        }
+    }
+    let kind = spectral_material(ctx, shader, &id, &textures)?;
+    Ok((kind, None, textures))
 }
 
 /// Fails on an authored `inputs:*` that the `spectral:*` shader `id` does not define.
@@ -188,12 +200,18 @@ fn check_inputs(ctx: &Ctx, shader: &usd::Prim, id: &str, vocabulary: &[&str]) ->
     Ok(())
 }
 
-/// A `spectral:*` material model.
-fn spectral_material(ctx: &mut Ctx, shader: &usd::Prim, id: &str) -> Result<MaterialKind> {
+/// A `spectral:*` material model; `textures` are its textured inputs (read by the builder).
+fn spectral_material(
+    ctx: &mut Ctx,
+    shader: &usd::Prim,
+    id: &str,
+    textures: &[(String, TextureDesc)],
+) -> Result<MaterialKind> {
     let mut inputs = Inputs {
         ctx,
         shader,
-        textured: Vec::new(),
+        textured: textures.iter().map(|(n, _)| n.clone()).collect(),
+        spectral: Some(id.to_string()),
     };
     let roughness = inputs.f32("roughness")?.unwrap_or(0.0);
     Ok(match id {
@@ -245,6 +263,7 @@ fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDe
         ctx,
         shader,
         textured: textures.iter().map(|(n, _)| n.clone()).collect(),
+        spectral: None,
     };
     Ok(PreviewSurfaceDesc {
         diffuse_color: inputs.rgb("diffuseColor")?.unwrap_or(d.diffuse_color),
@@ -299,6 +318,9 @@ struct Inputs<'a, 's> {
     shader: &'a usd::Prim,
     /// Inputs already read as textures (their value is unset here, without a warning).
     textured: Vec<String>,
+    /// The `info:id` of a `spectral:*` shader, whose other node connections are errors;
+    /// `None` for UsdPreviewSurface, where they are warnings.
+    spectral: Option<String>,
 }
 
 impl Inputs<'_, '_> {
@@ -324,6 +346,19 @@ impl Inputs<'_, '_> {
             return Err(self
                 .ctx
                 .err(&node_prim, format!("unknown shader info:id '{id}'")));
+        }
+        if let Some(shader_id) = &self.spectral {
+            let accepted = vocab::texturable_inputs(shader_id)
+                .iter()
+                .map(|i| format!("inputs:{i}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let reason = format!(
+                "inputs:{name} is connected to <{}> ({id}), but {shader_id} reads only a value \
+                 there (texture connections are accepted on {accepted}, from a UsdUVTexture)",
+                node.as_str()
+            );
+            return Err(self.ctx.err(self.shader, reason));
         }
         let message = format!(
             "inputs:{name} is connected to <{}> ({id}), but this input cannot be read from a texture; using the default",

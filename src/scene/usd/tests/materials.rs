@@ -251,6 +251,55 @@ fn an_unknown_wrap_token_is_an_error() {
     );
 }
 
+/// `WOOD` with a `spectral:plastic` surface whose reflectance and roughness are textured.
+fn spectral_wood(ior_line: &str) -> String {
+    let surface = format!(
+        "uniform token info:id = \"spectral:plastic\"\n            \
+         color3f inputs:reflectance.connect = </Looks/Wood/Tex.outputs:rgb>\n            \
+         float inputs:roughness.connect = </Looks/Wood/Tex.outputs:r>\n            {ior_line}"
+    );
+    let start = WOOD
+        .find("uniform token info:id = \"UsdPreviewSurface\"")
+        .unwrap();
+    let end = WOOD[start..].find("token outputs:surface").unwrap() + start;
+    format!("{}{surface}\n            {}", &WOOD[..start], &WOOD[end..])
+}
+
+#[test]
+fn spectral_shaders_read_textures_on_reflectance_and_roughness() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("wood.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let path = dir.join("stage.usda");
+    let text = spectral_wood("float inputs:ior = 1.4");
+    std::fs::write(&path, format!("{METRES_Y_UP}{text}")).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let wood = material_of(&desc, "Wood");
+    let MaterialKind::Plastic { ior, .. } = &wood.kind else {
+        panic!("plastic: {:?}", wood.kind)
+    };
+    assert_eq!(*ior, 1.4);
+    let reflectance = wood.texture("reflectance").expect("textured reflectance");
+    assert_eq!(reflectance.channel, crate::scene::desc::TextureChannel::Rgb);
+    assert_eq!(reflectance.shader_path, "/Looks/Wood/Tex");
+    let roughness = wood.texture("roughness").expect("textured roughness");
+    assert_eq!(roughness.channel, crate::scene::desc::TextureChannel::R);
+    assert_eq!(wood.all_textures().count(), 2);
+    // A texture on an input that only takes a value is an error naming the input.
+    let bad = spectral_wood("float inputs:ior.connect = </Looks/Wood/Tex.outputs:r>");
+    std::fs::write(&path, format!("{METRES_Y_UP}{bad}")).unwrap();
+    let err = super::super::load(&path).expect_err("ior cannot be textured");
+    assert_one_line(&err, "stage.usda");
+    let text = err.to_string();
+    for part in [
+        "/Looks/Wood/S",
+        "inputs:ior",
+        "spectral:plastic",
+        "inputs:reflectance, inputs:roughness",
+    ] {
+        assert!(text.contains(part), "'{part}' not in {text}");
+    }
+}
+
 /// A UsdPreviewSurface with textured diffuseColor and opacity, and an interface input.
 const WOOD: &str = r#"def Scope "Looks" {
     def Material "Wood" {
