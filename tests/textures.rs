@@ -739,3 +739,45 @@ fn a_texture_on_a_spectral_input_that_takes_only_a_value_is_an_error() {
         ],
     );
 }
+
+// ---- Texture-coordinate primvars and UsdTransform2d ---------------------------------------
+
+/// Renders `stage` (a quad filling the view, textured with `q` by quadrant) under a dome of
+/// `l` nits and checks every quadrant's colour.
+fn assert_quadrants(dir: &Path, stage: &str, l: f32, q: [[u8; 4]; 4]) {
+    let out = render_file(&write(dir, "quadrants.usda", stage), (32, 32), 32, 7, None);
+    for (k, texel) in q.iter().enumerate() {
+        for (ch, &byte) in texel[..3].iter().enumerate() {
+            let (mean, sem) = quadrant(&out, k, ch);
+            let expected = f64::from(l) * f64::from(byte) / 255.0;
+            let tol = 6e-3 * f64::from(l) + 5.0 * sem;
+            assert!(
+                (mean - expected).abs() < tol,
+                "quadrant {k} channel {ch}: {mean} vs {expected} (sem {sem})"
+            );
+        }
+    }
+}
+
+const CHECKER: [[u8; 4]; 4] = [
+    [204, 51, 25, 255],
+    [25, 153, 76, 255],
+    [13, 26, 230, 255],
+    [128, 128, 128, 255],
+];
+const RAW: &str = "            token inputs:sourceColorSpace = \"raw\"\n";
+const DIFFUSE_CONNECTED: &str =
+    "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
+
+#[test]
+fn a_texture_reads_the_primvar_its_reader_names() {
+    let dir = temp_dir("tex-st1");
+    quadrant_png(&dir.join("checker.png"), CHECKER);
+    // primvars:st is mirrored; the texture must read the faceVarying, indexed primvars:st1.
+    let st = "    texCoord2f[] primvars:st = [(3, -2), (-2, -2), (-2, 3), (3, 3)] (\n        interpolation = \"vertex\"\n    )\n    float2[] primvars:st1 = [(-2, -2), (3, -2), (3, 3), (-2, 3)] (\n        interpolation = \"faceVarying\"\n    )\n    int[] primvars:st1:indices = [0, 1, 2, 3]\n";
+    let stage = textured_stage_st(20.0, "checker.png", RAW, DIFFUSE_CONNECTED, st).replace(
+        "token inputs:varname = \"st\"",
+        "token inputs:varname = \"st1\"",
+    );
+    assert_quadrants(&dir, &stage, 20.0, CHECKER);
+}

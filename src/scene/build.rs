@@ -284,12 +284,6 @@ fn preview_surface(
     let specular = reflectance(&SpectrumDesc::Rgb(ps.specular_color))?;
     let mut m = PreviewMaterial::new(ps, diffuse, specular);
     for (input, tex) in &ps.textures {
-        if tex.st_primvar != "st" {
-            warnings.push(format!(
-                "{}: primvar '{}' is not read (only primvars:st); using st",
-                tex.shader_path, tex.st_primvar
-            ));
-        }
         let Some(slot) = preview_slot(&mut m.textures, input) else {
             continue;
         };

@@ -36,7 +36,8 @@ pub struct MeshDesc {
     /// Optional shading normals, one per triangle corner (vertex and faceVarying
     /// interpolation are both expanded to this), world space, unit length.
     pub normals: Option<Vec<[Vec3; 3]>>,
-    /// Optional `st` texture coordinates, one per triangle corner.
+    /// Optional texture coordinates, one per triangle corner: the primvar named by the
+    /// material's `texcoord` (`primvars:st` by default).
     pub uvs: Option<Vec<[Vec2; 3]>>,
     /// Index into `SceneDescription::materials`.
     pub material: Option<usize>,
@@ -67,6 +68,10 @@ pub struct MaterialDesc {
     /// (`"reflectance"`, `"roughness"`); a UsdPreviewSurface keeps its own in
     /// [`PreviewSurfaceDesc::textures`].
     pub textures: Vec<(String, TextureDesc)>,
+    /// The float2 primvar every texture of the material reads through its
+    /// `UsdPrimvarReader_float2` (`"st"` when it has no textures): a material reads one
+    /// texture-coordinate set, which the meshes it is bound to keep.
+    pub texcoord: String,
 }
 
 impl MaterialDesc {

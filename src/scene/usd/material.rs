@@ -105,12 +105,35 @@ pub(super) fn read_material(ctx: &mut Ctx, path: &sdf::Path) -> Result<Option<Ma
         return Ok(None);
     };
     let (kind, emission, textures) = read_surface(ctx, &shader)?;
-    Ok(Some(MaterialDesc {
+    let mut desc = MaterialDesc {
         prim_path: path.as_str().to_string(),
         kind,
         emission,
         textures,
-    }))
+        texcoord: "st".into(),
+    };
+    desc.texcoord = texcoord(ctx, &material, &desc)?;
+    Ok(Some(desc))
+}
+
+/// The one texture-coordinate primvar the material's textures read (`st` without textures);
+/// an error when two textures read different ones.
+fn texcoord(ctx: &Ctx, material: &usd::Prim, desc: &MaterialDesc) -> Result<String> {
+    let mut textures = desc.all_textures();
+    let Some(first) = textures.next() else {
+        return Ok("st".into());
+    };
+    match textures.find(|t| t.st_primvar != first.st_primvar) {
+        None => Ok(first.st_primvar.clone()),
+        Some(other) => Err(ctx.err(
+            material,
+            format!(
+                "<{}> reads primvars:{} but <{}> reads primvars:{}; a material may read only \
+                 one texture-coordinate primvar",
+                first.shader_path, first.st_primvar, other.shader_path, other.st_primvar
+            ),
+        )),
+    }
 }
 
 /// Follows the material's `outputs:surface` (through NodeGraphs) to a Shader prim.

@@ -383,3 +383,135 @@ def Xform "Forced" {{
     );
     assert_eq!(index("/Unbound"), None);
 }
+
+/// A Material `name` whose diffuseColor texture reads primvar `varname` (one reader per
+/// entry of `varnames` feeding one texture each: diffuseColor, then roughness).
+fn primvar_material(name: &str, varnames: &[&str]) -> String {
+    let inputs = ["color3f inputs:diffuseColor", "float inputs:roughness"];
+    let outputs = ["rgb", "r"];
+    let mut nodes = String::new();
+    let mut connections = String::new();
+    for (k, varname) in varnames.iter().enumerate() {
+        connections += &format!(
+            "        {}.connect = </Looks/{name}/Tex{k}.outputs:{}>\n",
+            inputs[k], outputs[k]
+        );
+        nodes += &format!(
+            r#"    def Shader "Reader{k}" {{
+        uniform token info:id = "UsdPrimvarReader_float2"
+        token inputs:varname = "{varname}"
+        float2 outputs:result
+    }}
+    def Shader "Tex{k}" {{
+        uniform token info:id = "UsdUVTexture"
+        asset inputs:file = @tex.png@
+        float2 inputs:st.connect = </Looks/{name}/Reader{k}.outputs:result>
+        float3 outputs:rgb
+        float outputs:r
+    }}
+"#
+        );
+    }
+    format!(
+        r#"def Material "{name}" {{
+    token outputs:surface.connect = </Looks/{name}/S.outputs:surface>
+    def Shader "S" {{
+        uniform token info:id = "UsdPreviewSurface"
+{connections}        token outputs:surface
+    }}
+{nodes}}}
+"#
+    )
+}
+
+/// A quad (two triangles) with primvars `st` (vertex), `uv1` (faceVarying, indexed), `map1`
+/// (uniform) and `flat` (constant), bound to `/Looks/<material>`.
+fn primvar_mesh(name: &str, material: &str) -> String {
+    format!(
+        r#"def Mesh "{name}" {{
+    int[] faceVertexCounts = [3, 3]
+    int[] faceVertexIndices = [0, 1, 2, 0, 2, 3]
+    point3f[] points = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+    texCoord2f[] primvars:st = [(0, 0), (1, 0), (1, 1), (0, 1)] (
+        interpolation = "vertex"
+    )
+    float2[] primvars:uv1 = [(5, 5), (6, 5), (6, 6)] (
+        interpolation = "faceVarying"
+    )
+    int[] primvars:uv1:indices = [0, 1, 2, 0, 2, 1]
+    texCoord2f[] primvars:map1 = [(0.25, 0.5), (0.75, 0.5)] (
+        interpolation = "uniform"
+    )
+    texCoord2d[] primvars:flat = [(0.5, 0.125)] (
+        interpolation = "constant"
+    )
+    rel material:binding = </Looks/{material}>
+}}
+"#
+    )
+}
+
+#[test]
+fn meshes_keep_the_texcoord_primvar_their_material_reads() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("tex.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let looks: String = [
+        ("St", vec!["st"]),
+        ("Uv1", vec!["uv1"]),
+        ("Map1", vec!["map1", "map1"]),
+        ("Flat", vec!["flat"]),
+        ("Missing", vec!["nowhere"]),
+    ]
+    .iter()
+    .map(|(n, v)| primvar_material(n, v))
+    .collect();
+    let meshes: String = ["St", "Uv1", "Map1", "Flat", "Missing"]
+        .iter()
+        .map(|n| primvar_mesh(n, n))
+        .collect();
+    let path = dir.join("stage.usda");
+    let text = format!("{METRES_Y_UP}def Scope \"Looks\" {{\n{looks}}}\n{meshes}");
+    std::fs::write(&path, text).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let v = |x: f32, y: f32| glam::Vec2::new(x, y);
+    let uvs = |name: &str| mesh(&desc, name).uvs.clone();
+    assert_eq!(material_of(&desc, "Uv1").texcoord, "uv1");
+    assert_eq!(
+        uvs("/St").unwrap()[1],
+        [v(0.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)]
+    );
+    assert_eq!(
+        uvs("/Uv1").unwrap()[1],
+        [v(5.0, 5.0), v(6.0, 6.0), v(6.0, 5.0)]
+    );
+    assert_eq!(uvs("/Map1").unwrap()[0], [v(0.25, 0.5); 3]);
+    assert_eq!(uvs("/Map1").unwrap()[1], [v(0.75, 0.5); 3]);
+    assert_eq!(uvs("/Flat").unwrap()[1], [v(0.5, 0.125); 3]);
+    assert!(uvs("/Missing").is_none());
+    let missing: Vec<_> = desc
+        .warnings
+        .iter()
+        .filter(|w| w.contains("primvars:nowhere"))
+        .collect();
+    assert_eq!(missing.len(), 1, "{:?}", desc.warnings);
+    assert!(missing[0].contains("/Missing"), "{missing:?}");
+}
+
+#[test]
+fn a_material_reading_two_texcoord_primvars_is_an_error() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("tex.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let text = format!(
+        "{METRES_Y_UP}def Scope \"Looks\" {{\n{}}}\n{}",
+        primvar_material("Mixed", &["st", "uv1"]),
+        primvar_mesh("Q", "Mixed")
+    );
+    let path = dir.join("stage.usda");
+    std::fs::write(&path, text).unwrap();
+    let err = super::super::load(&path).expect_err("two primvars");
+    assert_one_line(&err, "stage.usda");
+    let text = err.to_string();
+    for part in ["/Looks/Mixed", "primvars:st", "primvars:uv1", "only one"] {
+        assert!(text.contains(part), "'{part}' not in {text}");
+    }
+}
