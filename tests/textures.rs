@@ -33,6 +33,7 @@ fn desc(file: PathBuf, color_space: ColorSpace) -> TextureDesc {
         shader_path: "/Looks/M/Tex".into(),
         file,
         st_primvar: "st".into(),
+        st_transform: None,
         wrap_s: Wrap::Clamp,
         wrap_t: Wrap::Clamp,
         color_space,
@@ -779,5 +780,47 @@ fn a_texture_reads_the_primvar_its_reader_names() {
         "token inputs:varname = \"st\"",
         "token inputs:varname = \"st1\"",
     );
+    assert_quadrants(&dir, &stage, 20.0, CHECKER);
+}
+
+#[test]
+fn usd_transform2d_nodes_transform_st_in_the_spec_order() {
+    let dir = temp_dir("tex-transform2d");
+    quadrant_png(&dir.join("checker.png"), CHECKER);
+    // Reader → T1 → T2 → Tex. The quad's authored st is (T2 ∘ T1)⁻¹ of the plain mapping, so
+    // the texture sees the plain mapping only if each node computes in·scale, rotated, plus
+    // translation, and the nodes compose in order.
+    let (s1, r1, t1) = (Vec2::new(2.0, 0.5), 30.0f32, Vec2::new(0.3, -0.2));
+    let (s2, r2, t2) = (Vec2::new(-1.0, 3.0), -75.0f32, Vec2::new(1.5, 0.25));
+    let affine = |s, r: f32, t| glam::Affine2::from_scale_angle_translation(s, r.to_radians(), t);
+    let inverse = (affine(s2, r2, t2) * affine(s1, r1, t1)).inverse();
+    let st: Vec<String> = [(-2.0, -2.0), (3.0, -2.0), (3.0, 3.0), (-2.0, 3.0)]
+        .iter()
+        .map(|&(x, y)| {
+            let p = inverse.transform_point2(Vec2::new(x, y));
+            format!("({:.9}, {:.9})", p.x, p.y)
+        })
+        .collect();
+    let st = format!(
+        "    texCoord2f[] primvars:st = [{}] (\n        interpolation = \"vertex\"\n    )\n",
+        st.join(", ")
+    );
+    let node = |name: &str, input: &str, s: Vec2, r: f32, t: Vec2| {
+        format!(
+            "        def Shader \"{name}\"\n        {{\n            uniform token info:id = \"UsdTransform2d\"\n            float2 inputs:in.connect = </Looks/Paint/{input}.outputs:result>\n            float2 inputs:scale = ({}, {})\n            float inputs:rotation = {r}\n            float2 inputs:translation = ({}, {})\n            float2 outputs:result\n        }}\n",
+            s.x, s.y, t.x, t.y
+        )
+    };
+    let nodes = node("T1", "Reader", s1, r1, t1) + &node("T2", "T1", s2, r2, t2);
+    let stage = textured_stage_st(20.0, "checker.png", RAW, DIFFUSE_CONNECTED, &st)
+        .replace(
+            "float2 inputs:st.connect = </Looks/Paint/Reader.outputs:result>",
+            "float2 inputs:st.connect = </Looks/Paint/T2.outputs:result>",
+        )
+        .replace(
+            "        def Shader \"Tex\"\n",
+            &format!("{nodes}        def Shader \"Tex\"\n"),
+        );
+    assert!(stage.contains("T2.outputs:result") && stage.contains("def Shader \"T1\""));
     assert_quadrants(&dir, &stage, 20.0, CHECKER);
 }

@@ -403,6 +403,7 @@ mod tests {
             bias: [0.0; 4],
             fallback: [0.0; 4],
             channel,
+            transform: None,
         }
     }
 

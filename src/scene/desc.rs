@@ -5,7 +5,7 @@
 //! side their geometric normal points to; every entity carries its USD prim path so that
 //! errors and reports can name it.
 
-use glam::{DMat4, Mat4, Vec2, Vec3};
+use glam::{Affine2, DMat4, Mat4, Vec2, Vec3};
 use std::path::PathBuf;
 
 /// The whole stage as plain data.
@@ -175,6 +175,9 @@ pub struct TextureDesc {
     pub file: PathBuf,
     /// The `UsdPrimvarReader_float2` varname feeding `inputs:st` ("st" by default).
     pub st_primvar: String,
+    /// The `UsdTransform2d` nodes between the primvar reader and the texture, composed
+    /// (st ↦ texture coordinates); `None` without any.
+    pub st_transform: Option<Affine2>,
     pub wrap_s: Wrap,
     pub wrap_t: Wrap,
     pub color_space: ColorSpace,

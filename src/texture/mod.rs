@@ -32,7 +32,7 @@
 
 use crate::imageio;
 use crate::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
-use glam::Vec2;
+use glam::{Affine2, Vec2};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -146,12 +146,18 @@ pub struct TextureInput {
     /// Returned when st is not finite.
     pub fallback: [f32; 4],
     pub channel: TextureChannel,
+    /// UsdTransform2d applied to st before the lookup (`None`: identity).
+    pub transform: Option<Affine2>,
 }
 
 impl TextureInput {
-    /// `texel · scale + bias` at st = `uv`, all four channels.
+    /// `texel · scale + bias` at st = `uv` (through the UsdTransform2d), all four channels.
     #[inline]
     pub fn rgba(&self, uv: Vec2) -> [f32; 4] {
+        let uv = match &self.transform {
+            Some(t) => t.transform_point2(uv),
+            None => uv,
+        };
         if !uv.is_finite() {
             return self.fallback;
         }
@@ -201,6 +207,7 @@ impl TextureCache {
             bias: desc.bias,
             fallback: desc.fallback,
             channel: desc.channel,
+            transform: desc.st_transform,
         })
     }
 

@@ -9,7 +9,8 @@ use crate::scene::desc::{
     ColorSpace, IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc,
     TextureChannel, TextureDesc, Wrap,
 };
-use crate::Result;
+use crate::{Error, Result};
+use glam::{Affine2, Vec2};
 
 /// How many connection hops (through NodeGraph / Material interfaces) are followed.
 const MAX_CONNECTION_DEPTH: usize = 32;
@@ -605,10 +606,12 @@ fn uv_texture(ctx: &mut Ctx, prim: &usd::Prim, output: &str) -> Result<TextureDe
             return Err(ctx.err(prim, reason));
         }
     };
+    let (st_primvar, st_transform) = st_source(ctx, prim)?;
     Ok(TextureDesc {
         shader_path: prim.path().as_str().to_string(),
         file,
-        st_primvar: st_primvar(ctx, prim)?,
+        st_primvar,
+        st_transform,
         wrap_s: wrap(ctx, prim, "inputs:wrapS")?,
         wrap_t: wrap(ctx, prim, "inputs:wrapT")?,
         color_space: color_space(ctx, prim)?,
@@ -675,17 +678,92 @@ fn vec4(ctx: &Ctx, prim: &usd::Prim, attr: &str, default: [f32; 4]) -> Result<[f
 }
 
 /// The primvar named by the `UsdPrimvarReader_float2` feeding the texture's `inputs:st`
-/// ("st" when st is unconnected or the reader names none).
-fn st_primvar(ctx: &mut Ctx, prim: &usd::Prim) -> Result<String> {
-    let Resolved::Node(reader, _) = resolve_input(ctx, prim, "inputs:st")? else {
-        return Ok("st".into());
-    };
-    let reader = ctx.stage.prim(reader);
-    let id = ctx.token(&reader, "info:id")?.unwrap_or_default();
-    if id != "UsdPrimvarReader_float2" {
-        let reason =
-            format!("inputs:st comes from '{id}'; only UsdPrimvarReader_float2 is supported");
-        return Err(ctx.err(&reader, reason));
+/// ("st" when st is unconnected or the reader names none), and the composition of the
+/// `UsdTransform2d` nodes on the way (`None` without any).
+fn st_source(ctx: &mut Ctx, prim: &usd::Prim) -> Result<(String, Option<Affine2>)> {
+    let mut transform: Option<Affine2> = None;
+    let (mut node, mut attr) = (prim.clone(), "inputs:st");
+    for _ in 0..MAX_CONNECTION_DEPTH {
+        let Resolved::Node(source, _) = resolve_input(ctx, &node, attr)? else {
+            return Ok(("st".into(), transform));
+        };
+        let source = ctx.stage.prim(source);
+        match ctx.token(&source, "info:id")?.unwrap_or_default().as_str() {
+            "UsdPrimvarReader_float2" => {
+                let varname = node_token(ctx, &source, "inputs:varname")?;
+                return Ok((varname.unwrap_or_else(|| "st".into()), transform));
+            }
+            "UsdTransform2d" => {
+                // This node is applied before the ones found so far (nearer the texture).
+                let t = transform2d(ctx, &source)?;
+                transform = Some(transform.map_or(t, |outer| outer * t));
+                (node, attr) = (source, "inputs:in");
+            }
+            id => {
+                let reason = format!(
+                    "{attr} comes from '{id}'; only UsdPrimvarReader_float2 and UsdTransform2d \
+                     are supported"
+                );
+                return Err(ctx.err(&source, reason));
+            }
+        }
     }
-    Ok(node_token(ctx, &reader, "inputs:varname")?.unwrap_or_else(|| "st".into()))
+    Err(ctx.err(prim, "inputs:st: connection chain too long (cycle?)"))
+}
+
+/// A `UsdTransform2d` node: result = in · scale, rotated by `rotation` degrees
+/// counter-clockwise, plus `translation` (UsdPreviewSurface specification, "Transform2d").
+fn transform2d(ctx: &Ctx, prim: &usd::Prim) -> Result<Affine2> {
+    let rotation = node_float(ctx, prim, "inputs:rotation", 0.0)?;
+    let scale = node_vec2(ctx, prim, "inputs:scale", [1.0; 2])?;
+    let translation = node_vec2(ctx, prim, "inputs:translation", [0.0; 2])?;
+    Ok(Affine2::from_scale_angle_translation(
+        Vec2::from_array(scale),
+        rotation.to_radians(),
+        Vec2::from_array(translation),
+    ))
+}
+
+/// A finite float input of a node (a value, possibly through interface connections).
+fn node_float(ctx: &Ctx, prim: &usd::Prim, attr: &str, default: f32) -> Result<f32> {
+    let v = match node_value(ctx, prim, attr)? {
+        Some(v) => values::to_f64(&v)
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| node_type_err(ctx, prim, attr, &v, "a finite float"))?,
+        None => return Ok(default),
+    };
+    Ok(v as f32)
+}
+
+/// A finite float2 input of a node.
+fn node_vec2(ctx: &Ctx, prim: &usd::Prim, attr: &str, default: [f32; 2]) -> Result<[f32; 2]> {
+    let v = match node_value(ctx, prim, attr)? {
+        Some(v) => values::to_vec2(&v)
+            .filter(|x| x.iter().all(|c| c.is_finite()))
+            .ok_or_else(|| node_type_err(ctx, prim, attr, &v, "a finite float2"))?,
+        None => return Ok(default),
+    };
+    Ok(v.map(|c| c as f32))
+}
+
+/// The value of a node's input; an error when it is driven by another node.
+fn node_value(ctx: &Ctx, prim: &usd::Prim, attr: &str) -> Result<Option<sdf::Value>> {
+    match resolve_input(ctx, prim, attr)? {
+        Resolved::Unset => Ok(None),
+        Resolved::Value(v) => Ok(Some(v)),
+        Resolved::Node(node, _) => Err(ctx.err(
+            prim,
+            format!(
+                "'{attr}' is connected to <{}>; only a value is supported here",
+                node.as_str()
+            ),
+        )),
+    }
+}
+
+fn node_type_err(ctx: &Ctx, prim: &usd::Prim, attr: &str, v: &sdf::Value, what: &str) -> Error {
+    ctx.err(
+        prim,
+        format!("'{attr}' is {}, expected {what}", values::kind(v)),
+    )
 }

@@ -515,3 +515,48 @@ fn a_material_reading_two_texcoord_primvars_is_an_error() {
         assert!(text.contains(part), "'{part}' not in {text}");
     }
 }
+
+/// `WOOD` with a UsdTransform2d between the reader and the texture (`transform` lines).
+fn transformed_wood(transform: &str) -> String {
+    let node = format!(
+        r#"def Shader "T" {{
+            uniform token info:id = "UsdTransform2d"
+            float2 inputs:in.connect = </Looks/Wood/Reader.outputs:result>
+            {transform}
+            float2 outputs:result
+        }}
+        def Shader "Tex" {{"#
+    );
+    WOOD.replace("def Shader \"Tex\" {", &node).replace(
+        "float2 inputs:st.connect = </Looks/Wood/Reader.outputs:result>",
+        "float2 inputs:st.connect = </Looks/Wood/T.outputs:result>",
+    )
+}
+
+#[test]
+fn transform2d_nodes_are_read_and_their_inputs_must_be_values() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("wood.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let path = dir.join("stage.usda");
+    let ok =
+        transformed_wood("float inputs:rotation = 90\n            float2 inputs:scale = (2, 1)");
+    std::fs::write(&path, format!("{METRES_Y_UP}{ok}")).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let MaterialKind::PreviewSurface(p) = &material_of(&desc, "Wood").kind else {
+        panic!("preview surface")
+    };
+    let tex = p.texture("diffuseColor").expect("textured");
+    assert_eq!(tex.st_primvar, "uv");
+    let t = tex.st_transform.expect("a transform");
+    let q = t.transform_point2(glam::Vec2::new(1.0, 1.0));
+    assert!((q - glam::Vec2::new(-1.0, 2.0)).length() < 1e-6, "{q}");
+    let bad = transformed_wood("float inputs:rotation.connect = </Looks/Wood/Tex.outputs:r>");
+    std::fs::write(&path, format!("{METRES_Y_UP}{bad}")).unwrap();
+    let err = super::super::load(&path).expect_err("a driven rotation");
+    assert_one_line(&err, "stage.usda");
+    let text = err.to_string();
+    assert!(
+        text.contains("/Looks/Wood/T") && text.contains("inputs:rotation"),
+        "{text}"
+    );
+}
