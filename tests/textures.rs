@@ -824,3 +824,18 @@ fn usd_transform2d_nodes_transform_st_in_the_spec_order() {
     assert!(stage.contains("T2.outputs:result") && stage.contains("def Shader \"T1\""));
     assert_quadrants(&dir, &stage, 20.0, CHECKER);
 }
+
+#[test]
+fn an_srgb_decoded_normal_map_warns() {
+    let dir = temp_dir("nmap-srgb");
+    quadrant_png(&dir.join("normal.png"), [[128, 128, 255, 255]; 4]);
+    let stage = textured_stage(1.0, "normal.png", "", NORMAL_CONNECTED);
+    let scene = load_scene(&dir, "srgb.usda", &stage);
+    let warnings = &scene.summary.warnings;
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("/Looks/Paint/Tex") && w.contains("normal map decoded as sRGB")),
+        "{warnings:?}"
+    );
+}

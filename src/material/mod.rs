@@ -12,6 +12,11 @@
 //! constant IOR (and for thin dielectrics, whose directions do not depend on λ) the
 //! wavelengths are never collapsed. The material only reads `lambda`.
 //!
+//! **Textures.** Inputs read from a `UsdUVTexture` are evaluated at the hit's st when the
+//! BSDF is built: UsdPreviewSurface's in `preview.rs`, the colour reflectance and roughness of
+//! the `spectral:*` materials through [`ColorInput`], [`FloatInput`] and [`AlphaTexture`]
+//! (`inputs.rs`). Coat albedos that a textured roughness needs come from `coat_levels.rs`.
+//!
 //! **Normal maps.** [`Material::shading_normal`] perturbs the interpolated shading normal
 //! (`normal_map.rs`); the scene calls it when it builds the `SurfaceHit`, so that the BSDF
 //! frame and the integrators' cosines agree. [`Material::bsdf`] takes the final normal.

@@ -284,6 +284,13 @@ fn preview_surface(
     let specular = reflectance(&SpectrumDesc::Rgb(ps.specular_color))?;
     let mut m = PreviewMaterial::new(ps, diffuse, specular);
     for (input, tex) in &ps.textures {
+        if input == "normal" && decoded_as_srgb(tex) {
+            warnings.push(format!(
+                "{}: a normal map decoded as sRGB (sourceColorSpace '{:?}'); normal maps are \
+                 usually raw",
+                tex.shader_path, tex.color_space
+            ));
+        }
         let Some(slot) = preview_slot(&mut m.textures, input) else {
             continue;
         };
@@ -291,6 +298,19 @@ fn preview_surface(
     }
     m.prepare_textures();
     Ok(Material::Preview(Box::new(m)))
+}
+
+/// True when the texture's colour is sRGB-decoded: `sRGB`, or `auto` on a non-float file.
+fn decoded_as_srgb(tex: &TextureDesc) -> bool {
+    let float_file = tex
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("hdr"));
+    match tex.color_space {
+        ColorSpace::Srgb => true,
+        ColorSpace::Auto => !float_file,
+        ColorSpace::Raw => false,
+    }
 }
 
 /// The image and node parameters of a texture, loaded through the cache.
