@@ -560,3 +560,28 @@ fn transform2d_nodes_are_read_and_their_inputs_must_be_values() {
         "{text}"
     );
 }
+
+#[test]
+fn geom_subsets_keep_the_primvar_of_their_own_material() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("tex.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let subset = r#"    def GeomSubset "Second" {
+        uniform token elementType = "face"
+        uniform token familyName = "materialBind"
+        int[] indices = [1]
+        rel material:binding = </Looks/Uv1>
+    }
+}"#;
+    let mesh_text = primvar_mesh("Q", "St");
+    let mesh_text = format!("{}{subset}\n", &mesh_text[..mesh_text.rfind('}').unwrap()]);
+    let looks = primvar_material("St", &["st"]) + &primvar_material("Uv1", &["uv1"]);
+    let path = dir.join("stage.usda");
+    let text = format!("{METRES_Y_UP}def Scope \"Looks\" {{\n{looks}}}\n{mesh_text}");
+    std::fs::write(&path, text).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let v = |x: f32, y: f32| glam::Vec2::new(x, y);
+    let first = mesh(&desc, "/Q").uvs.clone().expect("st");
+    let second = mesh(&desc, "/Q/Second").uvs.clone().expect("uv1");
+    assert_eq!(first, vec![[v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0)]]);
+    assert_eq!(second, vec![[v(5.0, 5.0), v(6.0, 6.0), v(6.0, 5.0)]]);
+}
