@@ -342,6 +342,7 @@ fn rough_models_converge_to_their_smooth_counterparts() {
             eta: dense(n),
             k: dense(k),
             distrib: TrowbridgeReitz::isotropic(alpha),
+            roughness: None,
         }
         .bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda)
         .bxdf
@@ -418,6 +419,7 @@ fn normal_incidence_metal_reflectance_matches_the_tables() {
             eta: dense(n),
             k: dense(k),
             distrib: TrowbridgeReitz::isotropic(0.0),
+            roughness: None,
         };
         let mut worst = 0.0f32;
         for l in 360..=830 {
@@ -616,10 +618,12 @@ fn dispersion_terminates_secondary_wavelengths_only_when_the_ior_varies() {
     let bk7 = Material::Dielectric {
         ior: data::glass("BK7").unwrap(),
         distrib: TrowbridgeReitz::isotropic(0.0),
+        roughness: None,
     };
     let constant = Material::Dielectric {
         ior: Sellmeier::constant(1.5),
         distrib: TrowbridgeReitz::isotropic(0.0),
+        roughness: None,
     };
     let thin = Material::ThinDielectric {
         ior: data::glass("BK7").unwrap(),
@@ -710,8 +714,21 @@ fn preview_surface_normal_input_tilts_the_shading_normal() {
         panic!("preview surface")
     };
     assert!((p.normal - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6);
+    // The quad has no st: the tangent frame is the arbitrary one around +Z (x = +X). The
+    // scene perturbs the hit's shading normal, which the BSDF frame then uses.
+    let ray = spectral_render::geometry::Ray::new(Vec3::new(0.2, 0.1, 1.0), -Vec3::Z);
+    let Some(spectral_render::scene::Hit::Surface(si)) = scene.intersect(&ray, f32::INFINITY)
+    else {
+        panic!("the ray hits the quad")
+    };
+    assert!(
+        (si.ns - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-5,
+        "{}",
+        si.ns
+    );
+    assert_eq!(si.ng, Vec3::Z);
     let lambda = SampledWavelengths::sample_visible(0.3);
-    let bsdf = scene.materials[0].bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda);
+    let bsdf = scene.materials[0].bsdf(si.uv, si.ns, &lambda);
     assert!((bsdf.frame.n.dot(Vec3::Z) - 0.8).abs() < 1e-5);
     // A normal pointing into the surface is replaced by (0, 0, 1), with a warning.
     let scene = load_looks("normal-down", &looks, "Down").unwrap();

@@ -79,6 +79,25 @@ impl CoatAlbedo {
         }))
     }
 
+    /// (1 − t)·a + t·b, for two albedos of the same distribution (both smooth Schlick, or
+    /// both tables); `a` otherwise. Exact for Schlick coats interpolated in F0, since E is
+    /// linear in F0.
+    #[inline]
+    pub fn lerp(a: &CoatAlbedo, b: &CoatAlbedo, t: f32) -> CoatAlbedo {
+        use ScalarFresnel::Schlick;
+        match (a, b) {
+            (CoatAlbedo::Table(x), CoatAlbedo::Table(y)) => {
+                CoatAlbedo::Table(std::array::from_fn(|j| x[j] + t * (y[j] - x[j])))
+            }
+            (CoatAlbedo::Smooth(Schlick { f0: x }), CoatAlbedo::Smooth(Schlick { f0: y })) => {
+                CoatAlbedo::Smooth(Schlick {
+                    f0: x + t * (y - x),
+                })
+            }
+            _ => *a,
+        }
+    }
+
     /// E(μ) for μ = |cos θ|.
     #[inline]
     pub fn eval(&self, mu: f32) -> f32 {

@@ -44,6 +44,7 @@ pub fn metal(metal: &str, alpha_x: f32, alpha_y: f32) -> Bxdf {
         eta: dense(n),
         k: dense(k),
         distrib: TrowbridgeReitz::new(alpha_x, alpha_y),
+        roughness: None,
     };
     m.bsdf(glam::Vec2::ZERO, glam::Vec3::Z, &lambda()).bxdf
 }

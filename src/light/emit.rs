@@ -152,9 +152,9 @@ impl Light {
 
     /// Densities with which [`Light::sample_le`] produces the point `p` (geometric normal `n`)
     /// and the direction `w` leaving it; for infinite lights `p` and `n` are ignored and `w`
-    /// is the direction of travel. Every light's points are uniform over its area, so `_p`
-    /// is not needed yet (a textured emitter will need it). A delta direction has density 1
-    /// relative to its delta, as in `sample_li`.
+    /// is the direction of travel. Every light's points are uniform over its area (a
+    /// textured emitter's too: only its radiance varies), so `_p` is not needed. A delta
+    /// direction has density 1 relative to its delta, as in `sample_li`.
     pub fn pdf_le(&self, _p: Vec3, n: Vec3, w: Vec3, sphere: &SceneSphere) -> LePdf {
         let cosine = |area: f32, two_sided: bool| {
             let c = n.dot(w);

@@ -32,7 +32,7 @@ pub use dome::DomeLight;
 pub use rect::RectLight;
 pub use sampler::LightSampler;
 pub use sphere::SphereLight;
-pub use triangle::TriangleLight;
+pub use triangle::{EmissiveTexture, TriangleLight};
 
 /// The receiving point of a light sample.
 #[derive(Clone, Copy, Debug)]
@@ -117,7 +117,7 @@ impl Light {
     #[inline]
     pub fn l(&self, hit: &LightHit, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
-            Light::Triangle(l) => l.l(hit.n, w, lambda),
+            Light::Triangle(l) => l.l(hit, w, lambda),
             Light::Rect(l) => l.l(hit.n, w, lambda),
             Light::Disk(l) => l.l(hit.n, w, lambda),
             Light::Sphere(l) => l.l(w, lambda),

@@ -1,13 +1,57 @@
 //! One emissive triangle of a mesh light (MeshLightAPI or an emissive material), sampled
 //! uniformly by area (PBR 4ed §6.5.4).
+//!
+//! A textured UsdPreviewSurface `emissiveColor` ([`EmissiveTexture`]) makes the radiance vary
+//! over the triangle: it is looked up at the st of the emitting point and uplifted per lookup
+//! as an RGB illuminant (D65 × sigmoid, pbrt-v4 `RGBIlluminantSpectrum`), so the colour
+//! (1, 1, 1) emits D65 of 1 cd/m², as a constant `emissiveColor` does. Points are still
+//! sampled uniformly by area (the pdfs are unchanged); `radiance` then holds the triangle's
+//! mean colour, which weights the light sampler and the `lights` report.
 
 use super::{
     area_to_solid_angle, emits_towards, sample_by_area, LightHit, LightLiSample, LightSampleContext,
 };
 use crate::sampling::warp::uniform_triangle;
+use crate::spectral::uplift::RgbIlluminantSpectrum;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
-use glam::Vec3;
+use crate::texture::TextureInput;
+use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+use std::sync::Arc;
+
+/// A texture on the emitted radiance: the shared `emissiveColor` texture and the triangle's
+/// st at its corners.
+#[derive(Clone, Debug)]
+pub struct EmissiveTexture {
+    pub texture: Arc<TextureInput>,
+    pub uv: [Vec2; 3],
+}
+
+impl EmissiveTexture {
+    /// Spectral radiance at barycentrics `b` for the path's wavelengths.
+    #[inline]
+    fn radiance(&self, b: [f32; 3], lambda: &SampledWavelengths) -> SampledSpectrum {
+        let uv = b[0] * self.uv[0] + b[1] * self.uv[1] + b[2] * self.uv[2];
+        let s = RgbIlluminantSpectrum::new_lookup(self.texture.rgb(uv));
+        SampledSpectrum::from_fn(|i| s.eval(lambda.lambda[i]))
+    }
+
+    /// The mean linear RGB over the triangle, from a 4 × 4 stratified set of points.
+    fn mean_rgb(&self) -> [f32; 3] {
+        const N: usize = 4;
+        let mut sum = [0.0f32; 3];
+        for k in 0..N * N {
+            let u = [(k % N) as f32 + 0.5, (k / N) as f32 + 0.5].map(|x| x / N as f32);
+            let b = uniform_triangle(u);
+            let uv = b[0] * self.uv[0] + b[1] * self.uv[1] + b[2] * self.uv[2];
+            let rgb = self.texture.rgb(uv);
+            for c in 0..3 {
+                sum[c] += rgb[c].max(0.0) / (N * N) as f32;
+            }
+        }
+        sum
+    }
+}
 
 #[derive(Clone, Debug)]
 pub struct TriangleLight {
@@ -16,9 +60,10 @@ pub struct TriangleLight {
     /// Unit geometric normal of the front face.
     pub n: Vec3,
     pub area: f32,
-    /// Emitted radiance.
+    /// Emitted radiance (with a texture: its mean over the triangle).
     pub radiance: Spectrum,
     pub two_sided: bool,
+    pub texture: Option<EmissiveTexture>,
 }
 
 impl TriangleLight {
@@ -38,7 +83,41 @@ impl TriangleLight {
             area,
             radiance,
             two_sided,
+            texture: None,
         }
+    }
+
+    /// This triangle emitting `texture` (an RGB radiance in nits per unit) instead.
+    pub fn with_texture(self, texture: EmissiveTexture) -> TriangleLight {
+        let mean = RgbIlluminantSpectrum::new(texture.mean_rgb());
+        TriangleLight {
+            radiance: Spectrum::RgbIlluminant(mean),
+            texture: Some(texture),
+            ..self
+        }
+    }
+
+    /// The radiance at barycentrics `b` (all of them for an untextured triangle).
+    #[inline]
+    fn radiance_at(&self, b: [f32; 3], lambda: &SampledWavelengths) -> SampledSpectrum {
+        match &self.texture {
+            Some(t) => t.radiance(b, lambda),
+            None => self.radiance.sample(lambda),
+        }
+    }
+
+    /// The barycentrics of a point `p` on the triangle (least squares in its plane).
+    fn barycentrics(&self, p: Vec3) -> [f32; 3] {
+        let (e1, e2, d) = (self.p[1] - self.p[0], self.p[2] - self.p[0], p - self.p[0]);
+        let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (d20, d21) = (d.dot(e1), d.dot(e2));
+        let denom = d00 * d11 - d01 * d01;
+        if denom.is_nan() || denom <= 0.0 {
+            return [1.0 / 3.0; 3];
+        }
+        let b1 = ((d11 * d20 - d01 * d21) / denom).clamp(0.0, 1.0);
+        let b2 = ((d00 * d21 - d01 * d20) / denom).clamp(0.0, 1.0 - b1);
+        [1.0 - b1 - b2, b1, b2]
     }
 
     pub fn sample_li(
@@ -53,7 +132,7 @@ impl TriangleLight {
         let b = uniform_triangle(u);
         let p = b[0] * self.p[0] + b[1] * self.p[1] + b[2] * self.p[2];
         sample_by_area(ctx, p, self.n, self.area, self.two_sided, |_| {
-            self.radiance.sample(lambda)
+            self.radiance_at(b, lambda)
         })
     }
 
@@ -64,14 +143,19 @@ impl TriangleLight {
         area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n)
     }
 
-    pub fn l(&self, _n: Vec3, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
+    /// Radiance leaving the point `hit` of the triangle towards `w`.
+    pub fn l(&self, hit: &LightHit, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         if !emits_towards(self.n, w, self.two_sided) {
             return SampledSpectrum::ZERO;
         }
-        self.radiance.sample(lambda)
+        match &self.texture {
+            Some(t) => t.radiance(self.barycentrics(hit.p), lambda),
+            None => self.radiance.sample(lambda),
+        }
     }
 
-    /// Φv = π A Lv per emitting side (Lambertian emitter, PBR 4ed §4.1.2).
+    /// Φv = π A Lv per emitting side (Lambertian emitter, PBR 4ed §4.1.2); with a texture, Lv
+    /// of its mean colour.
     pub fn luminous_power(&self) -> f32 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         sides * PI * self.area * xyz::luminance(&self.radiance.to_dense()) as f32

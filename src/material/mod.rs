@@ -12,12 +12,25 @@
 //! constant IOR (and for thin dielectrics, whose directions do not depend on λ) the
 //! wavelengths are never collapsed. The material only reads `lambda`.
 //!
+//! **Textures.** Inputs read from a `UsdUVTexture` are evaluated at the hit's st when the
+//! BSDF is built: UsdPreviewSurface's in `preview.rs`, the colour reflectance and roughness of
+//! the `spectral:*` materials through [`ColorInput`], [`FloatInput`] and [`AlphaTexture`]
+//! (`inputs.rs`). Coat albedos that a textured roughness needs come from `coat_levels.rs`.
+//!
+//! **Normal maps.** [`Material::shading_normal`] perturbs the interpolated shading normal
+//! (`normal_map.rs`); the scene calls it when it builds the `SurfaceHit`, so that the BSDF
+//! frame and the integrators' cosines agree. [`Material::bsdf`] takes the final normal.
+//!
 //! **Opacity.** [`Material::opacity`] is the probability that the surface is there
 //! (UsdPreviewSurface `opacity`, `opacityThreshold`); the integrator lets rays through the
 //! rest of the time.
 
+pub mod coat_levels;
+pub mod inputs;
+pub mod normal_map;
 pub mod preview;
 
+use crate::bxdf::coat::ScalarFresnel;
 use crate::bxdf::fresnel::diffuse_fresnel;
 use crate::bxdf::{
     Bsdf, Bxdf, CoatAlbedo, CoatFresnel, ConductorBxdf, DielectricBxdf, DiffuseBxdf, OrenNayarBxdf,
@@ -25,31 +38,38 @@ use crate::bxdf::{
 };
 use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
+use crate::texture::TextureInput;
+use coat_levels::CoatLevels;
 use glam::{Vec2, Vec3};
+use std::sync::Arc;
 
+pub use inputs::{AlphaTexture, ColorInput, FloatInput};
 pub use preview::PreviewMaterial;
 
 #[derive(Clone, Debug)]
 pub enum Material {
     /// Lambertian reflection with a spectral reflectance in [0, 1].
     Diffuse {
-        reflectance: Spectrum,
+        reflectance: ColorInput,
     },
     /// Oren–Nayar with slope deviation σ in radians.
     OrenNayar {
-        reflectance: Spectrum,
-        sigma: f32,
+        reflectance: ColorInput,
+        sigma: FloatInput,
     },
-    /// A metal: complex IOR η + ik relative to air, GGX roughness.
+    /// A metal: complex IOR η + ik relative to air, GGX roughness (`roughness`: textured α,
+    /// replacing `distrib`).
     Conductor {
         eta: Spectrum,
         k: Spectrum,
         distrib: TrowbridgeReitz,
+        roughness: Option<AlphaTexture>,
     },
     /// A glass interface (outside: air; inside: the back of the geometric normal).
     Dielectric {
         ior: Sellmeier,
         distrib: TrowbridgeReitz,
+        roughness: Option<AlphaTexture>,
     },
     /// A thin slab of glass.
     ThinDielectric {
@@ -62,7 +82,10 @@ pub enum Material {
 /// A plastic with its coat's precomputed albedo.
 #[derive(Clone, Debug)]
 pub struct PlasticMaterial {
-    pub reflectance: Spectrum,
+    pub reflectance: ColorInput,
+    /// A textured α, with the coat's albedo at roughness levels (replaces `distrib`,
+    /// `albedo` and `t_avg`).
+    pub roughness: Option<AlphaTexture>,
     pub eta: f32,
     pub distrib: TrowbridgeReitz,
     pub albedo: CoatAlbedo,
@@ -78,7 +101,8 @@ impl PlasticMaterial {
         let distrib = TrowbridgeReitz::isotropic(alpha);
         let albedo = SpecularCoat::new(distrib, CoatFresnel::Dielectric { eta }).albedo();
         PlasticMaterial {
-            reflectance,
+            reflectance: ColorInput::Constant(reflectance),
+            roughness: None,
             eta,
             distrib,
             albedo,
@@ -87,10 +111,42 @@ impl PlasticMaterial {
         }
     }
 
-    fn bxdf(&self, lambda: &SampledWavelengths) -> PlasticBxdf {
-        let coat = SpecularCoat::new(self.distrib, CoatFresnel::Dielectric { eta: self.eta });
-        let r = self.reflectance.sample(lambda);
-        PlasticBxdf::with_coat(coat, self.albedo, r, self.fdr_internal, self.t_avg)
+    /// Reads α from `texture` (the coat's energy compensation from the nearest of the
+    /// precomputed roughness levels, `coat_levels`).
+    pub fn with_roughness_texture(self, texture: TextureInput) -> PlasticMaterial {
+        let levels = CoatLevels::levels(ScalarFresnel::Dielectric { eta: self.eta });
+        PlasticMaterial {
+            roughness: Some(AlphaTexture {
+                texture,
+                coats: Some(Arc::new(levels)),
+            }),
+            ..self
+        }
+    }
+
+    /// The coat's distribution, albedo and T̄ at st = `uv`.
+    #[inline]
+    fn coat(&self, uv: Vec2) -> (TrowbridgeReitz, CoatAlbedo, f32) {
+        match &self.roughness {
+            Some(
+                t @ AlphaTexture {
+                    coats: Some(levels),
+                    ..
+                },
+            ) => {
+                let alpha = t.alpha(uv);
+                let (albedo, t_avg) = levels.get(levels.level(alpha.sqrt()));
+                (TrowbridgeReitz::isotropic(alpha), albedo, t_avg)
+            }
+            _ => (self.distrib, self.albedo, self.t_avg),
+        }
+    }
+
+    fn bxdf(&self, uv: Vec2, lambda: &SampledWavelengths) -> PlasticBxdf {
+        let (distrib, albedo, t_avg) = self.coat(uv);
+        let coat = SpecularCoat::new(distrib, CoatFresnel::Dielectric { eta: self.eta });
+        let r = self.reflectance.reflectance(uv, lambda);
+        PlasticBxdf::with_coat(coat, albedo, r, self.fdr_internal, t_avg)
     }
 }
 
@@ -101,26 +157,36 @@ impl Material {
     pub fn bsdf(&self, uv: Vec2, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
         let bxdf = match self {
             Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf {
-                r: reflectance_at(reflectance, lambda),
+                r: reflectance.reflectance(uv, lambda),
             }),
             Material::OrenNayar { reflectance, sigma } => Bxdf::OrenNayar(OrenNayarBxdf::new(
-                reflectance_at(reflectance, lambda),
-                *sigma,
+                reflectance.reflectance(uv, lambda),
+                sigma.eval(uv),
             )),
-            Material::Conductor { eta, k, distrib } => Bxdf::Conductor(ConductorBxdf::new(
-                *distrib,
+            Material::Conductor {
+                eta,
+                k,
+                distrib,
+                roughness,
+            } => Bxdf::Conductor(ConductorBxdf::new(
+                AlphaTexture::distrib(roughness.as_ref(), *distrib, uv),
                 eta.sample(lambda),
                 k.sample(lambda),
             )),
-            Material::Dielectric { ior, distrib } => {
-                Bxdf::Dielectric(DielectricBxdf::new(*distrib, ior.ior(lambda.lambda[0])))
-            }
+            Material::Dielectric {
+                ior,
+                distrib,
+                roughness,
+            } => Bxdf::Dielectric(DielectricBxdf::new(
+                AlphaTexture::distrib(roughness.as_ref(), *distrib, uv),
+                ior.ior(lambda.lambda[0]),
+            )),
             Material::ThinDielectric { ior } => {
                 Bxdf::ThinDielectric(ThinDielectricBxdf::new(SampledSpectrum::from_fn(|i| {
                     ior.ior(lambda.lambda[i])
                 })))
             }
-            Material::Plastic(p) => Bxdf::Plastic(p.bxdf(lambda)),
+            Material::Plastic(p) => Bxdf::Plastic(p.bxdf(uv, lambda)),
             Material::Preview(p) => return p.bsdf(uv, ns, lambda),
         };
         Bsdf::new(bxdf, ns)
@@ -143,6 +209,22 @@ impl Material {
         }
     }
 
+    /// True when the material perturbs the shading normal (UsdPreviewSurface `normal`): the
+    /// scene then keeps tangent frames for the meshes it is bound to.
+    pub fn perturbs_normal(&self) -> bool {
+        matches!(self, Material::Preview(p) if p.perturbs_normal())
+    }
+
+    /// The shading normal at st = `uv` given the interpolated one `ns`, the geometric normal
+    /// `ng` and the triangle's (∂p/∂u, ∂p/∂v) (`normal_map`); `ns` for every other material.
+    #[inline]
+    pub fn shading_normal(&self, uv: Vec2, ns: Vec3, ng: Vec3, dpduv: [Vec3; 2]) -> Vec3 {
+        match self {
+            Material::Preview(p) => p.shading_normal(uv, ns, ng, dpduv),
+            _ => ns,
+        }
+    }
+
     /// True when the surface is present everywhere (opacity 1 and no opacity texture).
     #[inline]
     pub fn is_opaque(&self) -> bool {
@@ -151,10 +233,4 @@ impl Material {
             _ => true,
         }
     }
-}
-
-/// A reflectance spectrum at the path's wavelengths, clamped to [0, 1].
-#[inline]
-fn reflectance_at(s: &Spectrum, lambda: &SampledWavelengths) -> SampledSpectrum {
-    s.sample(lambda).map(|v| v.clamp(0.0, 1.0))
 }

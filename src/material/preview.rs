@@ -4,36 +4,40 @@
 //! | input | mapping |
 //! |---|---|
 //! | `diffuseColor` | the Lambertian base ρ of the plastic, and the metal's Schlick F0 |
-//! | `emissiveColor` | an emitter (handled by the scene builder, not here) |
+//! | `emissiveColor` | an emitter of that RGB radiance in nits (the scene builder makes the mesh's triangles lights) |
 //! | `useSpecularWorkflow` = 0 | metallic workflow: plastic coat = dielectric Fresnel with `ior`; metal weight = `metallic` |
 //! | `useSpecularWorkflow` = 1 | plastic coat = Schlick with F0 = `specularColor`, F90 = 1; no metal lobe (`metallic` ignored, as the spec says) |
 //! | `roughness` | GGX α = roughness² for metal and plastic coat |
 //! | `clearcoat`, `clearcoatRoughness` | weight c of a GGX coat of IOR 1.5 (the spec's fixed clearcoat IOR), α = clearcoatRoughness² |
 //! | `opacity`, `opacityThreshold` | threshold > 0: present where opacity ≥ threshold, a cutout elsewhere; threshold 0: present with probability `opacity` |
-//! | `normal` | a constant tangent-space normal, applied in the frame built around the shading normal |
+//! | `normal` | a tangent-space normal (constant or a normal map), applied to the shading normal in the tangent frame of st by the scene (`normal_map.rs`) |
 //!
-//! **Textures.** `diffuseColor`, `metallic`, `roughness`, `clearcoat` and `opacity` may be
-//! connected to a `UsdUVTexture` ([`PreviewTextures`]): they are looked up at the hit's st per
-//! BSDF, the colour uplifted per lookup (`crate::texture`). A textured `roughness` sets the GGX
-//! α exactly; the plastic coat's energy compensation (albedo E(μ), T̄) is taken from the
-//! nearest of 33 roughness levels precomputed at build time. `clearcoatRoughness`,
-//! `specularColor` (which feed precomputed albedos) and `emissiveColor` stay constant: a
-//! texture there is warned about by the scene builder and the spec default is used.
+//! **Textures.** Every input but `useSpecularWorkflow`, `ior` and `opacityThreshold` may be
+//! connected to a `UsdUVTexture` ([`PreviewTextures`]): the BSDF's inputs are looked up at the
+//! hit's st per BSDF, colours uplifted per lookup (`crate::texture`); `normal` is applied by
+//! the scene to the hit's shading normal; `emissiveColor` by the mesh's triangle lights
+//! (`light::triangle`). A textured `roughness` or `clearcoatRoughness` sets the GGX α exactly;
+//! the coats' energy compensation (albedo E(μ), T̄) comes from the nearest of 33 roughness
+//! levels precomputed at build time, and a textured `specularColor` interpolates it exactly
+//! between F0 = 0 and 1 (`coat_levels`).
 //!
 //! Roughness is squared (α = r²) as in the specification's reference implementation and in
 //! Burley 2012 (§5.4), where `roughness` is perceptually linear; `spectral:` materials take α
 //! directly (DESIGN.md §3). The plastic coat uses the exact dielectric Fresnel of `ior`
 //! rather than the reference shader's Schlick fit of it; the spec's F0 of `specularColor`
 //! is Schlick by definition. Colours are uplifted with Jakob–Hanika 2019 and clamped to
-//! [0, 1]. Without tangents on the meshes the tangent frame of `normal` is the orthonormal
-//! basis of Duff et al. 2017 around the shading normal, so only the default (0, 0, 1) and
-//! normals symmetric about +Z are portable between renderers.
+//! [0, 1]. The tangent frame of `normal` is ∂p/∂u (Gram–Schmidt against the shading normal)
+//! and ±n × t on the side of ∂p/∂v; on a mesh without st (or where st is degenerate) it is the
+//! arbitrary basis of Duff et al. 2017 around the shading normal, so there only the default
+//! (0, 0, 1) and normals symmetric about +Z are portable between renderers.
 
+use super::coat_levels::{CoatLevels, SchlickLevels};
+use super::normal_map;
+use crate::bxdf::coat::ScalarFresnel;
 use crate::bxdf::fresnel::diffuse_fresnel;
 use crate::bxdf::{
     Bsdf, Bxdf, CoatAlbedo, CoatFresnel, PlasticBxdf, PreviewBxdf, SpecularCoat, TrowbridgeReitz,
 };
-use crate::math::Frame;
 use crate::scene::desc::PreviewSurfaceDesc;
 use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
@@ -52,6 +56,8 @@ pub struct PreviewMaterial {
     pub specular: Option<Spectrum>,
     pub metallic: f32,
     pub ior: f32,
+    /// `roughness` clamped to [0, 1]; α = roughness².
+    pub roughness: f32,
     pub distrib: TrowbridgeReitz,
     /// The plastic coat's albedo, its average transmittance and internal diffuse Fresnel.
     pub base_albedo: CoatAlbedo,
@@ -68,49 +74,84 @@ pub struct PreviewMaterial {
     pub textures: PreviewTextures,
 }
 
-/// The textured inputs of a UsdPreviewSurface; `None` where the input is a constant.
+/// The textured inputs of a UsdPreviewSurface; `None` where the input is a constant. After
+/// setting them, [`PreviewMaterial::prepare_textures`] precomputes the coat albedos they need.
 #[derive(Clone, Debug, Default)]
 pub struct PreviewTextures {
     pub diffuse: Option<TextureInput>,
+    pub specular: Option<TextureInput>,
     pub metallic: Option<TextureInput>,
-    pub clearcoat: Option<TextureInput>,
-    pub opacity: Option<TextureInput>,
     pub roughness: Option<TextureInput>,
-    /// Precomputed with the roughness texture ([`PreviewMaterial::set_roughness_texture`]).
-    pub roughness_coats: Option<Arc<RoughnessCoats>>,
+    pub clearcoat: Option<TextureInput>,
+    pub clearcoat_roughness: Option<TextureInput>,
+    pub opacity: Option<TextureInput>,
+    /// A tangent-space normal map (`normal`, usually raw with scale 2 and bias −1).
+    pub normal: Option<TextureInput>,
+    /// The base coat's albedos when `roughness` or `specularColor` is textured.
+    pub base_coats: Option<Arc<BaseCoats>>,
+    /// The clearcoat's albedos when `clearcoatRoughness` is textured.
+    pub clearcoat_coats: Option<Arc<CoatLevels>>,
     /// `opacityThreshold`, applied to a textured opacity per lookup.
     pub opacity_threshold: f32,
+}
+
+/// The plastic base coat's E(μ) and T̄ for textured inputs (`coat_levels`).
+#[derive(Debug)]
+pub enum BaseCoats {
+    /// One Fresnel (dielectric `ior`, or the constant `specularColor`'s bound), at every
+    /// roughness level.
+    Fixed(CoatLevels),
+    /// A textured `specularColor`: Schlick at F0 = 0 and 1, at every roughness level or at
+    /// the constant roughness.
+    Schlick(SchlickLevels),
+}
+
+impl BaseCoats {
+    /// E and T̄ at perceptual roughness `r`, for the Schlick bound `f0` (textured specular).
+    #[inline]
+    fn get(&self, r: f32, f0: f32) -> (CoatAlbedo, f32) {
+        match self {
+            BaseCoats::Fixed(l) => l.get(l.level(r)),
+            BaseCoats::Schlick(s) => s.get(s.f0_zero.level(r), f0),
+        }
+    }
 }
 
 impl PreviewTextures {
     /// True when no input is textured.
     pub fn is_empty(&self) -> bool {
-        self.diffuse.is_none()
-            && self.metallic.is_none()
-            && self.clearcoat.is_none()
-            && self.opacity.is_none()
-            && self.roughness.is_none()
+        [
+            &self.diffuse,
+            &self.specular,
+            &self.metallic,
+            &self.roughness,
+            &self.clearcoat,
+            &self.clearcoat_roughness,
+            &self.opacity,
+            &self.normal,
+        ]
+        .iter()
+        .all(|t| t.is_none())
     }
 }
 
 impl PreviewMaterial {
     /// Precomputes the material; `diffuse` and `specular` are the uplifted colours.
     pub fn new(d: &PreviewSurfaceDesc, diffuse: Spectrum, specular: Spectrum) -> PreviewMaterial {
-        let distrib = TrowbridgeReitz::isotropic(d.roughness.clamp(0.0, 1.0).powi(2));
+        let roughness = d.roughness.clamp(0.0, 1.0);
+        let distrib = TrowbridgeReitz::isotropic(roughness * roughness);
         let specular = d.use_specular_workflow.then_some(specular);
-        let fresnel = albedo_fresnel(specular.as_ref(), d.ior);
+        let base_albedo = CoatAlbedo::new(distrib, albedo_fresnel(specular.as_ref(), d.ior));
         let fdr = match &specular {
             Some(_) => 0.0,
             None => diffuse_fresnel(1.0 / d.ior),
         };
-        let base_albedo = SpecularCoat::new(distrib, fresnel).albedo();
         let clearcoat_distrib =
             TrowbridgeReitz::isotropic(d.clearcoat_roughness.clamp(0.0, 1.0).powi(2));
-        let clearcoat_albedo = SpecularCoat::new(
+        let clearcoat_albedo = CoatAlbedo::new(
             clearcoat_distrib,
-            CoatFresnel::Dielectric { eta: CLEARCOAT_IOR },
-        )
-        .albedo();
+            ScalarFresnel::Dielectric { eta: CLEARCOAT_IOR },
+        );
         PreviewMaterial {
             diffuse,
             metallic: if specular.is_some() {
@@ -120,6 +161,7 @@ impl PreviewMaterial {
             },
             specular,
             ior: d.ior,
+            roughness,
             distrib,
             base_albedo,
             base_t_avg: base_albedo.average_transmittance(),
@@ -136,32 +178,85 @@ impl PreviewMaterial {
         }
     }
 
-    /// Reads `roughness` from `t`: the GGX α is exact per lookup, the base coat's energy
-    /// compensation (albedo, average transmittance) comes from the nearest of
-    /// [`ROUGHNESS_LEVELS`] precomputed roughnesses (Δr = 1/32).
-    pub fn set_roughness_texture(&mut self, t: TextureInput) {
-        let fresnel = albedo_fresnel(self.specular.as_ref(), self.ior);
-        let albedo: [CoatAlbedo; ROUGHNESS_LEVELS] = std::array::from_fn(|k| {
-            let r = k as f32 / (ROUGHNESS_LEVELS - 1) as f32;
-            SpecularCoat::new(TrowbridgeReitz::isotropic(r * r), fresnel).albedo()
+    /// Precomputes the coat albedos the textured inputs need (`coat_levels`): a textured
+    /// `roughness` takes the base coat's E and T̄ from the nearest of 33 levels, a textured
+    /// `specularColor` interpolates them exactly in F0, a textured `clearcoatRoughness` takes
+    /// the clearcoat's E from the nearest level. The GGX α is exact per lookup.
+    pub fn prepare_textures(&mut self) {
+        let t = &mut self.textures;
+        let rough = t.roughness.is_some();
+        let base = match (&self.specular, &t.specular) {
+            (Some(_), Some(_)) => Some(BaseCoats::Schlick(SchlickLevels::new(
+                rough,
+                self.roughness,
+            ))),
+            (specular, _) if rough => Some(BaseCoats::Fixed(CoatLevels::levels(albedo_fresnel(
+                specular.as_ref(),
+                self.ior,
+            )))),
+            _ => None,
+        };
+        t.base_coats = base.map(Arc::new);
+        t.clearcoat_coats = t.clearcoat_roughness.as_ref().map(|_| {
+            Arc::new(CoatLevels::levels(ScalarFresnel::Dielectric {
+                eta: CLEARCOAT_IOR,
+            }))
         });
-        let t_avg = albedo.map(|a| a.average_transmittance());
-        self.textures.roughness = Some(t);
-        self.textures.roughness_coats = Some(Arc::new(RoughnessCoats { albedo, t_avg }));
     }
 
-    /// The base GGX distribution, its coat albedo and average transmittance at st = `uv`.
+    /// The base GGX distribution, its coat albedo and average transmittance at st = `uv`;
+    /// `f0` is the Schlick bound of a textured `specularColor` there.
     #[inline]
-    fn base_coat(&self, uv: Vec2) -> (TrowbridgeReitz, CoatAlbedo, f32) {
-        match (&self.textures.roughness, &self.textures.roughness_coats) {
-            (Some(t), Some(coats)) => {
+    fn base_coat(&self, uv: Vec2, f0: f32) -> (TrowbridgeReitz, CoatAlbedo, f32) {
+        let Some(coats) = &self.textures.base_coats else {
+            return (self.distrib, self.base_albedo, self.base_t_avg);
+        };
+        let (r, distrib) = match &self.textures.roughness {
+            Some(t) => {
                 let r = Self::scalar(Some(t), 0.0, uv);
-                let k = (r * (ROUGHNESS_LEVELS - 1) as f32).round() as usize;
-                let k = k.min(ROUGHNESS_LEVELS - 1);
-                let distrib = TrowbridgeReitz::isotropic(r * r);
-                (distrib, coats.albedo[k], coats.t_avg[k])
+                (r, TrowbridgeReitz::isotropic(r * r))
             }
-            _ => (self.distrib, self.base_albedo, self.base_t_avg),
+            None => (self.roughness, self.distrib),
+        };
+        let (albedo, t_avg) = coats.get(r, f0);
+        (distrib, albedo, t_avg)
+    }
+
+    /// The clearcoat's GGX distribution and albedo at st = `uv`.
+    #[inline]
+    fn clearcoat_coat(&self, uv: Vec2) -> (TrowbridgeReitz, CoatAlbedo) {
+        match (
+            &self.textures.clearcoat_roughness,
+            &self.textures.clearcoat_coats,
+        ) {
+            (Some(t), Some(levels)) => {
+                let r = Self::scalar(Some(t), 0.0, uv);
+                let (albedo, _) = levels.get(levels.level(r));
+                (TrowbridgeReitz::isotropic(r * r), albedo)
+            }
+            _ => (self.clearcoat_distrib, self.clearcoat_albedo),
+        }
+    }
+
+    /// The plastic coat's Fresnel at st = `uv` and, for a textured `specularColor`, the
+    /// scalar bound of its F0 (the albedo's; 0 otherwise).
+    #[inline]
+    fn base_fresnel(&self, uv: Vec2, lambda: &SampledWavelengths) -> (CoatFresnel, f32) {
+        let Some(s) = &self.specular else {
+            return (CoatFresnel::Dielectric { eta: self.ior }, 0.0);
+        };
+        match &self.textures.specular {
+            Some(t) => {
+                let sigmoid = reflectance_lookup(t.rgb(uv));
+                let f0 = SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]));
+                let f0 = f0.map(|v| v.clamp(0.0, 1.0));
+                let bound = sigmoid.max_value().clamp(0.0, 1.0);
+                (CoatFresnel::Schlick { f0 }, bound)
+            }
+            None => {
+                let f0 = s.sample(lambda).map(|v| v.clamp(0.0, 1.0));
+                (CoatFresnel::Schlick { f0 }, 0.0)
+            }
         }
     }
 
@@ -211,7 +306,6 @@ impl PreviewMaterial {
     /// The BSDF at a hit with st = `uv` and shading normal `ns`.
     #[inline]
     pub fn bsdf(&self, uv: Vec2, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
-        let clamp01 = |s: &Spectrum| s.sample(lambda).map(|v| v.clamp(0.0, 1.0));
         let rho = self.rho(uv, lambda);
         let metallic = if self.specular.is_some() {
             0.0
@@ -219,11 +313,8 @@ impl PreviewMaterial {
             Self::scalar(self.textures.metallic.as_ref(), self.metallic, uv)
         };
         let clearcoat = Self::scalar(self.textures.clearcoat.as_ref(), self.clearcoat, uv);
-        let fresnel = match &self.specular {
-            Some(s) => CoatFresnel::Schlick { f0: clamp01(s) },
-            None => CoatFresnel::Dielectric { eta: self.ior },
-        };
-        let (distrib, albedo, t_avg) = self.base_coat(uv);
+        let (fresnel, f0_bound) = self.base_fresnel(uv, lambda);
+        let (distrib, albedo, t_avg) = self.base_coat(uv, f0_bound);
         let base = PlasticBxdf::with_coat(
             SpecularCoat::new(distrib, fresnel),
             albedo,
@@ -231,45 +322,46 @@ impl PreviewMaterial {
             self.base_fdr_internal,
             t_avg,
         );
+        let (cc_distrib, cc_albedo) = self.clearcoat_coat(uv);
         let bxdf = PreviewBxdf {
             base,
             metal: SpecularCoat::new(distrib, CoatFresnel::Schlick { f0: rho }),
             metallic,
             clearcoat: SpecularCoat::new(
-                self.clearcoat_distrib,
+                cc_distrib,
                 CoatFresnel::Dielectric { eta: CLEARCOAT_IOR },
             ),
-            clearcoat_albedo: self.clearcoat_albedo,
+            clearcoat_albedo: cc_albedo,
             clearcoat_weight: clearcoat,
         };
-        let n = if self.normal == Vec3::Z {
-            ns
-        } else {
-            Frame::from_normal(ns).to_world(self.normal).normalize()
+        Bsdf::new(Bxdf::Preview(bxdf), ns)
+    }
+
+    /// True when `normal` (constant or textured) perturbs the shading normal.
+    pub fn perturbs_normal(&self) -> bool {
+        self.textures.normal.is_some() || self.normal != Vec3::Z
+    }
+
+    /// The shading normal perturbed by `normal` at st = `uv`, in the tangent frame `dpduv`
+    /// (`material::normal_map`).
+    #[inline]
+    pub fn shading_normal(&self, uv: Vec2, ns: Vec3, ng: Vec3, dpduv: [Vec3; 2]) -> Vec3 {
+        let n_t = match &self.textures.normal {
+            Some(t) => normal_map::texel_normal(t.rgb(uv)),
+            None => self.normal,
         };
-        Bsdf::new(Bxdf::Preview(bxdf), n)
+        normal_map::perturb(n_t, ns, ng, dpduv)
     }
 }
 
 /// The scalar Fresnel bound the base coat's albedo is computed with.
-fn albedo_fresnel(specular: Option<&Spectrum>, ior: f32) -> CoatFresnel {
+fn albedo_fresnel(specular: Option<&Spectrum>, ior: f32) -> ScalarFresnel {
     match specular {
-        Some(s) => CoatFresnel::Schlick {
-            f0: SampledSpectrum::splat(s.to_dense().max_value().clamp(0.0, 1.0)),
+        Some(s) => ScalarFresnel::Schlick {
+            f0: s.to_dense().max_value().clamp(0.0, 1.0),
         },
-        None => CoatFresnel::Dielectric { eta: ior },
+        None => ScalarFresnel::Dielectric { eta: ior },
     }
-}
-
-/// Roughness levels of [`RoughnessCoats`]: r = k / (N − 1).
-pub const ROUGHNESS_LEVELS: usize = 33;
-
-/// The base coat's albedo and average transmittance at [`ROUGHNESS_LEVELS`] roughnesses, for
-/// a textured `roughness`.
-#[derive(Debug)]
-pub struct RoughnessCoats {
-    pub albedo: [CoatAlbedo; ROUGHNESS_LEVELS],
-    pub t_avg: [f32; ROUGHNESS_LEVELS],
 }
 
 /// The probability that the surface is there: a cutout mask when `threshold` > 0.
@@ -311,6 +403,7 @@ mod tests {
             bias: [0.0; 4],
             fallback: [0.0; 4],
             channel,
+            transform: None,
         }
     }
 
@@ -346,20 +439,23 @@ mod tests {
         let scalars = [0.25, 0.5, 0.5, 1.0];
         textured.textures.metallic = Some(constant_texture(scalars, TextureChannel::R));
         textured.textures.clearcoat = Some(constant_texture(scalars, TextureChannel::G));
-        textured.set_roughness_texture(constant_texture(scalars, TextureChannel::B));
+        textured.textures.roughness = Some(constant_texture(scalars, TextureChannel::B));
+        textured.prepare_textures();
+        assert_same_f(&plain, &textured, Vec2::new(0.3, 0.7), 1e-6);
+    }
+
+    /// f of two materials at st = `uv` agree within `tol` (relative) for a few directions.
+    fn assert_same_f(a: &PreviewMaterial, b: &PreviewMaterial, uv: Vec2, tol: f32) {
         let lambda = SampledWavelengths {
             lambda: [450.0, 520.0, 600.0, 680.0],
             pdf: [1.0; 4],
         };
-        let uv = Vec2::new(0.3, 0.7);
-        let (a, b) = (
-            plain.bsdf(uv, Vec3::Z, &lambda),
-            textured.bsdf(uv, Vec3::Z, &lambda),
-        );
+        let (a, b) = (a.bsdf(uv, Vec3::Z, &lambda), b.bsdf(uv, Vec3::Z, &lambda));
         let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
         for wi in [
             Vec3::new(-0.2, 0.4, 0.8),
             Vec3::new(0.5, -0.5, 0.3),
+            Vec3::new(-0.3, -0.1, 0.9),
             Vec3::Z,
         ] {
             let wi = wi.normalize();
@@ -369,10 +465,57 @@ mod tests {
             );
             for i in 0..4 {
                 assert!(
-                    (fa.0[i] - fb.0[i]).abs() <= 1e-6 * fa.0[i].max(1.0),
+                    (fa.0[i] - fb.0[i]).abs() <= tol * fa.0[i].max(1.0),
                     "{fa:?} {fb:?}"
                 );
             }
+        }
+    }
+
+    /// A 2×1 texture (left texel `l`, right `r`) read through `channel`.
+    fn two_texels(l: [f32; 4], r: [f32; 4], channel: TextureChannel) -> TextureInput {
+        TextureInput {
+            image: Arc::new(ImageTexture::from_texels(2, 1, vec![l, r]).unwrap()),
+            ..constant_texture([0.0; 4], channel)
+        }
+    }
+
+    /// Textured `specularColor` (specular workflow) and `clearcoatRoughness` give, at each
+    /// texel, the BSDF of the material with those constants: the base albedo is exactly
+    /// linear in F0, the clearcoat roughnesses 0.25 and 0.75 lie on the level grid.
+    #[test]
+    fn textured_specular_and_clearcoat_roughness_match_constants_per_texel() {
+        let specs = [[0.3, 0.2, 0.1], [0.05, 0.4, 0.9]];
+        let cc_rough = [0.25, 0.75];
+        let base = PreviewSurfaceDesc {
+            diffuse_color: [0.4, 0.5, 0.6],
+            use_specular_workflow: true,
+            roughness: 0.37,
+            clearcoat: 0.8,
+            ..PreviewSurfaceDesc::default()
+        };
+        let diffuse = Spectrum::Sigmoid(uplift::reflectance_lookup(base.diffuse_color));
+        let mut textured = PreviewMaterial::new(&base, diffuse.clone(), Spectrum::Constant(0.5));
+        let [a, b] = specs;
+        textured.textures.specular = Some(two_texels(
+            [a[0], a[1], a[2], 1.0],
+            [b[0], b[1], b[2], 1.0],
+            TextureChannel::Rgb,
+        ));
+        textured.textures.clearcoat_roughness = Some(two_texels(
+            [cc_rough[0]; 4],
+            [cc_rough[1]; 4],
+            TextureChannel::R,
+        ));
+        textured.prepare_textures();
+        for (k, u) in [0.25f32, 0.75].into_iter().enumerate() {
+            let d = PreviewSurfaceDesc {
+                clearcoat_roughness: cc_rough[k],
+                ..base.clone()
+            };
+            let spec = Spectrum::Sigmoid(uplift::reflectance_lookup(specs[k]));
+            let plain = PreviewMaterial::new(&d, diffuse.clone(), spec);
+            assert_same_f(&plain, &textured, Vec2::new(u, 0.5), 1e-4);
         }
     }
 

@@ -11,17 +11,22 @@ use crate::light::emission::{self, Photometric};
 use crate::light::ies::IesProfile;
 use crate::light::report;
 use crate::light::shaping::Shaping;
+use crate::light::EmissiveTexture;
 use crate::light::*;
-use crate::material::{Material, PlasticMaterial, PreviewMaterial};
+use crate::material::normal_map::Tangents;
+use crate::material::preview::PreviewTextures;
+use crate::material::{
+    AlphaTexture, ColorInput, FloatInput, Material, PlasticMaterial, PreviewMaterial,
+};
 use crate::math::Frame;
 use crate::sampling::distribution::Distribution2D;
 use crate::sensor::Camera;
 use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
 use crate::spectral::{data, DenseSpectrum, Spectrum};
-use crate::texture::TextureCache;
+use crate::texture::{TextureCache, TextureInput};
 use crate::{Error, Result};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -40,17 +45,25 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
                 .map_err(|r| Error::prim(file, &m.prim_path, r))
         })
         .collect::<Result<Vec<_>>>()?;
+    let emissive = emissive_textures(desc, &mut textures)?;
     let default_material = materials.len() as u32;
     materials.push(Material::Diffuse {
-        reflectance: Spectrum::Constant(0.18),
+        reflectance: ColorInput::Constant(Spectrum::Constant(0.18)),
     });
 
     let mut lights = Vec::new();
     let mut meshes = Vec::new();
     for m in &desc.meshes {
         meshes.push(
-            mesh(desc, m, default_material, &mut lights)
-                .map_err(|r| Error::prim(file, &m.prim_path, r))?,
+            mesh(
+                desc,
+                m,
+                &materials,
+                &emissive,
+                default_material,
+                &mut lights,
+            )
+            .map_err(|r| Error::prim(file, &m.prim_path, r))?,
         );
     }
     let (tri_refs, triangles) = flatten_triangles(&meshes);
@@ -131,57 +144,102 @@ fn material(
     warnings: &mut Vec<String>,
 ) -> std::result::Result<Material, String> {
     let path = &m.prim_path;
+    let texture = |name: &str, cache: &mut TextureCache| {
+        m.texture(name).map(|t| texture_input(cache, t)).transpose()
+    };
     match &m.kind {
         MaterialKind::Diffuse {
             reflectance: r,
             roughness,
         } => {
-            let reflectance = reflectance(r)?;
+            let reflectance = color_input(r, texture("reflectance", textures)?)?;
             let sigma = non_negative("roughness", *roughness)?;
-            Ok(if sigma == 0.0 {
-                Material::Diffuse { reflectance }
-            } else {
-                Material::OrenNayar { reflectance, sigma }
+            Ok(match texture("roughness", textures)? {
+                Some(t) => Material::OrenNayar {
+                    reflectance,
+                    sigma: FloatInput::Texture(t),
+                },
+                None if sigma == 0.0 => Material::Diffuse { reflectance },
+                None => Material::OrenNayar {
+                    reflectance,
+                    sigma: FloatInput::Constant(sigma),
+                },
             })
         }
         MaterialKind::Conductor { eta, k, roughness } => Ok(Material::Conductor {
             eta: conductor_spectrum(eta, "eta", false)?,
             k: conductor_spectrum(k, "k", true)?,
             distrib: TrowbridgeReitz::isotropic(non_negative("roughness", *roughness)?),
+            roughness: alpha_texture(texture("roughness", textures)?),
         }),
         MaterialKind::Dielectric {
             ior,
             roughness,
             thin,
-        } => dielectric(path, ior, *roughness, *thin, warnings),
+        } => {
+            let alpha = texture("roughness", textures)?;
+            dielectric(path, ior, (*roughness, alpha), *thin, warnings)
+        }
         MaterialKind::Plastic {
             reflectance: r,
             ior,
             roughness,
-        } => Ok(Material::Plastic(PlasticMaterial::new(
-            reflectance(r)?,
-            *ior,
-            non_negative("roughness", *roughness)?,
-        ))),
+        } => {
+            let mut p = PlasticMaterial::new(
+                reflectance(r)?,
+                *ior,
+                non_negative("roughness", *roughness)?,
+            );
+            p.reflectance = color_input(r, texture("reflectance", textures)?)?;
+            Ok(Material::Plastic(match texture("roughness", textures)? {
+                Some(t) => p.with_roughness_texture(t),
+                None => p,
+            }))
+        }
         MaterialKind::PreviewSurface(ps) => preview_surface(path, ps, textures, warnings),
     }
 }
 
-/// `spectral:dielectric`: an interface, or a thin slab with `inputs:thin`.
+/// A reflectance input: the texture when there is one, else the spectrum `r`.
+fn color_input(
+    r: &SpectrumDesc,
+    texture: Option<TextureInput>,
+) -> std::result::Result<ColorInput, String> {
+    Ok(match texture {
+        Some(t) => ColorInput::Texture(t),
+        None => ColorInput::Constant(reflectance(r)?),
+    })
+}
+
+/// A textured GGX α (no coat levels).
+fn alpha_texture(texture: Option<TextureInput>) -> Option<AlphaTexture> {
+    texture.map(|texture| AlphaTexture {
+        texture,
+        coats: None,
+    })
+}
+
+/// `spectral:dielectric`: an interface, or a thin slab with `inputs:thin`; `roughness` is
+/// the constant α and the texture replacing it.
 fn dielectric(
     path: &str,
     i: &IorDesc,
-    roughness: f32,
+    roughness: (f32, Option<TextureInput>),
     thin: bool,
     warnings: &mut Vec<String>,
 ) -> std::result::Result<Material, String> {
     let ior = ior(i)?;
-    let alpha = non_negative("roughness", roughness)?;
+    let alpha = non_negative("roughness", roughness.0)?;
     if !thin {
         let distrib = TrowbridgeReitz::isotropic(alpha);
-        return Ok(Material::Dielectric { ior, distrib });
+        let roughness = alpha_texture(roughness.1);
+        return Ok(Material::Dielectric {
+            ior,
+            distrib,
+            roughness,
+        });
     }
-    if alpha > 0.0 {
+    if alpha > 0.0 || roughness.1.is_some() {
         warnings.push(format!(
             "{path}: a thin dielectric is always smooth; inputs:roughness ignored"
         ));
@@ -189,14 +247,24 @@ fn dielectric(
     Ok(Material::ThinDielectric { ior })
 }
 
-/// The UsdPreviewSurface inputs that may be read from a texture.
-const TEXTURED_PREVIEW_INPUTS: [&str; 5] = [
-    "diffuseColor",
-    "metallic",
-    "roughness",
-    "clearcoat",
-    "opacity",
-];
+/// The slot of a textured UsdPreviewSurface input; `None` for inputs the BSDF does not read
+/// from textures (`emissiveColor` is read by [`emissive_textures`]).
+fn preview_slot<'a>(
+    t: &'a mut PreviewTextures,
+    input: &str,
+) -> Option<&'a mut Option<TextureInput>> {
+    Some(match input {
+        "diffuseColor" => &mut t.diffuse,
+        "specularColor" => &mut t.specular,
+        "metallic" => &mut t.metallic,
+        "roughness" => &mut t.roughness,
+        "clearcoat" => &mut t.clearcoat,
+        "clearcoatRoughness" => &mut t.clearcoat_roughness,
+        "opacity" => &mut t.opacity,
+        "normal" => &mut t.normal,
+        _ => return None,
+    })
+}
 
 /// UsdPreviewSurface (mapping in `material/preview.rs`).
 fn preview_surface(
@@ -216,32 +284,65 @@ fn preview_surface(
     let specular = reflectance(&SpectrumDesc::Rgb(ps.specular_color))?;
     let mut m = PreviewMaterial::new(ps, diffuse, specular);
     for (input, tex) in &ps.textures {
-        if !TEXTURED_PREVIEW_INPUTS.contains(&input.as_str()) {
+        if input == "normal" && decoded_as_srgb(tex) {
             warnings.push(format!(
-                "{path}: a texture on inputs:{input} is not supported yet (supported: {}); \
-                 using the default",
-                TEXTURED_PREVIEW_INPUTS.join(", ")
+                "{}: a normal map decoded as sRGB (sourceColorSpace '{:?}'); normal maps are \
+                 usually raw",
+                tex.shader_path, tex.color_space
             ));
+        }
+        let Some(slot) = preview_slot(&mut m.textures, input) else {
             continue;
-        }
-        if tex.st_primvar != "st" {
-            warnings.push(format!(
-                "{}: primvar '{}' is not read (only primvars:st); using st",
-                tex.shader_path, tex.st_primvar
-            ));
-        }
-        let t = textures
-            .input(tex)
-            .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))?;
-        match input.as_str() {
-            "diffuseColor" => m.textures.diffuse = Some(t),
-            "metallic" => m.textures.metallic = Some(t),
-            "clearcoat" => m.textures.clearcoat = Some(t),
-            "opacity" => m.textures.opacity = Some(t),
-            _ => m.set_roughness_texture(t),
+        };
+        *slot = Some(texture_input(textures, tex)?);
+    }
+    m.prepare_textures();
+    Ok(Material::Preview(Box::new(m)))
+}
+
+/// True when the texture's colour is sRGB-decoded: `sRGB`, or `auto` on a non-float file.
+fn decoded_as_srgb(tex: &TextureDesc) -> bool {
+    let float_file = tex
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("hdr"));
+    match tex.color_space {
+        ColorSpace::Srgb => true,
+        ColorSpace::Auto => !float_file,
+        ColorSpace::Raw => false,
+    }
+}
+
+/// The image and node parameters of a texture, loaded through the cache.
+fn texture_input(
+    cache: &mut TextureCache,
+    tex: &TextureDesc,
+) -> std::result::Result<TextureInput, String> {
+    cache
+        .input(tex)
+        .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))
+}
+
+/// The texture on each material's UsdPreviewSurface `emissiveColor`, if any.
+fn emissive_textures(
+    desc: &SceneDescription,
+    cache: &mut TextureCache,
+) -> Result<Vec<Option<Arc<TextureInput>>>> {
+    fn emissive(m: &MaterialDesc) -> Option<&TextureDesc> {
+        match &m.kind {
+            MaterialKind::PreviewSurface(ps) => ps.texture("emissiveColor"),
+            _ => None,
         }
     }
-    Ok(Material::Preview(Box::new(m)))
+    desc.materials
+        .iter()
+        .map(|m| match emissive(m) {
+            Some(tex) => texture_input(cache, tex)
+                .map(|t| Some(Arc::new(t)))
+                .map_err(|r| Error::prim(&desc.source, &m.prim_path, r)),
+            None => Ok(None),
+        })
+        .collect()
 }
 
 /// A roughness (α or σ) that must be ≥ 0.
@@ -330,6 +431,8 @@ fn ior(i: &IorDesc) -> std::result::Result<Sellmeier, String> {
 fn mesh(
     desc: &SceneDescription,
     m: &MeshDesc,
+    materials: &[Material],
+    emissive: &[Option<Arc<TextureInput>>],
     default_material: u32,
     lights: &mut Vec<Light>,
 ) -> std::result::Result<Mesh, String> {
@@ -343,17 +446,32 @@ fn mesh(
         return Err("points must be finite".into());
     }
     let material = m.material.map_or(default_material, |i| i as u32);
-    let emission = mesh_emission(desc, m)?;
-    let light_offset = emission.map(|(radiance, two_sided)| {
+    let tangents = if materials[material as usize].perturbs_normal() {
+        Tangents::of(&m.positions, &m.indices, m.uvs.as_deref())
+    } else {
+        Tangents::Unused
+    };
+    let emission = match m.material.and_then(|i| emissive[i].as_ref()) {
+        Some(t) if m.light.is_none() => Some((Emitter::Textured(t.clone()), m.double_sided)),
+        _ => mesh_emission(desc, m)?.map(|(r, two)| (Emitter::Constant(r), two)),
+    };
+    let light_offset = emission.map(|(emitter, two_sided)| {
         let offset = lights.len() as u32;
-        for t in &m.indices {
+        for (k, t) in m.indices.iter().enumerate() {
             let p = t.map(|i| m.positions[i as usize]);
-            lights.push(Light::Triangle(TriangleLight::new(
-                m.prim_path.clone(),
-                p,
-                radiance.clone(),
-                two_sided,
-            )));
+            let light = match &emitter {
+                Emitter::Constant(r) => {
+                    TriangleLight::new(m.prim_path.clone(), p, r.clone(), two_sided)
+                }
+                Emitter::Textured(texture) => {
+                    TriangleLight::new(m.prim_path.clone(), p, Spectrum::Constant(0.0), two_sided)
+                        .with_texture(EmissiveTexture {
+                            texture: texture.clone(),
+                            uv: corner_uvs(m, k),
+                        })
+                }
+            };
+            lights.push(Light::Triangle(light));
         }
         offset
     });
@@ -363,9 +481,25 @@ fn mesh(
         indices: m.indices.clone(),
         normals: m.normals.clone(),
         uvs: m.uvs.clone(),
+        tangents,
         material,
         light_offset,
     })
+}
+
+/// What an emissive mesh emits.
+enum Emitter {
+    Constant(Spectrum),
+    /// A textured UsdPreviewSurface `emissiveColor` (RGB radiance in nits per unit).
+    Textured(Arc<TextureInput>),
+}
+
+/// The st of triangle `k`'s corners: the mesh's, or (0, 0), (1, 0), (0, 1) without st (the
+/// barycentric fallback of `SurfaceHit::uv`).
+fn corner_uvs(m: &MeshDesc, k: usize) -> [Vec2; 3] {
+    m.uvs
+        .as_ref()
+        .map_or([Vec2::ZERO, Vec2::X, Vec2::Y], |uvs| uvs[k])
 }
 
 /// The radiance of an emissive mesh (MeshLightAPI first, then the material's emissiveColor).

@@ -5,7 +5,7 @@
 //! side their geometric normal points to; every entity carries its USD prim path so that
 //! errors and reports can name it.
 
-use glam::{DMat4, Mat4, Vec2, Vec3};
+use glam::{Affine2, DMat4, Mat4, Vec2, Vec3};
 use std::path::PathBuf;
 
 /// The whole stage as plain data.
@@ -36,7 +36,8 @@ pub struct MeshDesc {
     /// Optional shading normals, one per triangle corner (vertex and faceVarying
     /// interpolation are both expanded to this), world space, unit length.
     pub normals: Option<Vec<[Vec3; 3]>>,
-    /// Optional `st` texture coordinates, one per triangle corner.
+    /// Optional texture coordinates, one per triangle corner: the primvar named by the
+    /// material's `texcoord` (`primvars:st` by default).
     pub uvs: Option<Vec<[Vec2; 3]>>,
     /// Index into `SceneDescription::materials`.
     pub material: Option<usize>,
@@ -63,6 +64,33 @@ pub struct MaterialDesc {
     pub kind: MaterialKind,
     /// `emissiveColor` of a UsdPreviewSurface: an emitter of that RGB radiance in nits.
     pub emission: Option<[f32; 3]>,
+    /// The inputs of a `spectral:*` shader connected to a `UsdUVTexture`, by input name
+    /// (`"reflectance"`, `"roughness"`); a UsdPreviewSurface keeps its own in
+    /// [`PreviewSurfaceDesc::textures`].
+    pub textures: Vec<(String, TextureDesc)>,
+    /// The float2 primvar every texture of the material reads through its
+    /// `UsdPrimvarReader_float2` (`"st"` when it has no textures): a material reads one
+    /// texture-coordinate set, which the meshes it is bound to keep.
+    pub texcoord: String,
+}
+
+impl MaterialDesc {
+    /// The texture on input `name` of a `spectral:*` shader, if any.
+    pub fn texture(&self, name: &str) -> Option<&TextureDesc> {
+        self.textures
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| t)
+    }
+
+    /// Every texture the material reads (of either kind of shader).
+    pub fn all_textures(&self) -> impl Iterator<Item = &TextureDesc> {
+        let preview = match &self.kind {
+            MaterialKind::PreviewSurface(ps) => ps.textures.as_slice(),
+            _ => &[],
+        };
+        self.textures.iter().chain(preview).map(|(_, t)| t)
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -147,6 +175,9 @@ pub struct TextureDesc {
     pub file: PathBuf,
     /// The `UsdPrimvarReader_float2` varname feeding `inputs:st` ("st" by default).
     pub st_primvar: String,
+    /// The `UsdTransform2d` nodes between the primvar reader and the texture, composed
+    /// (st ↦ texture coordinates); `None` without any.
+    pub st_transform: Option<Affine2>,
     pub wrap_s: Wrap,
     pub wrap_t: Wrap,
     pub color_space: ColorSpace,

@@ -5,6 +5,7 @@ use crate::accel::bvh::Bvh;
 use crate::geometry::triangle::hit_point_error;
 use crate::geometry::Ray;
 use crate::light::{Light, LightHit, LightSampler};
+use crate::material::normal_map::Tangents;
 use crate::material::Material;
 use crate::sensor::Camera;
 use glam::{DMat4, Vec2, Vec3};
@@ -18,6 +19,8 @@ pub struct Mesh {
     pub indices: Vec<[u32; 3]>,
     pub normals: Option<Vec<[Vec3; 3]>>,
     pub uvs: Option<Vec<[Vec2; 3]>>,
+    /// Per-triangle ∂p/∂u, ∂p/∂v when the material perturbs the shading normal.
+    pub tangents: Tangents,
     pub material: u32,
     /// Index of the light of this mesh's triangle 0 (triangle i is light `offset + i`).
     pub light_offset: Option<u32>,
@@ -38,7 +41,7 @@ pub struct SurfaceHit {
     pub p_error: Vec3,
     /// Unit geometric normal of the authored front face.
     pub ng: Vec3,
-    /// Unit shading normal, on the same side as `ng`.
+    /// Unit shading normal, on the same side as `ng`, after the material's normal map.
     pub ns: Vec3,
     pub uv: Vec2,
     pub t: f32,
@@ -132,6 +135,10 @@ impl Scene {
         );
         let p = hit.b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
         let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let uv = mesh.uvs.as_ref().map_or(Vec2::new(hit.b1, hit.b2), |uv| {
+            let [a, b, c] = uv[r.tri as usize];
+            hit.b0 * a + hit.b1 * b + hit.b2 * c
+        });
         let ns = match &mesh.normals {
             Some(n) => {
                 let [n0, n1, n2] = n[r.tri as usize];
@@ -146,10 +153,10 @@ impl Scene {
             }
             None => ng,
         };
-        let uv = mesh.uvs.as_ref().map_or(Vec2::new(hit.b1, hit.b2), |uv| {
-            let [a, b, c] = uv[r.tri as usize];
-            hit.b0 * a + hit.b1 * b + hit.b2 * c
-        });
+        let ns = match mesh.tangents.at(r.tri) {
+            Some(dpduv) => self.materials[mesh.material as usize].shading_normal(uv, ns, ng, dpduv),
+            None => ns,
+        };
         SurfaceHit {
             p,
             p_error: hit_point_error(hit, p0, p1, p2),

@@ -1,5 +1,6 @@
-//! Image textures for UsdPreviewSurface inputs (`UsdUVTexture` read through
-//! `UsdPrimvarReader_float2`).
+//! Image textures for material inputs (`UsdUVTexture` read through
+//! `UsdPrimvarReader_float2`, optionally through `UsdTransform2d` nodes), on UsdPreviewSurface
+//! and on the colour and roughness inputs of the `spectral:*` shaders.
 //!
 //! - **Storage.** An [`ImageTexture`] holds RGBA `f32` texels, row-major, top row first, already
 //!   decoded to linear values for `sourceColorSpace = sRGB` (alpha is never decoded). It is
@@ -7,10 +8,15 @@
 //!   material keeps a [`TextureInput`] (the image plus the node's wrap modes, scale, bias and
 //!   output channel), so a lookup returns plain values and allocates nothing.
 //! - **st convention.** USD's (0, 0) is the *bottom-left* of the image, so v is flipped:
-//!   texel row 0 (the top of the file) covers v ∈ [1 − 1/h, 1].
+//!   texel row 0 (the top of the file) covers v ∈ [1 − 1/h, 1]. st comes from the float2
+//!   primvar the reader names (one per material, `MaterialDesc::texcoord`), through the
+//!   composed `UsdTransform2d` nodes (`TextureInput::transform`: in · scale, rotated
+//!   counter-clockwise by `rotation` degrees, plus `translation`, as the UsdPreviewSurface
+//!   specification defines it).
 //! - **Filtering.** Bilinear between the four texel centres around (u·w − ½, (1 − v)·h − ½);
 //!   no mip-mapping and no ray differentials, so minified textures alias (noise that the
-//!   pixel samples average out, not bias in the mean over a texel-constant region).
+//!   pixel samples average out, not bias in the mean over a texel-constant region). A
+//!   footprint would have to reach `Material::bsdf` from every integrator; not done yet.
 //! - **Wrap modes** (UsdUVTexture `wrapS`/`wrapT`): repeat, clamp (to the edge texel), mirror
 //!   (period 2n), black (texels outside the image are (0, 0, 0, 0)); `useMetadata` is read as
 //!   repeat. The output is `texel · scale + bias`, per channel, as the spec says.
@@ -32,7 +38,7 @@
 
 use crate::imageio;
 use crate::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
-use glam::Vec2;
+use glam::{Affine2, Vec2};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -146,12 +152,18 @@ pub struct TextureInput {
     /// Returned when st is not finite.
     pub fallback: [f32; 4],
     pub channel: TextureChannel,
+    /// UsdTransform2d applied to st before the lookup (`None`: identity).
+    pub transform: Option<Affine2>,
 }
 
 impl TextureInput {
-    /// `texel · scale + bias` at st = `uv`, all four channels.
+    /// `texel · scale + bias` at st = `uv` (through the UsdTransform2d), all four channels.
     #[inline]
     pub fn rgba(&self, uv: Vec2) -> [f32; 4] {
+        let uv = match &self.transform {
+            Some(t) => t.transform_point2(uv),
+            None => uv,
+        };
         if !uv.is_finite() {
             return self.fallback;
         }
@@ -201,6 +213,7 @@ impl TextureCache {
             bias: desc.bias,
             fallback: desc.fallback,
             channel: desc.channel,
+            transform: desc.st_transform,
         })
     }
 

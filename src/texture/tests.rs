@@ -52,6 +52,7 @@ fn scale_bias_channels_and_fallback() {
         bias: [0.5, 0.0, 0.0, -0.5],
         fallback: [7.0; 4],
         channel: TextureChannel::A,
+        transform: None,
     };
     let uv = Vec2::new(0.25, 0.25);
     assert_eq!(input.rgba(uv), [6.5, 3.0, 1.5, 0.5]);
@@ -82,4 +83,33 @@ fn rejects_bad_texels() {
     assert!(ImageTexture::from_texels(2, 1, vec![[0.0; 4]]).is_none());
     assert!(ImageTexture::from_texels(1, 1, vec![[f32::NAN; 4]]).is_none());
     assert!(ImageTexture::from_texels(0, 0, vec![]).is_none());
+}
+
+#[test]
+fn the_st_transform_applies_before_the_lookup() {
+    let img = Arc::new(two_by_two());
+    let input = TextureInput {
+        image: img,
+        wrap: [Wrap::Clamp; 2],
+        scale: [1.0; 4],
+        bias: [0.0; 4],
+        fallback: [7.0; 4],
+        channel: TextureChannel::R,
+        // UsdTransform2d: scale (0.5, 1), then rotation 90° counter-clockwise, then
+        // translation (0.5, 0).
+        transform: Some(Affine2::from_scale_angle_translation(
+            Vec2::new(0.5, 1.0),
+            std::f32::consts::FRAC_PI_2,
+            Vec2::new(0.5, 0.0),
+        )),
+    };
+    let at = input.float(Vec2::new(0.75, 0.25));
+    // (0.75, 0.25) ↦ (0.375, 0.25) ↦ (−0.25, 0.375) ↦ (0.25, 0.375).
+    let expected = at_clamped(0.25, 0.375);
+    assert!((at - expected).abs() < 1e-5, "{at} vs {expected}");
+    assert_eq!(input.rgba(Vec2::new(f32::NAN, 0.0)), [7.0; 4]);
+}
+
+fn at_clamped(u: f32, v: f32) -> f32 {
+    at(&two_by_two(), u, v, Wrap::Clamp)
 }

@@ -9,7 +9,8 @@ use crate::scene::desc::{
     ColorSpace, IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc,
     TextureChannel, TextureDesc, Wrap,
 };
-use crate::Result;
+use crate::{Error, Result};
+use glam::{Affine2, Vec2};
 
 /// How many connection hops (through NodeGraph / Material interfaces) are followed.
 const MAX_CONNECTION_DEPTH: usize = 32;
@@ -104,12 +105,36 @@ pub(super) fn read_material(ctx: &mut Ctx, path: &sdf::Path) -> Result<Option<Ma
         );
         return Ok(None);
     };
-    let (kind, emission) = read_surface(ctx, &shader)?;
-    Ok(Some(MaterialDesc {
+    let (kind, emission, textures) = read_surface(ctx, &shader)?;
+    let mut desc = MaterialDesc {
         prim_path: path.as_str().to_string(),
         kind,
         emission,
-    }))
+        textures,
+        texcoord: "st".into(),
+    };
+    desc.texcoord = texcoord(ctx, &material, &desc)?;
+    Ok(Some(desc))
+}
+
+/// The one texture-coordinate primvar the material's textures read (`st` without textures);
+/// an error when two textures read different ones.
+fn texcoord(ctx: &Ctx, material: &usd::Prim, desc: &MaterialDesc) -> Result<String> {
+    let mut textures = desc.all_textures();
+    let Some(first) = textures.next() else {
+        return Ok("st".into());
+    };
+    match textures.find(|t| t.st_primvar != first.st_primvar) {
+        None => Ok(first.st_primvar.clone()),
+        Some(other) => Err(ctx.err(
+            material,
+            format!(
+                "<{}> reads primvars:{} but <{}> reads primvars:{}; a material may read only \
+                 one texture-coordinate primvar",
+                first.shader_path, first.st_primvar, other.shader_path, other.st_primvar
+            ),
+        )),
+    }
 }
 
 /// Follows the material's `outputs:surface` (through NodeGraphs) to a Shader prim.
@@ -139,8 +164,12 @@ fn surface_shader(ctx: &Ctx, material: &usd::Prim) -> Result<Option<usd::Prim>> 
     ))
 }
 
+/// What a surface shader defines: the material model, its emission, and the textures on the
+/// inputs of a `spectral:*` shader.
+type Surface = (MaterialKind, Option<[f32; 3]>, Vec<(String, TextureDesc)>);
+
 /// The material model of a surface shader, by `info:id`, and its emission.
-fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<(MaterialKind, Option<[f32; 3]>)> {
+fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<Surface> {
     let Some(id) = ctx.token(shader, "info:id")? else {
         return Err(ctx.err(
             shader,
@@ -154,7 +183,7 @@ fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<(MaterialKind, Opti
             .iter()
             .any(|&c| c != 0.0)
             .then_some(preview.emissive_color);
-        return Ok((MaterialKind::PreviewSurface(preview), emission));
+        return Ok((MaterialKind::PreviewSurface(preview), emission, Vec::new()));
     }
     let Some(vocabulary) = vocab::shader_inputs(&id) else {
         let reason = format!(
@@ -164,7 +193,14 @@ fn read_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<(MaterialKind, Opti
         return Err(ctx.err(shader, reason));
     };
     check_inputs(ctx, shader, &id, vocabulary)?;
-    Ok((spectral_material(ctx, shader, &id)?, None))
+    let mut textures = Vec::new();
+    for name in vocab::texturable_inputs(&id) {
+        if let Some(t) = texture_input(ctx, shader, name)? {
+            textures.push((name.to_string(), t));
+        }
+    }
+    let kind = spectral_material(ctx, shader, &id, &textures)?;
+    Ok((kind, None, textures))
 }
 
 /// Fails on an authored `inputs:*` that the `spectral:*` shader `id` does not define.
@@ -188,12 +224,18 @@ fn check_inputs(ctx: &Ctx, shader: &usd::Prim, id: &str, vocabulary: &[&str]) ->
     Ok(())
 }
 
-/// A `spectral:*` material model.
-fn spectral_material(ctx: &mut Ctx, shader: &usd::Prim, id: &str) -> Result<MaterialKind> {
+/// A `spectral:*` material model; `textures` are its textured inputs (read by the builder).
+fn spectral_material(
+    ctx: &mut Ctx,
+    shader: &usd::Prim,
+    id: &str,
+    textures: &[(String, TextureDesc)],
+) -> Result<MaterialKind> {
     let mut inputs = Inputs {
         ctx,
         shader,
-        textured: Vec::new(),
+        textured: textures.iter().map(|(n, _)| n.clone()).collect(),
+        spectral: Some(id.to_string()),
     };
     let roughness = inputs.f32("roughness")?.unwrap_or(0.0);
     Ok(match id {
@@ -219,7 +261,7 @@ fn spectral_material(ctx: &mut Ctx, shader: &usd::Prim, id: &str) -> Result<Mate
 }
 
 /// The UsdPreviewSurface inputs that may be connected to a `UsdUVTexture`.
-const TEXTURABLE_INPUTS: [&str; 8] = [
+const TEXTURABLE_INPUTS: [&str; 9] = [
     "diffuseColor",
     "emissiveColor",
     "specularColor",
@@ -228,6 +270,7 @@ const TEXTURABLE_INPUTS: [&str; 8] = [
     "clearcoat",
     "clearcoatRoughness",
     "opacity",
+    "normal",
 ];
 
 /// Reads a UsdPreviewSurface, warning about inputs it cannot honour.
@@ -244,6 +287,7 @@ fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDe
         ctx,
         shader,
         textured: textures.iter().map(|(n, _)| n.clone()).collect(),
+        spectral: None,
     };
     Ok(PreviewSurfaceDesc {
         diffuse_color: inputs.rgb("diffuseColor")?.unwrap_or(d.diffuse_color),
@@ -298,6 +342,9 @@ struct Inputs<'a, 's> {
     shader: &'a usd::Prim,
     /// Inputs already read as textures (their value is unset here, without a warning).
     textured: Vec<String>,
+    /// The `info:id` of a `spectral:*` shader, whose other node connections are errors;
+    /// `None` for UsdPreviewSurface, where they are warnings.
+    spectral: Option<String>,
 }
 
 impl Inputs<'_, '_> {
@@ -324,8 +371,21 @@ impl Inputs<'_, '_> {
                 .ctx
                 .err(&node_prim, format!("unknown shader info:id '{id}'")));
         }
+        if let Some(shader_id) = &self.spectral {
+            let accepted = vocab::texturable_inputs(shader_id)
+                .iter()
+                .map(|i| format!("inputs:{i}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let reason = format!(
+                "inputs:{name} is connected to <{}> ({id}), but {shader_id} reads only a value \
+                 there (texture connections are accepted on {accepted}, from a UsdUVTexture)",
+                node.as_str()
+            );
+            return Err(self.ctx.err(self.shader, reason));
+        }
         let message = format!(
-            "inputs:{name} is connected to <{}> ({id}): only UsdPreviewSurface inputs read UsdUVTexture nodes; using the default",
+            "inputs:{name} is connected to <{}> ({id}), but this input cannot be read from a texture; using the default",
             node.as_str()
         );
         self.ctx.warn(self.shader, message);
@@ -546,10 +606,12 @@ fn uv_texture(ctx: &mut Ctx, prim: &usd::Prim, output: &str) -> Result<TextureDe
             return Err(ctx.err(prim, reason));
         }
     };
+    let (st_primvar, st_transform) = st_source(ctx, prim)?;
     Ok(TextureDesc {
         shader_path: prim.path().as_str().to_string(),
         file,
-        st_primvar: st_primvar(ctx, prim)?,
+        st_primvar,
+        st_transform,
         wrap_s: wrap(ctx, prim, "inputs:wrapS")?,
         wrap_t: wrap(ctx, prim, "inputs:wrapT")?,
         color_space: color_space(ctx, prim)?,
@@ -616,17 +678,92 @@ fn vec4(ctx: &Ctx, prim: &usd::Prim, attr: &str, default: [f32; 4]) -> Result<[f
 }
 
 /// The primvar named by the `UsdPrimvarReader_float2` feeding the texture's `inputs:st`
-/// ("st" when st is unconnected or the reader names none).
-fn st_primvar(ctx: &mut Ctx, prim: &usd::Prim) -> Result<String> {
-    let Resolved::Node(reader, _) = resolve_input(ctx, prim, "inputs:st")? else {
-        return Ok("st".into());
-    };
-    let reader = ctx.stage.prim(reader);
-    let id = ctx.token(&reader, "info:id")?.unwrap_or_default();
-    if id != "UsdPrimvarReader_float2" {
-        let reason =
-            format!("inputs:st comes from '{id}'; only UsdPrimvarReader_float2 is supported");
-        return Err(ctx.err(&reader, reason));
+/// ("st" when st is unconnected or the reader names none), and the composition of the
+/// `UsdTransform2d` nodes on the way (`None` without any).
+fn st_source(ctx: &mut Ctx, prim: &usd::Prim) -> Result<(String, Option<Affine2>)> {
+    let mut transform: Option<Affine2> = None;
+    let (mut node, mut attr) = (prim.clone(), "inputs:st");
+    for _ in 0..MAX_CONNECTION_DEPTH {
+        let Resolved::Node(source, _) = resolve_input(ctx, &node, attr)? else {
+            return Ok(("st".into(), transform));
+        };
+        let source = ctx.stage.prim(source);
+        match ctx.token(&source, "info:id")?.unwrap_or_default().as_str() {
+            "UsdPrimvarReader_float2" => {
+                let varname = node_token(ctx, &source, "inputs:varname")?;
+                return Ok((varname.unwrap_or_else(|| "st".into()), transform));
+            }
+            "UsdTransform2d" => {
+                // This node is applied before the ones found so far (nearer the texture).
+                let t = transform2d(ctx, &source)?;
+                transform = Some(transform.map_or(t, |outer| outer * t));
+                (node, attr) = (source, "inputs:in");
+            }
+            id => {
+                let reason = format!(
+                    "{attr} comes from '{id}'; only UsdPrimvarReader_float2 and UsdTransform2d \
+                     are supported"
+                );
+                return Err(ctx.err(&source, reason));
+            }
+        }
     }
-    Ok(node_token(ctx, &reader, "inputs:varname")?.unwrap_or_else(|| "st".into()))
+    Err(ctx.err(prim, "inputs:st: connection chain too long (cycle?)"))
+}
+
+/// A `UsdTransform2d` node: result = in · scale, rotated by `rotation` degrees
+/// counter-clockwise, plus `translation` (UsdPreviewSurface specification, "Transform2d").
+fn transform2d(ctx: &Ctx, prim: &usd::Prim) -> Result<Affine2> {
+    let rotation = node_float(ctx, prim, "inputs:rotation", 0.0)?;
+    let scale = node_vec2(ctx, prim, "inputs:scale", [1.0; 2])?;
+    let translation = node_vec2(ctx, prim, "inputs:translation", [0.0; 2])?;
+    Ok(Affine2::from_scale_angle_translation(
+        Vec2::from_array(scale),
+        rotation.to_radians(),
+        Vec2::from_array(translation),
+    ))
+}
+
+/// A finite float input of a node (a value, possibly through interface connections).
+fn node_float(ctx: &Ctx, prim: &usd::Prim, attr: &str, default: f32) -> Result<f32> {
+    let v = match node_value(ctx, prim, attr)? {
+        Some(v) => values::to_f64(&v)
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| node_type_err(ctx, prim, attr, &v, "a finite float"))?,
+        None => return Ok(default),
+    };
+    Ok(v as f32)
+}
+
+/// A finite float2 input of a node.
+fn node_vec2(ctx: &Ctx, prim: &usd::Prim, attr: &str, default: [f32; 2]) -> Result<[f32; 2]> {
+    let v = match node_value(ctx, prim, attr)? {
+        Some(v) => values::to_vec2(&v)
+            .filter(|x| x.iter().all(|c| c.is_finite()))
+            .ok_or_else(|| node_type_err(ctx, prim, attr, &v, "a finite float2"))?,
+        None => return Ok(default),
+    };
+    Ok(v.map(|c| c as f32))
+}
+
+/// The value of a node's input; an error when it is driven by another node.
+fn node_value(ctx: &Ctx, prim: &usd::Prim, attr: &str) -> Result<Option<sdf::Value>> {
+    match resolve_input(ctx, prim, attr)? {
+        Resolved::Unset => Ok(None),
+        Resolved::Value(v) => Ok(Some(v)),
+        Resolved::Node(node, _) => Err(ctx.err(
+            prim,
+            format!(
+                "'{attr}' is connected to <{}>; only a value is supported here",
+                node.as_str()
+            ),
+        )),
+    }
+}
+
+fn node_type_err(ctx: &Ctx, prim: &usd::Prim, attr: &str, v: &sdf::Value, what: &str) -> Error {
+    ctx.err(
+        prim,
+        format!("'{attr}' is {}, expected {what}", values::kind(v)),
+    )
 }

@@ -1,5 +1,9 @@
-//! UsdGeomMesh: topology validation, fan triangulation, winding, primvars (normals, st) and
-//! the transform to world space.
+//! UsdGeomMesh: topology validation, fan triangulation, winding, primvars (normals, texture
+//! coordinates) and the transform to world space.
+//!
+//! Texture coordinates: a mesh piece keeps the one float2 primvar its material reads
+//! (`MaterialDesc::texcoord`, `st` by default), with any interpolation (constant, uniform,
+//! vertex/varying, faceVarying) and optional `:indices`, expanded per triangle corner.
 
 use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
 use openusd::usd;
@@ -16,8 +20,9 @@ pub(super) struct MeshGeometry {
     pub triangles: Vec<Triangle>,
     /// Shading normals per triangle corner, world space, unit length.
     pub normals: Option<Vec<[Vec3; 3]>>,
-    pub uvs: Option<Vec<[Vec2; 3]>>,
     pub double_sided: bool,
+    /// The polygon topology (for reading primvars later).
+    topology: Topology,
     /// Number of polygons (for GeomSubset face indices).
     pub face_count: usize,
 }
@@ -62,12 +67,6 @@ struct Primvar<T> {
     interpolation: Interpolation,
 }
 
-/// Per-corner attributes of the triangles, in object space.
-struct CornerData {
-    normals: Option<Vec<[DVec3; 3]>>,
-    uvs: Option<Vec<[Vec2; 3]>>,
-}
-
 /// Reads a Mesh prim into world-space triangles; `None` (with a warning) when it has nothing
 /// to render. `local_to_world` is in stage space.
 pub(super) fn read_geometry(
@@ -83,20 +82,8 @@ pub(super) fn read_geometry(
     };
     let holes = hole_mask(ctx, prim, topology.counts.len())?;
     let triangles = triangulate(&topology, &holes, flips(ctx, prim, &to_world)?);
-    let corners = CornerData {
-        normals: read_normals(ctx, prim, &topology, &triangles)?,
-        uvs: read_uvs(ctx, prim, &topology, &triangles)?,
-    };
-    assemble(
-        ctx,
-        prim,
-        &to_world,
-        &points,
-        triangles,
-        corners,
-        topology.counts.len(),
-    )
-    .map(Some)
+    let normals = read_normals(ctx, prim, &topology, &triangles)?;
+    assemble(ctx, prim, &to_world, &points, triangles, normals, topology).map(Some)
 }
 
 /// Turns a tessellated intrinsic shape (Sphere, Cube, ...) into world-space triangles.
@@ -126,18 +113,14 @@ pub(super) fn shape_geometry(
         .iter()
         .map(|t| t.corners.each_ref().map(normal))
         .collect();
-    let corners = CornerData {
-        normals: Some(normals),
-        uvs: None,
-    };
     assemble(
         ctx,
         prim,
         &to_world,
         &shape.points,
         triangles,
-        corners,
-        topology.counts.len(),
+        Some(normals),
+        topology,
     )
     .map(Some)
 }
@@ -159,31 +142,29 @@ fn flips(ctx: &Ctx, prim: &usd::Prim, to_world: &DMat4) -> Result<bool> {
     Ok(left_handed(ctx, prim)? != (to_world.determinant() < 0.0))
 }
 
-/// Transforms points and corner data to world space; `doubleSided` defaults to the schema
-/// fallback (true only for a Plane).
+/// Transforms points and object-space corner normals to world space; `doubleSided`
+/// defaults to the schema fallback (true only for a Plane).
 fn assemble(
     ctx: &Ctx,
     prim: &usd::Prim,
     to_world: &DMat4,
     points: &[DVec3],
     triangles: Vec<Triangle>,
-    corners: CornerData,
-    face_count: usize,
+    normals: Option<Vec<[DVec3; 3]>>,
+    topology: Topology,
 ) -> Result<MeshGeometry> {
     let positions: Vec<Vec3> = points
         .iter()
         .map(|&p| to_world.transform_point3(p).as_vec3())
         .collect();
-    let normals = corners
-        .normals
-        .map(|n| world_normals(&n, &triangles, &positions, to_world));
+    let normals = normals.map(|n| world_normals(&n, &triangles, &positions, to_world));
     Ok(MeshGeometry {
         positions,
         triangles,
         normals,
-        uvs: corners.uvs,
         double_sided: ctx.bool_or(prim, "doubleSided", ctx.type_name(prim)? == "Plane")?,
-        face_count,
+        face_count: topology.counts.len(),
+        topology,
     })
 }
 
@@ -336,14 +317,15 @@ fn read_normals(
     Ok(expand(ctx, prim, &primvar, topology, triangles))
 }
 
-/// Reads `primvars:st` per triangle corner; `None` when absent or invalid (warned).
-fn read_uvs(
+/// Reads the float2 primvar `primvars:<name>` (texture coordinates) per triangle corner;
+/// `None` when absent or invalid (warned).
+pub(super) fn read_texcoords(
     ctx: &mut Ctx,
     prim: &usd::Prim,
-    topology: &Topology,
-    triangles: &[Triangle],
+    geometry: &MeshGeometry,
+    name: &str,
 ) -> Result<Option<Vec<[Vec2; 3]>>> {
-    let name = "primvars:st";
+    let name = &format!("primvars:{name}");
     let Some(values) = ctx.vec2_array(prim, name)? else {
         return Ok(None);
     };
@@ -354,7 +336,13 @@ fn read_uvs(
     let Some(primvar) = primvar(ctx, prim, name, values, Interpolation::Constant)? else {
         return Ok(None);
     };
-    Ok(expand(ctx, prim, &primvar, topology, triangles))
+    Ok(expand(
+        ctx,
+        prim,
+        &primvar,
+        &geometry.topology,
+        &geometry.triangles,
+    ))
 }
 
 /// Completes a primvar with its `interpolation` metadata and `:indices`.
@@ -490,17 +478,19 @@ fn geometric_normal(tri: &Triangle, positions: &[Vec3]) -> Vec3 {
 }
 
 /// Builds a `MeshDesc` from the triangles whose face `keep` selects, with the positions
-/// compacted to the points they use. Material and light are left for the caller.
+/// compacted to the points they use and `all_uvs` (per triangle of the whole mesh, from
+/// [`read_texcoords`]) kept for them. Material and light are left for the caller.
 pub(super) fn to_desc(
     geometry: &MeshGeometry,
     prim_path: &str,
     keep: impl Fn(usize) -> bool,
+    all_uvs: Option<&[[Vec2; 3]]>,
 ) -> MeshDesc {
     let mut remap = vec![u32::MAX; geometry.positions.len()];
     let mut positions = Vec::new();
     let mut indices = Vec::new();
     let mut normals = geometry.normals.as_ref().map(|_| Vec::new());
-    let mut uvs = geometry.uvs.as_ref().map(|_| Vec::new());
+    let mut uvs = all_uvs.map(|_| Vec::new());
     for (t, tri) in geometry
         .triangles
         .iter()
@@ -518,7 +508,7 @@ pub(super) fn to_desc(
         if let (Some(out), Some(all)) = (normals.as_mut(), geometry.normals.as_ref()) {
             out.push(all[t]);
         }
-        if let (Some(out), Some(all)) = (uvs.as_mut(), geometry.uvs.as_ref()) {
+        if let (Some(out), Some(all)) = (uvs.as_mut(), all_uvs) {
             out.push(all[t]);
         }
     }

@@ -23,7 +23,7 @@ mod xform;
 #[cfg(test)]
 mod tests;
 
-use glam::DMat4;
+use glam::{DMat4, Vec2};
 use openusd::{sdf, usd};
 use std::collections::HashMap;
 use std::path::Path;
@@ -249,17 +249,24 @@ impl<'s> Reader<'s> {
         };
         let (subsets, face_group) = self.material_subsets(prim, geometry.face_count)?;
         let mut pieces = Vec::new();
-        let rest = mesh::to_desc(&geometry, prim.path().as_str(), |f| {
-            face_group.get(f).copied().flatten().is_none()
-        });
-        pieces.push(MeshDesc {
-            material: self.bound_material_index(prim)?,
-            ..rest
-        });
+        let mut uv_sets = Vec::new();
+        let material = self.bound_material_index(prim)?;
+        let uvs = self.texcoord_set(prim, &geometry, material, &mut uv_sets)?;
+        let rest = mesh::to_desc(
+            &geometry,
+            prim.path().as_str(),
+            |f| face_group.get(f).copied().flatten().is_none(),
+            uv_sets[uvs].1.as_deref(),
+        );
+        pieces.push(MeshDesc { material, ..rest });
         for (g, (subset_path, material)) in subsets.iter().enumerate() {
-            let piece = mesh::to_desc(&geometry, subset_path, |f| {
-                face_group.get(f).copied().flatten() == Some(g)
-            });
+            let uvs = self.texcoord_set(prim, &geometry, *material, &mut uv_sets)?;
+            let piece = mesh::to_desc(
+                &geometry,
+                subset_path,
+                |f| face_group.get(f).copied().flatten() == Some(g),
+                uv_sets[uvs].1.as_deref(),
+            );
             pieces.push(MeshDesc {
                 material: *material,
                 ..piece
@@ -282,9 +289,38 @@ impl<'s> Reader<'s> {
         else {
             return Ok(());
         };
-        let piece = mesh::to_desc(&geometry, prim.path().as_str(), |_| true);
+        let piece = mesh::to_desc(&geometry, prim.path().as_str(), |_| true, None);
         let material = self.bound_material_index(prim)?;
         self.push_meshes(prim, vec![MeshDesc { material, ..piece }], is_light)
+    }
+
+    /// The index in `sets` of the texture coordinates that `material` reads on the mesh,
+    /// reading them on first use; warns when a textured material's primvar is missing (the
+    /// barycentric coordinates are used then).
+    fn texcoord_set(
+        &mut self,
+        prim: &usd::Prim,
+        geometry: &mesh::MeshGeometry,
+        material: Option<usize>,
+        sets: &mut Vec<(String, Option<Vec<[Vec2; 3]>>)>,
+    ) -> Result<usize> {
+        let (name, textured) = match material.map(|i| &self.desc.materials[i]) {
+            Some(m) => (m.texcoord.clone(), m.all_textures().next().is_some()),
+            None => ("st".to_string(), false),
+        };
+        if let Some(i) = sets.iter().position(|(n, _)| *n == name) {
+            return Ok(i);
+        }
+        let uvs = mesh::read_texcoords(&mut self.ctx, prim, geometry, &name)?;
+        if uvs.is_none() && textured {
+            let message = format!(
+                "a textured material reads primvars:{name}, which the mesh does not have; \
+                 textures are looked up at the triangles' barycentric coordinates"
+            );
+            self.ctx.warn(prim, message);
+        }
+        sets.push((name, uvs));
+        Ok(sets.len() - 1)
     }
 
     /// Adds the meshes of one prim, with its emission when it is a mesh light.

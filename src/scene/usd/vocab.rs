@@ -77,3 +77,13 @@ pub(super) fn shader_inputs(id: &str) -> Option<&'static [&'static str]> {
         _ => return None,
     })
 }
+
+/// The inputs of a `spectral:*` shader that may be connected to a `UsdUVTexture`: colour
+/// reflectances and roughnesses.
+pub(super) fn texturable_inputs(id: &str) -> &'static [&'static str] {
+    match id {
+        "spectral:diffuse" | "spectral:plastic" => &["reflectance", "roughness"],
+        "spectral:conductor" | "spectral:dielectric" => &["roughness"],
+        _ => &[],
+    }
+}

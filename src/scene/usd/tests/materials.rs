@@ -251,6 +251,55 @@ fn an_unknown_wrap_token_is_an_error() {
     );
 }
 
+/// `WOOD` with a `spectral:plastic` surface whose reflectance and roughness are textured.
+fn spectral_wood(ior_line: &str) -> String {
+    let surface = format!(
+        "uniform token info:id = \"spectral:plastic\"\n            \
+         color3f inputs:reflectance.connect = </Looks/Wood/Tex.outputs:rgb>\n            \
+         float inputs:roughness.connect = </Looks/Wood/Tex.outputs:r>\n            {ior_line}"
+    );
+    let start = WOOD
+        .find("uniform token info:id = \"UsdPreviewSurface\"")
+        .unwrap();
+    let end = WOOD[start..].find("token outputs:surface").unwrap() + start;
+    format!("{}{surface}\n            {}", &WOOD[..start], &WOOD[end..])
+}
+
+#[test]
+fn spectral_shaders_read_textures_on_reflectance_and_roughness() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("wood.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let path = dir.join("stage.usda");
+    let text = spectral_wood("float inputs:ior = 1.4");
+    std::fs::write(&path, format!("{METRES_Y_UP}{text}")).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let wood = material_of(&desc, "Wood");
+    let MaterialKind::Plastic { ior, .. } = &wood.kind else {
+        panic!("plastic: {:?}", wood.kind)
+    };
+    assert_eq!(*ior, 1.4);
+    let reflectance = wood.texture("reflectance").expect("textured reflectance");
+    assert_eq!(reflectance.channel, crate::scene::desc::TextureChannel::Rgb);
+    assert_eq!(reflectance.shader_path, "/Looks/Wood/Tex");
+    let roughness = wood.texture("roughness").expect("textured roughness");
+    assert_eq!(roughness.channel, crate::scene::desc::TextureChannel::R);
+    assert_eq!(wood.all_textures().count(), 2);
+    // A texture on an input that only takes a value is an error naming the input.
+    let bad = spectral_wood("float inputs:ior.connect = </Looks/Wood/Tex.outputs:r>");
+    std::fs::write(&path, format!("{METRES_Y_UP}{bad}")).unwrap();
+    let err = super::super::load(&path).expect_err("ior cannot be textured");
+    assert_one_line(&err, "stage.usda");
+    let text = err.to_string();
+    for part in [
+        "/Looks/Wood/S",
+        "inputs:ior",
+        "spectral:plastic",
+        "inputs:reflectance, inputs:roughness",
+    ] {
+        assert!(text.contains(part), "'{part}' not in {text}");
+    }
+}
+
 /// A UsdPreviewSurface with textured diffuseColor and opacity, and an interface input.
 const WOOD: &str = r#"def Scope "Looks" {
     def Material "Wood" {
@@ -333,4 +382,206 @@ def Xform "Forced" {{
         "/Looks/A"
     );
     assert_eq!(index("/Unbound"), None);
+}
+
+/// A Material `name` whose diffuseColor texture reads primvar `varname` (one reader per
+/// entry of `varnames` feeding one texture each: diffuseColor, then roughness).
+fn primvar_material(name: &str, varnames: &[&str]) -> String {
+    let inputs = ["color3f inputs:diffuseColor", "float inputs:roughness"];
+    let outputs = ["rgb", "r"];
+    let mut nodes = String::new();
+    let mut connections = String::new();
+    for (k, varname) in varnames.iter().enumerate() {
+        connections += &format!(
+            "        {}.connect = </Looks/{name}/Tex{k}.outputs:{}>\n",
+            inputs[k], outputs[k]
+        );
+        nodes += &format!(
+            r#"    def Shader "Reader{k}" {{
+        uniform token info:id = "UsdPrimvarReader_float2"
+        token inputs:varname = "{varname}"
+        float2 outputs:result
+    }}
+    def Shader "Tex{k}" {{
+        uniform token info:id = "UsdUVTexture"
+        asset inputs:file = @tex.png@
+        float2 inputs:st.connect = </Looks/{name}/Reader{k}.outputs:result>
+        float3 outputs:rgb
+        float outputs:r
+    }}
+"#
+        );
+    }
+    format!(
+        r#"def Material "{name}" {{
+    token outputs:surface.connect = </Looks/{name}/S.outputs:surface>
+    def Shader "S" {{
+        uniform token info:id = "UsdPreviewSurface"
+{connections}        token outputs:surface
+    }}
+{nodes}}}
+"#
+    )
+}
+
+/// A quad (two triangles) with primvars `st` (vertex), `uv1` (faceVarying, indexed), `map1`
+/// (uniform) and `flat` (constant), bound to `/Looks/<material>`.
+fn primvar_mesh(name: &str, material: &str) -> String {
+    format!(
+        r#"def Mesh "{name}" {{
+    int[] faceVertexCounts = [3, 3]
+    int[] faceVertexIndices = [0, 1, 2, 0, 2, 3]
+    point3f[] points = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+    texCoord2f[] primvars:st = [(0, 0), (1, 0), (1, 1), (0, 1)] (
+        interpolation = "vertex"
+    )
+    float2[] primvars:uv1 = [(5, 5), (6, 5), (6, 6)] (
+        interpolation = "faceVarying"
+    )
+    int[] primvars:uv1:indices = [0, 1, 2, 0, 2, 1]
+    texCoord2f[] primvars:map1 = [(0.25, 0.5), (0.75, 0.5)] (
+        interpolation = "uniform"
+    )
+    texCoord2d[] primvars:flat = [(0.5, 0.125)] (
+        interpolation = "constant"
+    )
+    rel material:binding = </Looks/{material}>
+}}
+"#
+    )
+}
+
+#[test]
+fn meshes_keep_the_texcoord_primvar_their_material_reads() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("tex.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let looks: String = [
+        ("St", vec!["st"]),
+        ("Uv1", vec!["uv1"]),
+        ("Map1", vec!["map1", "map1"]),
+        ("Flat", vec!["flat"]),
+        ("Missing", vec!["nowhere"]),
+    ]
+    .iter()
+    .map(|(n, v)| primvar_material(n, v))
+    .collect();
+    let meshes: String = ["St", "Uv1", "Map1", "Flat", "Missing"]
+        .iter()
+        .map(|n| primvar_mesh(n, n))
+        .collect();
+    let path = dir.join("stage.usda");
+    let text = format!("{METRES_Y_UP}def Scope \"Looks\" {{\n{looks}}}\n{meshes}");
+    std::fs::write(&path, text).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let v = |x: f32, y: f32| glam::Vec2::new(x, y);
+    let uvs = |name: &str| mesh(&desc, name).uvs.clone();
+    assert_eq!(material_of(&desc, "Uv1").texcoord, "uv1");
+    assert_eq!(
+        uvs("/St").unwrap()[1],
+        [v(0.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)]
+    );
+    assert_eq!(
+        uvs("/Uv1").unwrap()[1],
+        [v(5.0, 5.0), v(6.0, 6.0), v(6.0, 5.0)]
+    );
+    assert_eq!(uvs("/Map1").unwrap()[0], [v(0.25, 0.5); 3]);
+    assert_eq!(uvs("/Map1").unwrap()[1], [v(0.75, 0.5); 3]);
+    assert_eq!(uvs("/Flat").unwrap()[1], [v(0.5, 0.125); 3]);
+    assert!(uvs("/Missing").is_none());
+    let missing: Vec<_> = desc
+        .warnings
+        .iter()
+        .filter(|w| w.contains("primvars:nowhere"))
+        .collect();
+    assert_eq!(missing.len(), 1, "{:?}", desc.warnings);
+    assert!(missing[0].contains("/Missing"), "{missing:?}");
+}
+
+#[test]
+fn a_material_reading_two_texcoord_primvars_is_an_error() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("tex.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let text = format!(
+        "{METRES_Y_UP}def Scope \"Looks\" {{\n{}}}\n{}",
+        primvar_material("Mixed", &["st", "uv1"]),
+        primvar_mesh("Q", "Mixed")
+    );
+    let path = dir.join("stage.usda");
+    std::fs::write(&path, text).unwrap();
+    let err = super::super::load(&path).expect_err("two primvars");
+    assert_one_line(&err, "stage.usda");
+    let text = err.to_string();
+    for part in ["/Looks/Mixed", "primvars:st", "primvars:uv1", "only one"] {
+        assert!(text.contains(part), "'{part}' not in {text}");
+    }
+}
+
+/// `WOOD` with a UsdTransform2d between the reader and the texture (`transform` lines).
+fn transformed_wood(transform: &str) -> String {
+    let node = format!(
+        r#"def Shader "T" {{
+            uniform token info:id = "UsdTransform2d"
+            float2 inputs:in.connect = </Looks/Wood/Reader.outputs:result>
+            {transform}
+            float2 outputs:result
+        }}
+        def Shader "Tex" {{"#
+    );
+    WOOD.replace("def Shader \"Tex\" {", &node).replace(
+        "float2 inputs:st.connect = </Looks/Wood/Reader.outputs:result>",
+        "float2 inputs:st.connect = </Looks/Wood/T.outputs:result>",
+    )
+}
+
+#[test]
+fn transform2d_nodes_are_read_and_their_inputs_must_be_values() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("wood.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let path = dir.join("stage.usda");
+    let ok =
+        transformed_wood("float inputs:rotation = 90\n            float2 inputs:scale = (2, 1)");
+    std::fs::write(&path, format!("{METRES_Y_UP}{ok}")).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let MaterialKind::PreviewSurface(p) = &material_of(&desc, "Wood").kind else {
+        panic!("preview surface")
+    };
+    let tex = p.texture("diffuseColor").expect("textured");
+    assert_eq!(tex.st_primvar, "uv");
+    let t = tex.st_transform.expect("a transform");
+    let q = t.transform_point2(glam::Vec2::new(1.0, 1.0));
+    assert!((q - glam::Vec2::new(-1.0, 2.0)).length() < 1e-6, "{q}");
+    let bad = transformed_wood("float inputs:rotation.connect = </Looks/Wood/Tex.outputs:r>");
+    std::fs::write(&path, format!("{METRES_Y_UP}{bad}")).unwrap();
+    let err = super::super::load(&path).expect_err("a driven rotation");
+    assert_one_line(&err, "stage.usda");
+    let text = err.to_string();
+    assert!(
+        text.contains("/Looks/Wood/T") && text.contains("inputs:rotation"),
+        "{text}"
+    );
+}
+
+#[test]
+fn geom_subsets_keep_the_primvar_of_their_own_material() {
+    let dir = temp_dir();
+    crate::imageio::write_png_rgba8(&dir.join("tex.png"), &[255, 0, 0, 255], 1, 1).unwrap();
+    let subset = r#"    def GeomSubset "Second" {
+        uniform token elementType = "face"
+        uniform token familyName = "materialBind"
+        int[] indices = [1]
+        rel material:binding = </Looks/Uv1>
+    }
+}"#;
+    let mesh_text = primvar_mesh("Q", "St");
+    let mesh_text = format!("{}{subset}\n", &mesh_text[..mesh_text.rfind('}').unwrap()]);
+    let looks = primvar_material("St", &["st"]) + &primvar_material("Uv1", &["uv1"]);
+    let path = dir.join("stage.usda");
+    let text = format!("{METRES_Y_UP}def Scope \"Looks\" {{\n{looks}}}\n{mesh_text}");
+    std::fs::write(&path, text).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let v = |x: f32, y: f32| glam::Vec2::new(x, y);
+    let first = mesh(&desc, "/Q").uvs.clone().expect("st");
+    let second = mesh(&desc, "/Q/Second").uvs.clone().expect("uv1");
+    assert_eq!(first, vec![[v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0)]]);
+    assert_eq!(second, vec![[v(5.0, 5.0), v(6.0, 6.0), v(6.0, 5.0)]]);
 }

@@ -1,0 +1,92 @@
+//! Inputs of the `spectral:*` materials that are a constant or a `UsdUVTexture` (colour
+//! reflectances and roughnesses), evaluated at the hit's st.
+//!
+//! A textured reflectance is uplifted per lookup like a UsdPreviewSurface colour
+//! (`crate::texture`); a textured roughness is read from the texture's float output as the
+//! shader's own unit (GGX α, Oren–Nayar σ in radians), clamped to ≥ 0.
+
+use super::coat_levels::CoatLevels;
+use crate::bxdf::TrowbridgeReitz;
+use crate::spectral::uplift::reflectance_lookup;
+use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
+use crate::texture::TextureInput;
+use glam::Vec2;
+use std::sync::Arc;
+
+/// A reflectance: a spectrum, or an RGB texture uplifted per lookup.
+#[derive(Clone, Debug)]
+pub enum ColorInput {
+    Constant(Spectrum),
+    Texture(TextureInput),
+}
+
+impl ColorInput {
+    /// The reflectance at st = `uv` for the path's wavelengths, clamped to [0, 1].
+    #[inline]
+    pub fn reflectance(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+        let s = match self {
+            ColorInput::Constant(s) => s.sample(lambda),
+            ColorInput::Texture(t) => {
+                let sigmoid = reflectance_lookup(t.rgb(uv));
+                SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]))
+            }
+        };
+        s.map(|v| v.clamp(0.0, 1.0))
+    }
+}
+
+/// A non-negative scalar (a roughness): a constant, or a texture's float output.
+#[derive(Clone, Debug)]
+pub enum FloatInput {
+    Constant(f32),
+    Texture(TextureInput),
+}
+
+impl FloatInput {
+    #[inline]
+    pub fn eval(&self, uv: Vec2) -> f32 {
+        match self {
+            FloatInput::Constant(v) => *v,
+            FloatInput::Texture(t) => non_negative(t.float(uv)),
+        }
+    }
+}
+
+/// A textured GGX α, and for a coated model the coat's albedo at roughness levels.
+#[derive(Clone, Debug)]
+pub struct AlphaTexture {
+    pub texture: TextureInput,
+    /// The coat's E(μ) and T̄ at levels of √α (plastic only).
+    pub coats: Option<Arc<CoatLevels>>,
+}
+
+impl AlphaTexture {
+    /// α at st = `uv`.
+    #[inline]
+    pub fn alpha(&self, uv: Vec2) -> f32 {
+        non_negative(self.texture.float(uv))
+    }
+
+    /// The GGX distribution at st = `uv`, or `constant` without a texture.
+    #[inline]
+    pub fn distrib(
+        t: Option<&AlphaTexture>,
+        constant: TrowbridgeReitz,
+        uv: Vec2,
+    ) -> TrowbridgeReitz {
+        match t {
+            Some(t) => TrowbridgeReitz::isotropic(t.alpha(uv)),
+            None => constant,
+        }
+    }
+}
+
+/// `v` if finite and positive, else 0.
+#[inline]
+fn non_negative(v: f32) -> f32 {
+    if v.is_finite() {
+        v.max(0.0)
+    } else {
+        0.0
+    }
+}
