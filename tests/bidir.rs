@@ -24,7 +24,7 @@ use spectral_render::integrator::bidir::connect::{
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
 use spectral_render::integrator::bidir::{
-    BidirContext, Mis, MisHeuristic, PathVertex, Sensor, SensorRay, Walk,
+    BidirContext, LightOrigin, Mis, MisHeuristic, PathVertex, Sensor, SensorRay, Walk,
 };
 use spectral_render::integrator::IntegratorKind;
 use spectral_render::light::emit::LightLeSample;
@@ -1166,8 +1166,10 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
             delta_dir: light.is_delta(),
             infinite: path.infinite(),
         };
-        let (o, mut walk) =
-            Walk::light(ctx, li, pmf, &le).unwrap_or_else(|| panic!("emission: light {li} {le:?}"));
+        let o =
+            LightOrigin::new(li, pmf, &le).unwrap_or_else(|| panic!("emission: light {li} {le:?}"));
+        let mut walk =
+            Walk::light(ctx, &o, &le).unwrap_or_else(|| panic!("emission: light {li} {le:?}"));
         origin = Some(o);
         for i in 1..s {
             if i == 1 {

@@ -828,6 +828,96 @@ fn path_light_and_bdpt_meters_agree_in_the_cornell_box() {
     eprintln!("cbox agreement: max |z| = {worst:.2}");
 }
 
+/// Shaped lights (UsdLux ShapingAPI): an IES downlight on a sphere and a rect light with a
+/// soft 40° cone and focus, above a grey floor beside a white wall. Their emission varies with
+/// direction and is zero over part of the sphere of directions, so a light subpath whose
+/// sampled direction carries nothing must still connect its light point to the meter (a bug
+/// once dropped those, reading 35 % low). Path, light tracing and BDPT agree at four meters,
+/// twelve z-tests at a family-wise 1 % (Šidák): |z| < 3.4.
+#[test]
+fn shaped_lights_agree_with_path_light_and_bdpt() {
+    let ies = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ies/downlight.ies");
+    let floor = [
+        DVec3::new(-3.0, 0.0, -3.0),
+        DVec3::new(-3.0, 0.0, 3.0),
+        DVec3::new(3.0, 0.0, 3.0),
+        DVec3::new(3.0, 0.0, -3.0),
+    ];
+    let wall = [
+        DVec3::new(-3.0, 0.0, -1.0),
+        DVec3::new(3.0, 0.0, -1.0),
+        DVec3::new(3.0, 3.0, -1.0),
+        DVec3::new(-3.0, 3.0, -1.0),
+    ];
+    let down = xform(&[("translate", "(0, 2, 0)".into()), ("rotateX", "-90".into())]);
+    let spot = xform(&[
+        ("translate", "(1, 1.5, 0.5)".into()),
+        ("rotateX", "-60".into()),
+    ]);
+    let shaped = |ty: &str, name: &str, inputs: String| {
+        format!(
+            "def {ty} \"{name}\" (\n    prepend apiSchemas = [\"ShapingAPI\"]\n)\n{{\n{inputs}}}\n\n"
+        )
+    };
+    let downlight = shaped(
+        "SphereLight",
+        "Downlight",
+        format!(
+            "    float inputs:radius = 0.03\n    float inputs:intensity = 2000\n    \
+             asset inputs:shaping:ies:file = @{}@\n{down}",
+            ies.display()
+        ),
+    );
+    let spotlight = shaped(
+        "RectLight",
+        "Spot",
+        format!(
+            "    float inputs:width = 0.2\n    float inputs:height = 0.2\n    \
+             float inputs:intensity = 300\n    float inputs:shaping:cone:angle = 40\n    \
+             float inputs:shaping:cone:softness = 0.3\n    float inputs:shaping:focus = 2\n{spot}"
+        ),
+    );
+    let body = header()
+        + &looks("Grey", 0.5)
+        + &quad("Floor", floor, "Grey")
+        + &quad("Wall", wall, "Grey")
+        + &downlight
+        + &spotlight;
+    let scene = load("shaped", &body);
+    let meters = [
+        Meter::illuminance(Vec3::new(0.0, 0.001, 0.0), Vec3::Y).unwrap(),
+        Meter::illuminance(Vec3::new(0.8, 0.001, 0.9), Vec3::Y).unwrap(),
+        Meter::illuminance(Vec3::new(-0.7, 0.001, 0.3), Vec3::Y).unwrap(),
+        Meter::illuminance(Vec3::new(0.5, 1.0, -0.999), Vec3::Z).unwrap(),
+    ];
+    let r: Vec<Vec<Reading>> = ALL
+        .iter()
+        .map(|&k| read_with(&scene, &meters, Stop::RelError(0.01), 31, 5, k))
+        .collect();
+    for (i, m) in meters.iter().enumerate() {
+        eprintln!(
+            "shaped at {}: path {:.3} ± {:.3}, light {:.3} ± {:.3}, bdpt {:.3} ± {:.3}",
+            m.p,
+            r[0][i].value,
+            r[0][i].ci95,
+            r[1][i].value,
+            r[1][i].ci95,
+            r[2][i].value,
+            r[2][i].ci95
+        );
+        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+            let z = z_score(&r[a][i], &r[b][i]);
+            assert!(
+                z.abs() < 3.4,
+                "{} vs {} at {}: z = {z:.2}",
+                ALL[a].name(),
+                ALL[b].name(),
+                m.p
+            );
+        }
+    }
+}
+
 /// Light reaching a meter only through dispersive glass: a BK7 slab between a disk light and
 /// a white floor, the meter looking down at the floor. Every path refracts through the slab,
 /// terminating the secondary wavelengths; the three estimators must still agree, which they

@@ -222,10 +222,15 @@ pub fn trace_light_subpath(
     let Some(le) = light.sample_le(u_pos, u_dir, &ctx.sphere, lambda) else {
         return;
     };
-    let Some((origin, mut walk)) = Walk::light(ctx, index as u32, pmf, &le) else {
+    let Some(origin) = LightOrigin::new(index as u32, pmf, &le) else {
         return;
     };
+    // y_0 is kept even when no radiance leaves along the sampled direction (a shaped light
+    // emitting nothing there): its t = 1 and s ≥ 1 connections do not use that direction.
     path.origin = Some(origin);
+    let Some(mut walk) = Walk::light(ctx, &origin, &le) else {
+        return;
+    };
     loop {
         let Some(Hit::Surface(si)) = ctx.scene.intersect(&walk.ray, walk.t_max) else {
             return;
@@ -251,22 +256,15 @@ pub fn trace_light_subpath(
     }
 }
 
-impl Walk {
-    /// A light subpath leaving light `index` (chosen with probability `pmf`) along the
-    /// emitted ray `le`: the origin y_0 and the walk with β = L |cos θ| / (pmf p_pos p_dir)
-    /// (PBR 3ed §16.3.1, GenerateLightSubpath; Veach 1997 §10.2) and the MIS start
-    /// [tech. rep. (31)–(33), (48)–(50)].
-    pub fn light(
-        ctx: &BidirContext,
-        index: u32,
-        pmf: f32,
-        le: &LightLeSample,
-    ) -> Option<(LightOrigin, Walk)> {
+impl LightOrigin {
+    /// The light's point y_0 of an emitted ray `le` from light `index` (chosen with
+    /// probability `pmf`); None when the ray's densities are unusable.
+    pub fn new(index: u32, pmf: f32, le: &LightLeSample) -> Option<LightOrigin> {
         let emit = pmf * le.pdf_pos_a * le.pdf_dir_w;
-        if le.l.is_black() || !emit.is_finite() || emit <= 0.0 {
+        if !emit.is_finite() || emit <= 0.0 {
             return None;
         }
-        let origin = LightOrigin {
+        Some(LightOrigin {
             light: index,
             p: le.p,
             p_error: le.p_error,
@@ -277,13 +275,26 @@ impl Walk {
             le: le.l,
             infinite: le.infinite,
             delta_dir: le.delta_dir,
-        };
+        })
+    }
+}
+
+impl Walk {
+    /// The walk of a light subpath leaving `origin` along the emitted ray `le`, with
+    /// β = L |cos θ| / (pmf p_pos p_dir) (PBR 3ed §16.3.1, GenerateLightSubpath; Veach 1997
+    /// §10.2) and the MIS start [tech. rep. (31)–(33), (48)–(50)]; None when the ray carries
+    /// no radiance.
+    pub fn light(ctx: &BidirContext, origin: &LightOrigin, le: &LightLeSample) -> Option<Walk> {
+        if le.l.is_black() {
+            return None;
+        }
+        let emit = origin.pmf * le.pdf_pos_a * le.pdf_dir_w;
         let ray = if le.infinite {
             Ray::new(le.p, le.w)
         } else {
             spawn_ray(le.p, le.p_error, le.n, le.w)
         };
-        let walk = Walk {
+        Some(Walk {
             ray,
             t_max: f32::INFINITY,
             beta: le.l * (le.cos_light() / emit),
@@ -292,8 +303,7 @@ impl Walk {
             depth: 0,
             prev: LightSampleContext { p: le.p, n: le.n },
             from_infinite: le.infinite,
-        };
-        Some((origin, walk))
+        })
     }
 }
 
