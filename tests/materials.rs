@@ -728,7 +728,7 @@ fn preview_surface_normal_input_tilts_the_shading_normal() {
     );
     assert_eq!(si.ng, Vec3::Z);
     let lambda = SampledWavelengths::sample_visible(0.3);
-    let bsdf = scene.materials[0].bsdf(si.uv, si.ns, &lambda);
+    let bsdf = scene.materials[0].bsdf(si.uv.into(), si.ns, &lambda);
     assert!((bsdf.frame.n.dot(Vec3::Z) - 0.8).abs() < 1e-5);
     // A normal pointing into the surface is replaced by (0, 0, 1), with a warning.
     let scene = load_looks("normal-down", &looks, "Down").unwrap();
@@ -784,7 +784,10 @@ fn path_tracer_collapses_wavelengths_only_at_dispersive_glass() {
         let dir = temp_dir("collapse");
         let path = write(&dir, "stage.usda", &backdrop_stage(&ball, &looks));
         let scene = spectral_render::scene::load(&path, Some((8, 8))).unwrap();
-        let integrator = PathIntegrator { max_depth: 5 };
+        let integrator = PathIntegrator {
+            max_depth: 5,
+            filter: spectral_render::texture::TextureFilter::Finest,
+        };
         let (mut hero, mut secondary) = (0.0f32, 0.0f32);
         for s in 0..64 {
             let mut sampler = Sampler::new(1, 0, s);

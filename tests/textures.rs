@@ -50,7 +50,7 @@ fn srgb_and_raw_decoding_scale_bias_and_the_cache() {
     let png = dir.join("grey.png");
     imageio::write_png_rgba8(&png, &[128, 128, 128, 128], 1, 1).unwrap();
     let mut cache = TextureCache::default();
-    let uv = Vec2::splat(0.5);
+    let uv = Vec2::splat(0.5).into();
     let srgb = cache.input(&desc(png.clone(), ColorSpace::Srgb)).unwrap();
     let auto = cache.input(&desc(png.clone(), ColorSpace::Auto)).unwrap();
     let raw = cache.input(&desc(png.clone(), ColorSpace::Raw)).unwrap();
@@ -515,8 +515,8 @@ fn assert_same_bsdf(a: &Scene, b: &Scene, x: f32, y: f32) {
     let (sa, sb) = (surface_at(a, x, y), surface_at(b, x, y));
     assert!((sa.ns - sb.ns).length() < 1e-6, "{} vs {}", sa.ns, sb.ns);
     let lambda = SampledWavelengths::sample_visible(0.37);
-    let fa = a.materials[0].bsdf(sa.uv, sa.ns, &lambda);
-    let fb = b.materials[0].bsdf(sb.uv, sb.ns, &lambda);
+    let fa = a.materials[0].bsdf(sa.uv.into(), sa.ns, &lambda);
+    let fb = b.materials[0].bsdf(sb.uv.into(), sb.ns, &lambda);
     let wo = Vec3::new(0.2, -0.3, 0.9).normalize();
     for wi in [Vec3::new(-0.4, 0.1, 0.8), Vec3::new(0.6, 0.2, 0.3), Vec3::Z] {
         let wi = wi.normalize();
