@@ -42,6 +42,10 @@ pub struct RenderOptions {
     /// Record the per-(s, t) decomposition (BDPT only).
     pub strategies: bool,
     pub progress: bool,
+    /// Filter textures over the camera's pixel footprint (MIP-mapped, trilinear); false
+    /// looks every texture up bilinearly at its finest level (pbrt-v4's
+    /// `--disable-texture-filtering`; Mitsuba 3's bitmaps).
+    pub filter_textures: bool,
 }
 
 impl Default for RenderOptions {
@@ -56,6 +60,7 @@ impl Default for RenderOptions {
             mis: MisHeuristic::Power,
             strategies: false,
             progress: false,
+            filter_textures: true,
         }
     }
 }
@@ -113,6 +118,9 @@ impl<'a> Engine<'a> {
 /// The camera's texture footprint for the render's sample count (unknown under a time
 /// budget: `TextureFilter::camera`).
 fn texture_filter(opts: &RenderOptions) -> TextureFilter {
+    if !opts.filter_textures {
+        return TextureFilter::Finest;
+    }
     let spp = match (opts.spp, opts.time_budget) {
         (Some(n), _) => Some(u64::from(n)),
         (None, Some(_)) => None,
