@@ -344,7 +344,7 @@ fn rough_models_converge_to_their_smooth_counterparts() {
             distrib: TrowbridgeReitz::isotropic(alpha),
             roughness: None,
         }
-        .bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda)
+        .bsdf(glam::Vec2::ZERO.into(), Vec3::Z, &lambda)
         .bxdf
     };
     let plastic = |alpha: f32| {
@@ -427,7 +427,7 @@ fn normal_incidence_metal_reflectance_matches_the_tables() {
                 lambda: [l as f32; 4],
                 pdf: [1.0; 4],
             };
-            let bsdf = m.bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda);
+            let bsdf = m.bsdf(glam::Vec2::ZERO.into(), Vec3::Z, &lambda);
             let s = bsdf
                 .bxdf
                 .sample_f(Vec3::Z, 0.5, [0.5; 2], RADIANCE)
@@ -635,7 +635,7 @@ fn dispersion_terminates_secondary_wavelengths_only_when_the_ior_varies() {
         lambda: [450.0, 550.0, 650.0, 750.0],
         pdf: [1.0; 4],
     };
-    match bk7.bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda).bxdf {
+    match bk7.bsdf(glam::Vec2::ZERO.into(), Vec3::Z, &lambda).bxdf {
         Bxdf::Dielectric(d) => assert_eq!(d.eta, data::glass("BK7").unwrap().ior(450.0)),
         _ => panic!(),
     }
