@@ -133,7 +133,7 @@ impl ImageTexture {
         let base = &self.levels[0];
         let level = (width * base.width.max(base.height) as f32).log2();
         let last = self.levels.len() - 1;
-        if !(level > 0.0) {
+        if level.is_nan() || level <= 0.0 {
             return base.bilinear(uv, wrap);
         }
         if level >= last as f32 {

@@ -168,7 +168,8 @@ fn power_of_two_levels_are_block_means() {
 
 #[test]
 fn non_power_of_two_sizes_halve_down_to_one_and_keep_the_mean() {
-    let cases: [((usize, usize), Vec<(usize, usize)>); 4] = [
+    type Sizes = Vec<(usize, usize)>;
+    let cases: [((usize, usize), Sizes); 4] = [
         ((5, 3), vec![(5, 3), (2, 1), (1, 1)]),
         ((1, 1), vec![(1, 1)]),
         ((7, 1), vec![(7, 1), (3, 1), (1, 1)]),
