@@ -12,7 +12,8 @@
 //! constant IOR (and for thin dielectrics, whose directions do not depend on λ) the
 //! wavelengths are never collapsed. The material only reads `lambda`.
 //!
-//! **Textures.** Inputs read from a `UsdUVTexture` are evaluated at the hit's st when the
+//! **Textures.** Inputs read from a `UsdUVTexture` are evaluated at the hit's st, filtered
+//! over its footprint ([`TexCoord`]; only computed when [`Material::is_textured`]), when the
 //! BSDF is built: UsdPreviewSurface's in `preview.rs`, the colour reflectance and roughness of
 //! the `spectral:*` materials through [`ColorInput`], [`FloatInput`] and [`AlphaTexture`]
 //! (`inputs.rs`). Coat albedos that a textured roughness needs come from `coat_levels.rs`.

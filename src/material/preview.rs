@@ -14,9 +14,10 @@
 //!
 //! **Textures.** Every input but `useSpecularWorkflow`, `ior` and `opacityThreshold` may be
 //! connected to a `UsdUVTexture` ([`PreviewTextures`]): the BSDF's inputs are looked up at the
-//! hit's st per BSDF, colours uplifted per lookup (`crate::texture`); `normal` is applied by
-//! the scene to the hit's shading normal; `emissiveColor` by the mesh's triangle lights
-//! (`light::triangle`). A textured `roughness` or `clearcoatRoughness` sets the GGX α exactly;
+//! hit's st per BSDF, filtered over the pixel footprint, colours uplifted per lookup
+//! (`crate::texture`); `normal` is applied by the scene to the hit's shading normal;
+//! `emissiveColor` by the mesh's triangle lights (`light::triangle`); those two and `opacity`
+//! are looked up at the finest level (pbrt-v4 does the same). A textured `roughness` or `clearcoatRoughness` sets the GGX α exactly;
 //! the coats' energy compensation (albedo E(μ), T̄) comes from the nearest of 33 roughness
 //! levels precomputed at build time, and a textured `specularColor` interpolates it exactly
 //! between F0 = 0 and 1 (`coat_levels`).

@@ -13,10 +13,17 @@
 //!   composed `UsdTransform2d` nodes (`TextureInput::transform`: in · scale, rotated
 //!   counter-clockwise by `rotation` degrees, plus `translation`, as the UsdPreviewSurface
 //!   specification defines it).
-//! - **Filtering.** Bilinear between the four texel centres around (u·w − ½, (1 − v)·h − ½);
-//!   no mip-mapping and no ray differentials, so minified textures alias (noise that the
-//!   pixel samples average out, not bias in the mean over a texel-constant region). A
-//!   footprint would have to reach `Material::bsdf` from every integrator; not done yet.
+//! - **MIP pyramid** (`mip.rs`, PBR 4ed §10.4.3): built once at load, every level the exact
+//!   box average of the one above at ⌊size / 2⌋ per axis, down to 1 × 1.
+//! - **Filtering.** A lookup takes a [`TexCoord`]: st and its derivatives per pixel
+//!   (`coord.rs`; from the camera's footprint at the hit, `Scene::tex_coord`). Within a
+//!   level, bilinear between the four texel centres around (u·w − ½, (1 − v)·h − ½); across
+//!   levels trilinear, as pbrt-v4's `MIPMap::Filter` with `FilterFunction::Trilinear`: the
+//!   level log2(width · max(w, h)) for width = 2 · max |∂st/∂x|, |∂st/∂y|, interpolated
+//!   between the two levels around it. A zero footprint ([`TexCoord::point`]) is bilinear at
+//!   level 0, exactly the lookup without MIP-mapping; normal maps, opacity and emission use
+//!   it (as pbrt-v4), and so does every lookup when filtering is off
+//!   ([`TextureFilter::Finest`]). A UsdTransform2d maps the derivatives by its linear part.
 //! - **Wrap modes** (UsdUVTexture `wrapS`/`wrapT`): repeat, clamp (to the edge texel), mirror
 //!   (period 2n), black (texels outside the image are (0, 0, 0, 0)); `useMetadata` is read as
 //!   repeat. The output is `texel · scale + bias`, per channel, as the spec says.
