@@ -15,6 +15,7 @@ use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::sensor::film::{Film, Tile};
 use crate::spectral::{color, xyz::sampled_to_xyz, SampledWavelengths};
+use crate::texture::TextureFilter;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::io::IsTerminal;
@@ -41,6 +42,10 @@ pub struct RenderOptions {
     /// Record the per-(s, t) decomposition (BDPT only).
     pub strategies: bool,
     pub progress: bool,
+    /// Filter textures over the camera's pixel footprint (MIP-mapped, trilinear); false
+    /// looks every texture up bilinearly at its finest level (pbrt-v4's
+    /// `--disable-texture-filtering`; Mitsuba 3's bitmaps).
+    pub filter_textures: bool,
 }
 
 impl Default for RenderOptions {
@@ -55,6 +60,7 @@ impl Default for RenderOptions {
             mis: MisHeuristic::Power,
             strategies: false,
             progress: false,
+            filter_textures: true,
         }
     }
 }
@@ -95,9 +101,10 @@ enum Engine<'a> {
 impl<'a> Engine<'a> {
     fn new(scene: &'a Scene, opts: &RenderOptions) -> Engine<'a> {
         let max_depth = opts.max_depth;
-        let ctx = || BidirContext::new(scene, Mis::bdpt(opts.mis), max_depth);
+        let filter = texture_filter(opts);
+        let ctx = || BidirContext::new(scene, Mis::bdpt(opts.mis), max_depth).with_filter(filter);
         match opts.integrator {
-            IntegratorKind::Path => Engine::Path(PathIntegrator { max_depth }),
+            IntegratorKind::Path => Engine::Path(PathIntegrator { max_depth, filter }),
             IntegratorKind::Light => Engine::Light(LightTracer { max_depth }, ctx()),
             IntegratorKind::Bdpt => Engine::Bdpt(BdptIntegrator { max_depth }, ctx()),
         }
@@ -106,6 +113,20 @@ impl<'a> Engine<'a> {
     fn is_bidirectional(&self) -> bool {
         !matches!(self, Engine::Path(_))
     }
+}
+
+/// The camera's texture footprint for the render's sample count (unknown under a time
+/// budget: `TextureFilter::camera`).
+fn texture_filter(opts: &RenderOptions) -> TextureFilter {
+    if !opts.filter_textures {
+        return TextureFilter::Finest;
+    }
+    let spp = match (opts.spp, opts.time_budget) {
+        (Some(n), _) => Some(u64::from(n)),
+        (None, Some(_)) => None,
+        (None, None) => Some(u64::from(DEFAULT_SPP)),
+    };
+    TextureFilter::camera(spp)
 }
 
 fn render_in_pool(scene: &Scene, opts: &RenderOptions) -> Result<RenderOutput, String> {

@@ -23,6 +23,10 @@ use spectral_render::integrator::bidir::connect::{
 };
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
+use spectral_render::texture::TextureFilter;
+
+/// The bidirectional context's default (`BidirContext::new`): textures unfiltered.
+const FINEST: TextureFilter = TextureFilter::Finest;
 use spectral_render::integrator::bidir::{
     BidirContext, LightOrigin, Mis, MisHeuristic, PathVertex, Sensor, SensorRay, Walk,
 };
@@ -808,7 +812,7 @@ impl FullPath {
         (0..self.n())
             .map(|i| {
                 (1..self.n() - 1).contains(&i)
-                    && bsdf_at(scene, &self.surfaces[i - 1], &mut lambda).is_specular()
+                    && bsdf_at(scene, &self.surfaces[i - 1], FINEST, &mut lambda).is_specular()
             })
             .collect()
     }
@@ -915,7 +919,7 @@ fn random_path(
         let Some(Hit::Surface(si)) = scene.intersect(&ray, t) else {
             return None;
         };
-        let bsdf = bsdf_at(scene, &si, &mut lambda);
+        let bsdf = bsdf_at(scene, &si, FINEST, &mut lambda);
         let bs = bsdf.sample_f(
             -ray.d,
             sampler.get_1d(),
@@ -970,7 +974,7 @@ fn random_path(
                 Some(x2) => (x2.p - x1.p).normalize(),
                 None => (sensor.p() - x1.p).normalize(),
             };
-            let bsdf = bsdf_at(scene, x1, &mut lambda);
+            let bsdf = bsdf_at(scene, x1, FINEST, &mut lambda);
             !bsdf.f(wo, ls.wi, TransportMode::Radiance).is_black()
         }
         None => ls.wi.dot(n1) > 0.0,
@@ -1002,7 +1006,7 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
         if specular[i] {
             return 1.0;
         }
-        let b = bsdf_at(scene, &path.surfaces[i - 1], lambda);
+        let b = bsdf_at(scene, &path.surfaces[i - 1], FINEST, lambda);
         b.pdf(path.dir(i, from), path.dir(i, to), mode) as f64
     };
     let ng = |i: usize| -> Vec3 {
@@ -1119,7 +1123,7 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
         PathVertex::new(
             si,
             wo,
-            bsdf_at(scene, si, lambda),
+            bsdf_at(scene, si, FINEST, lambda),
             walk.beta,
             walk.mis,
             walk.depth,

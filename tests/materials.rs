@@ -344,7 +344,7 @@ fn rough_models_converge_to_their_smooth_counterparts() {
             distrib: TrowbridgeReitz::isotropic(alpha),
             roughness: None,
         }
-        .bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda)
+        .bsdf(glam::Vec2::ZERO.into(), Vec3::Z, &lambda)
         .bxdf
     };
     let plastic = |alpha: f32| {
@@ -427,7 +427,7 @@ fn normal_incidence_metal_reflectance_matches_the_tables() {
                 lambda: [l as f32; 4],
                 pdf: [1.0; 4],
             };
-            let bsdf = m.bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda);
+            let bsdf = m.bsdf(glam::Vec2::ZERO.into(), Vec3::Z, &lambda);
             let s = bsdf
                 .bxdf
                 .sample_f(Vec3::Z, 0.5, [0.5; 2], RADIANCE)
@@ -635,7 +635,7 @@ fn dispersion_terminates_secondary_wavelengths_only_when_the_ior_varies() {
         lambda: [450.0, 550.0, 650.0, 750.0],
         pdf: [1.0; 4],
     };
-    match bk7.bsdf(glam::Vec2::ZERO, Vec3::Z, &lambda).bxdf {
+    match bk7.bsdf(glam::Vec2::ZERO.into(), Vec3::Z, &lambda).bxdf {
         Bxdf::Dielectric(d) => assert_eq!(d.eta, data::glass("BK7").unwrap().ior(450.0)),
         _ => panic!(),
     }
@@ -728,7 +728,7 @@ fn preview_surface_normal_input_tilts_the_shading_normal() {
     );
     assert_eq!(si.ng, Vec3::Z);
     let lambda = SampledWavelengths::sample_visible(0.3);
-    let bsdf = scene.materials[0].bsdf(si.uv, si.ns, &lambda);
+    let bsdf = scene.materials[0].bsdf(si.uv.into(), si.ns, &lambda);
     assert!((bsdf.frame.n.dot(Vec3::Z) - 0.8).abs() < 1e-5);
     // A normal pointing into the surface is replaced by (0, 0, 1), with a warning.
     let scene = load_looks("normal-down", &looks, "Down").unwrap();
@@ -784,7 +784,10 @@ fn path_tracer_collapses_wavelengths_only_at_dispersive_glass() {
         let dir = temp_dir("collapse");
         let path = write(&dir, "stage.usda", &backdrop_stage(&ball, &looks));
         let scene = spectral_render::scene::load(&path, Some((8, 8))).unwrap();
-        let integrator = PathIntegrator { max_depth: 5 };
+        let integrator = PathIntegrator {
+            max_depth: 5,
+            filter: spectral_render::texture::TextureFilter::Finest,
+        };
         let (mut hero, mut secondary) = (0.0f32, 0.0f32);
         for s in 0..64 {
             let mut sampler = Sampler::new(1, 0, s);

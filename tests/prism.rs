@@ -144,7 +144,10 @@ fn spot_centroid(
     let u_expected = setup.screen_u(exit, out);
     let eye = exit + (SCREEN_DISTANCE - 0.3) * out;
     let eye = Vec3::new(eye.x as f32, eye.y as f32, 0.0);
-    let integrator = PathIntegrator { max_depth: 7 };
+    let integrator = PathIntegrator {
+        max_depth: 7,
+        filter: spectral_render::texture::TextureFilter::Finest,
+    };
     let lambda = SampledWavelengths {
         lambda: [lambda_nm as f32; 4],
         pdf: [1.0; 4],

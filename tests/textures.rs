@@ -50,7 +50,7 @@ fn srgb_and_raw_decoding_scale_bias_and_the_cache() {
     let png = dir.join("grey.png");
     imageio::write_png_rgba8(&png, &[128, 128, 128, 128], 1, 1).unwrap();
     let mut cache = TextureCache::default();
-    let uv = Vec2::splat(0.5);
+    let uv = Vec2::splat(0.5).into();
     let srgb = cache.input(&desc(png.clone(), ColorSpace::Srgb)).unwrap();
     let auto = cache.input(&desc(png.clone(), ColorSpace::Auto)).unwrap();
     let raw = cache.input(&desc(png.clone(), ColorSpace::Raw)).unwrap();
@@ -515,8 +515,8 @@ fn assert_same_bsdf(a: &Scene, b: &Scene, x: f32, y: f32) {
     let (sa, sb) = (surface_at(a, x, y), surface_at(b, x, y));
     assert!((sa.ns - sb.ns).length() < 1e-6, "{} vs {}", sa.ns, sb.ns);
     let lambda = SampledWavelengths::sample_visible(0.37);
-    let fa = a.materials[0].bsdf(sa.uv, sa.ns, &lambda);
-    let fb = b.materials[0].bsdf(sb.uv, sb.ns, &lambda);
+    let fa = a.materials[0].bsdf(sa.uv.into(), sa.ns, &lambda);
+    let fb = b.materials[0].bsdf(sb.uv.into(), sb.ns, &lambda);
     let wo = Vec3::new(0.2, -0.3, 0.9).normalize();
     for wi in [Vec3::new(-0.4, 0.1, 0.8), Vec3::new(0.6, 0.2, 0.3), Vec3::Z] {
         let wi = wi.normalize();
@@ -838,4 +838,177 @@ fn an_srgb_decoded_normal_map_warns() {
             .any(|w| w.contains("/Looks/Paint/Tex") && w.contains("normal map decoded as sRGB")),
         "{warnings:?}"
     );
+}
+
+// ---- MIP-mapped filtering over the camera footprint ---------------------------------------
+
+/// A 64×64 RGBA8 PNG of 8×8-texel black and white checks.
+fn checker_png(path: &Path) {
+    let mut bytes = Vec::new();
+    for y in 0..64 {
+        for x in 0..64 {
+            let v = if (x / 8 + y / 8) % 2 == 0 { 255 } else { 0 };
+            bytes.extend_from_slice(&[v, v, v, 255]);
+        }
+    }
+    imageio::write_png_rgba8(path, &bytes, 64, 64).unwrap();
+}
+
+/// A floor 0.1 below a camera looking along −Z (field ±0.2), reaching 500 m away, with the
+/// checker texture repeated every 0.4 m (checks of 5 cm), diffuse under a dome of `l` nits:
+/// its radiance is ρ·l, and near the horizon a pixel covers many checks.
+fn grazing_floor_stage(l: f32, file: &str) -> String {
+    let st = "    texCoord2f[] primvars:st = [(-1250, 0), (1250, 0), (1250, -1250), (-1250, -1250)] (\n        interpolation = \"vertex\"\n    )\n";
+    let tex = "            token inputs:sourceColorSpace = \"raw\"\n            token inputs:wrapS = \"repeat\"\n            token inputs:wrapT = \"repeat\"\n";
+    let stage = textured_stage_st(l, file, tex, DIFFUSE_CONNECTED, st);
+    // The floor: y = −0.1 from z = 0.99 to z = −499, x ∈ [−500, 500], facing +Y.
+    let floor = "point3f[] points = [(-500, -0.1, 1), (500, -0.1, 1), (500, -0.1, -499), (-500, -0.1, -499)]";
+    let start = stage.find("point3f[] points").unwrap();
+    let end = start + stage[start..].find('\n').unwrap();
+    format!("{}{floor}{}", &stage[..start], &stage[end..])
+}
+
+/// Per-pixel mean and variance across seeds of the green channel over `pixels`, for `spp`.
+fn per_pixel_stats(
+    scene: &Scene,
+    pixels: &[usize],
+    spp: u32,
+    seeds: u64,
+    filter_textures: bool,
+) -> (Vec<f64>, f64) {
+    let images: Vec<_> = (0..seeds)
+        .map(|seed| {
+            let opts = spectral_render::render::RenderOptions {
+                spp: Some(spp),
+                seed,
+                max_depth: 3,
+                filter_textures,
+                ..Default::default()
+            };
+            let out = spectral_render::render::render(scene, &opts).unwrap();
+            assert_finite(&out);
+            out
+        })
+        .collect();
+    let mut means = Vec::new();
+    let mut var = 0.0;
+    for &i in pixels {
+        let v: Vec<f64> = images.iter().map(|o| f64::from(o.rgb[i][1])).collect();
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        var += v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
+        means.push(m);
+    }
+    (means, var / pixels.len() as f64)
+}
+
+/// The checker's E[ρ²] and ρ̄ under bilinear lookups at finest level (ramps between checks
+/// included), from a dense grid over one period.
+fn checker_moments(file: &Path) -> (f64, f64) {
+    let img = spectral_render::texture::ImageTexture::load(file, ColorSpace::Raw).unwrap();
+    let (mut m1, mut m2, n) = (0.0, 0.0, 512);
+    for j in 0..n {
+        for i in 0..n {
+            let uv = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+            let r = f64::from(img.bilinear(uv, [Wrap::Repeat; 2])[1]);
+            m1 += r;
+            m2 += r * r;
+        }
+    }
+    let k = (n * n) as f64;
+    (m1 / k, m2 / k)
+}
+
+/// A checkerboard seen at grazing angles: at 4 spp the unfiltered floor near the horizon is
+/// noise (each sample picks a black or white check), the filtered one is grey up to the
+/// lighting noise.
+///
+/// Expected ratio: a sample is ρ·Y with Y the lighting estimate (mean L, E[Y²] = c L²),
+/// independent of ρ. Filtered near the horizon, ρ = ρ̄ (coarse levels hold the mean), so
+/// Var_f = ρ̄² (c − 1) L² / n, which gives c. Unfiltered, ρ is the texture at a random point
+/// of a footprint spanning many checks: Var_u = (E[ρ²] c − ρ̄²) L² / n, with E[ρ²], ρ̄ of
+/// the bilinear checker. The measured Var_u / Var_f must be that ratio within the sampling
+/// error of variances from a few seeds (and footprints that span a finite number of checks,
+/// which can only lower Var_u): we require ≥ 0.7 × predicted and ≥ 3. The means agree:
+/// filtering averages the texture over the footprint without changing its mean.
+#[test]
+fn a_grazing_checkerboard_is_smooth_when_filtered_and_keeps_its_mean() {
+    let l = 10.0f32;
+    let dir = temp_dir("tex-mip-grazing");
+    let file = dir.join("checks.png");
+    checker_png(&file);
+    let path = write(&dir, "floor.usda", &grazing_floor_stage(l, "checks.png"));
+    let scene = spectral_render::scene::load(&path, Some((64, 64))).unwrap();
+    // Rows 32..40 see the floor 0.3 to 6 m away at slopes of 0.3° to 3°: a pixel covers
+    // 4 to 500 checks along z.
+    let pixels: Vec<usize> = (32 * 64..40 * 64).collect();
+    let (spp, seeds) = (4, 6);
+    let (mean_f, var_f) = per_pixel_stats(&scene, &pixels, spp, seeds, true);
+    let (mean_u, var_u) = per_pixel_stats(&scene, &pixels, spp, seeds, false);
+    let (rho, rho2) = checker_moments(&file);
+    let c = 1.0 + var_f * f64::from(spp) / (rho * rho * f64::from(l * l));
+    let predicted = (rho2 * c - rho * rho) / (rho * rho * (c - 1.0));
+    let ratio = var_u / var_f;
+    eprintln!(
+        "grazing checker: Var_u {var_u:.4} Var_f {var_f:.4} ratio {ratio:.2} \
+         (predicted {predicted:.2}, c = {c:.3}, rho {rho:.4}, E[rho²] {rho2:.4})"
+    );
+    assert!(
+        ratio >= 0.7 * predicted && ratio >= 3.0,
+        "{ratio} vs {predicted}"
+    );
+    // Means over the region: per-pixel means are independent across pixels.
+    let stats = |m: &[f64]| mean_and_sem(m.iter().map(|&x| x as f32));
+    let ((mf, sf), (mu, su)) = (stats(&mean_f), stats(&mean_u));
+    let tol = 4.0 * (sf * sf + su * su).sqrt();
+    eprintln!("means: filtered {mf:.4} ± {sf:.4}, unfiltered {mu:.4} ± {su:.4}");
+    assert!((mf - mu).abs() < tol, "{mf} vs {mu} (tol {tol})");
+    let expected = rho * f64::from(l);
+    assert!(
+        (mf - expected).abs() < 6e-3 * f64::from(l) + 4.0 * sf,
+        "{mf} vs {expected}"
+    );
+}
+
+/// Untextured materials get no footprint; textured ones a finite one, also on degenerate st,
+/// and the footprint shrinks towards the camera and grows towards the horizon.
+#[test]
+fn footprints_are_finite_and_follow_distance() {
+    use spectral_render::texture::TextureFilter;
+    let dir = temp_dir("tex-mip-footprint");
+    checker_png(&dir.join("checks.png"));
+    let scene = load_scene(&dir, "floor.usda", &grazing_floor_stage(1.0, "checks.png"));
+    let filter = TextureFilter::camera(Some(1));
+    // Floor points straight below the given depth (the footprint depends on the point only).
+    let hit = |z: f32| {
+        let o = Vec3::new(0.0, 0.5, z);
+        match scene.intersect(&Ray::new(o, Vec3::NEG_Y), f32::INFINITY) {
+            Some(Hit::Surface(si)) => si,
+            other => panic!("{other:?}"),
+        }
+    };
+    // Seen from the camera (0, 0, 1) at a slope 0.1/d, the footprint along z grows as d².
+    let near = scene.tex_coord(&hit(0.5), filter);
+    let far = scene.tex_coord(&hit(-20.0), filter);
+    assert!(near.filter_width() > 0.0 && near.filter_width().is_finite());
+    assert!(
+        far.filter_width() > 100.0 * near.filter_width(),
+        "{near:?} {far:?}"
+    );
+    assert_eq!(
+        scene.tex_coord(&hit(0.5), TextureFilter::Finest),
+        spectral_render::texture::TexCoord::point(hit(0.5).uv)
+    );
+    // Degenerate st (one point for the whole mesh) and a zero-area triangle: zero
+    // derivatives, no NaN, and a filtered render stays finite.
+    let stage = textured_stage_st(5.0, "checks.png", RAW, DIFFUSE_CONNECTED, "");
+    let mut s = stage[..stage.find("def Mesh").unwrap()].to_string();
+    s += "def Mesh \"Bad\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{\n    int[] faceVertexCounts = [3, 3, 3]\n    int[] faceVertexIndices = [0, 1, 2, 0, 2, 3, 1, 1, 1]\n    point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]\n    texCoord2f[] primvars:st = [(0.5, 0.5)] (\n        interpolation = \"constant\"\n    )\n    rel material:binding = </Looks/Paint>\n}\n";
+    let path = write(&dir, "bad.usda", &s);
+    let bad = spectral_render::scene::load(&path, Some((16, 16))).unwrap();
+    assert!(bad.materials[0].is_textured());
+    for (x, y) in POINTS {
+        let tc = bad.tex_coord(&surface_at(&bad, x, y), filter);
+        assert_eq!((tc.duvdx, tc.duvdy), (Vec2::ZERO, Vec2::ZERO), "{tc:?}");
+    }
+    render_file(&path, (16, 16), 2, 3, None);
 }

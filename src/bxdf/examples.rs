@@ -46,7 +46,8 @@ pub fn metal(metal: &str, alpha_x: f32, alpha_y: f32) -> Bxdf {
         distrib: TrowbridgeReitz::new(alpha_x, alpha_y),
         roughness: None,
     };
-    m.bsdf(glam::Vec2::ZERO, glam::Vec3::Z, &lambda()).bxdf
+    m.bsdf(glam::Vec2::ZERO.into(), glam::Vec3::Z, &lambda())
+        .bxdf
 }
 
 fn dielectric(eta: f32, alpha: f32) -> Bxdf {
@@ -56,13 +57,15 @@ fn dielectric(eta: f32, alpha: f32) -> Bxdf {
 fn plastic(alpha: f32) -> Bxdf {
     let rho = Spectrum::Sigmoid(crate::spectral::uplift::reflectance([0.7, 0.2, 0.1]));
     let m = Material::Plastic(PlasticMaterial::new(rho, 1.5, alpha));
-    m.bsdf(glam::Vec2::ZERO, glam::Vec3::Z, &lambda()).bxdf
+    m.bsdf(glam::Vec2::ZERO.into(), glam::Vec3::Z, &lambda())
+        .bxdf
 }
 
 fn preview(d: PreviewSurfaceDesc) -> Bxdf {
     let uplift = |c| Spectrum::Sigmoid(crate::spectral::uplift::reflectance(c));
     let m = PreviewMaterial::new(&d, uplift(d.diffuse_color), uplift(d.specular_color));
-    m.bsdf(glam::Vec2::ZERO, glam::Vec3::Z, &lambda()).bxdf
+    m.bsdf(glam::Vec2::ZERO.into(), glam::Vec3::Z, &lambda())
+        .bxdf
 }
 
 /// Every model, smooth and rough, with the corner cases of issue 3.

@@ -49,6 +49,10 @@ struct RenderArgs {
     /// Also write an 8-bit sRGB PNG preview.
     #[arg(long)]
     preview: Option<PathBuf>,
+    /// Look textures up bilinearly at full resolution instead of filtering them over the
+    /// pixel footprint (MIP-mapped, trilinear), as Mitsuba 3's bitmaps.
+    #[arg(long = "no-texture-filtering")]
+    no_texture_filtering: bool,
     /// Exposure of the preview in stops (the EXR stays absolute): the preview shows
     /// RGB × 2^EV, so −6.6 maps 100 cd/m² white to 1.
     #[arg(
@@ -122,6 +126,7 @@ fn run(args: &RenderArgs) -> Result<(), String> {
         mis: args.mis,
         strategies: args.strategies.is_some(),
         progress: true,
+        filter_textures: !args.no_texture_filtering,
     };
     let out = render::render(&scene, &opts)?;
     if out.dropped_samples > 0 {

@@ -90,7 +90,7 @@ impl BdptIntegrator {
             if walk.depth > ctx.max_depth {
                 return;
             }
-            let bsdf = bsdf_at(ctx.scene, &si, lambda);
+            let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
             let z = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
             if !bsdf.is_specular() {
                 self.connect_vertex(ctx, &z, lambda, sampler, ws);

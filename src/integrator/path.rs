@@ -23,11 +23,14 @@ use crate::material::Material;
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
+use crate::texture::TextureFilter;
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug)]
 pub struct PathIntegrator {
     pub max_depth: u32,
+    /// Texture footprints: the camera's for images, none for meters.
+    pub filter: TextureFilter,
 }
 
 /// What the previous vertex knew, for MIS when a BSDF-sampled ray finds an emitter.
@@ -131,7 +134,7 @@ impl PathIntegrator {
             if material.is_dispersive() {
                 lambda.terminate_secondary();
             }
-            let bsdf = material.bsdf(si.uv, si.ns, lambda);
+            let bsdf = material.bsdf(scene.tex_coord(&si, self.filter), si.ns, lambda);
             if !bsdf.is_specular() {
                 l += beta * self.sample_ld(scene, &si, &bsdf, wo, lambda, sampler);
             }

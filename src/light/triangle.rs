@@ -32,7 +32,7 @@ impl EmissiveTexture {
     #[inline]
     fn radiance(&self, b: [f32; 3], lambda: &SampledWavelengths) -> SampledSpectrum {
         let uv = b[0] * self.uv[0] + b[1] * self.uv[1] + b[2] * self.uv[2];
-        let s = RgbIlluminantSpectrum::new_lookup(self.texture.rgb(uv));
+        let s = RgbIlluminantSpectrum::new_lookup(self.texture.rgb(uv.into()));
         SampledSpectrum::from_fn(|i| s.eval(lambda.lambda[i]))
     }
 
@@ -44,7 +44,7 @@ impl EmissiveTexture {
             let u = [(k % N) as f32 + 0.5, (k / N) as f32 + 0.5].map(|x| x / N as f32);
             let b = uniform_triangle(u);
             let uv = b[0] * self.uv[0] + b[1] * self.uv[1] + b[2] * self.uv[2];
-            let rgb = self.texture.rgb(uv);
+            let rgb = self.texture.rgb(uv.into());
             for c in 0..3 {
                 sum[c] += rgb[c].max(0.0) / (N * N) as f32;
             }

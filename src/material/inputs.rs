@@ -9,8 +9,7 @@ use super::coat_levels::CoatLevels;
 use crate::bxdf::TrowbridgeReitz;
 use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
-use crate::texture::TextureInput;
-use glam::Vec2;
+use crate::texture::{TexCoord, TextureInput};
 use std::sync::Arc;
 
 /// A reflectance: a spectrum, or an RGB texture uplifted per lookup.
@@ -21,13 +20,17 @@ pub enum ColorInput {
 }
 
 impl ColorInput {
-    /// The reflectance at st = `uv` for the path's wavelengths, clamped to [0, 1].
+    pub fn is_textured(&self) -> bool {
+        matches!(self, ColorInput::Texture(_))
+    }
+
+    /// The reflectance at `tc` for the path's wavelengths, clamped to [0, 1].
     #[inline]
-    pub fn reflectance(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+    pub fn reflectance(&self, tc: TexCoord, lambda: &SampledWavelengths) -> SampledSpectrum {
         let s = match self {
             ColorInput::Constant(s) => s.sample(lambda),
             ColorInput::Texture(t) => {
-                let sigmoid = reflectance_lookup(t.rgb(uv));
+                let sigmoid = reflectance_lookup(t.rgb(tc));
                 SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]))
             }
         };
@@ -43,11 +46,15 @@ pub enum FloatInput {
 }
 
 impl FloatInput {
+    pub fn is_textured(&self) -> bool {
+        matches!(self, FloatInput::Texture(_))
+    }
+
     #[inline]
-    pub fn eval(&self, uv: Vec2) -> f32 {
+    pub fn eval(&self, tc: TexCoord) -> f32 {
         match self {
             FloatInput::Constant(v) => *v,
-            FloatInput::Texture(t) => non_negative(t.float(uv)),
+            FloatInput::Texture(t) => non_negative(t.float(tc)),
         }
     }
 }
@@ -61,21 +68,21 @@ pub struct AlphaTexture {
 }
 
 impl AlphaTexture {
-    /// α at st = `uv`.
+    /// α at `tc`.
     #[inline]
-    pub fn alpha(&self, uv: Vec2) -> f32 {
-        non_negative(self.texture.float(uv))
+    pub fn alpha(&self, tc: TexCoord) -> f32 {
+        non_negative(self.texture.float(tc))
     }
 
-    /// The GGX distribution at st = `uv`, or `constant` without a texture.
+    /// The GGX distribution at `tc`, or `constant` without a texture.
     #[inline]
     pub fn distrib(
         t: Option<&AlphaTexture>,
         constant: TrowbridgeReitz,
-        uv: Vec2,
+        tc: TexCoord,
     ) -> TrowbridgeReitz {
         match t {
-            Some(t) => TrowbridgeReitz::isotropic(t.alpha(uv)),
+            Some(t) => TrowbridgeReitz::isotropic(t.alpha(tc)),
             None => constant,
         }
     }

@@ -12,7 +12,8 @@
 //! constant IOR (and for thin dielectrics, whose directions do not depend on λ) the
 //! wavelengths are never collapsed. The material only reads `lambda`.
 //!
-//! **Textures.** Inputs read from a `UsdUVTexture` are evaluated at the hit's st when the
+//! **Textures.** Inputs read from a `UsdUVTexture` are evaluated at the hit's st, filtered
+//! over its footprint ([`TexCoord`]; only computed when [`Material::is_textured`]), when the
 //! BSDF is built: UsdPreviewSurface's in `preview.rs`, the colour reflectance and roughness of
 //! the `spectral:*` materials through [`ColorInput`], [`FloatInput`] and [`AlphaTexture`]
 //! (`inputs.rs`). Coat albedos that a textured roughness needs come from `coat_levels.rs`.
@@ -38,7 +39,7 @@ use crate::bxdf::{
 };
 use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
-use crate::texture::TextureInput;
+use crate::texture::{TexCoord, TextureInput};
 use coat_levels::CoatLevels;
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
@@ -124,9 +125,9 @@ impl PlasticMaterial {
         }
     }
 
-    /// The coat's distribution, albedo and T̄ at st = `uv`.
+    /// The coat's distribution, albedo and T̄ at `tc`.
     #[inline]
-    fn coat(&self, uv: Vec2) -> (TrowbridgeReitz, CoatAlbedo, f32) {
+    fn coat(&self, tc: TexCoord) -> (TrowbridgeReitz, CoatAlbedo, f32) {
         match &self.roughness {
             Some(
                 t @ AlphaTexture {
@@ -134,7 +135,7 @@ impl PlasticMaterial {
                     ..
                 },
             ) => {
-                let alpha = t.alpha(uv);
+                let alpha = t.alpha(tc);
                 let (albedo, t_avg) = levels.get(levels.level(alpha.sqrt()));
                 (TrowbridgeReitz::isotropic(alpha), albedo, t_avg)
             }
@@ -142,26 +143,26 @@ impl PlasticMaterial {
         }
     }
 
-    fn bxdf(&self, uv: Vec2, lambda: &SampledWavelengths) -> PlasticBxdf {
-        let (distrib, albedo, t_avg) = self.coat(uv);
+    fn bxdf(&self, tc: TexCoord, lambda: &SampledWavelengths) -> PlasticBxdf {
+        let (distrib, albedo, t_avg) = self.coat(tc);
         let coat = SpecularCoat::new(distrib, CoatFresnel::Dielectric { eta: self.eta });
-        let r = self.reflectance.reflectance(uv, lambda);
+        let r = self.reflectance.reflectance(tc, lambda);
         PlasticBxdf::with_coat(coat, albedo, r, self.fdr_internal, t_avg)
     }
 }
 
 impl Material {
-    /// The BSDF at a surface point with texture coordinates `uv` (USD st) and shading
-    /// normal `ns`.
+    /// The BSDF at a surface point with texture coordinates `tc` (USD st and its footprint,
+    /// [`Material::is_textured`]) and shading normal `ns`.
     #[inline]
-    pub fn bsdf(&self, uv: Vec2, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
+    pub fn bsdf(&self, tc: TexCoord, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
         let bxdf = match self {
             Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf {
-                r: reflectance.reflectance(uv, lambda),
+                r: reflectance.reflectance(tc, lambda),
             }),
             Material::OrenNayar { reflectance, sigma } => Bxdf::OrenNayar(OrenNayarBxdf::new(
-                reflectance.reflectance(uv, lambda),
-                sigma.eval(uv),
+                reflectance.reflectance(tc, lambda),
+                sigma.eval(tc),
             )),
             Material::Conductor {
                 eta,
@@ -169,7 +170,7 @@ impl Material {
                 distrib,
                 roughness,
             } => Bxdf::Conductor(ConductorBxdf::new(
-                AlphaTexture::distrib(roughness.as_ref(), *distrib, uv),
+                AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
                 eta.sample(lambda),
                 k.sample(lambda),
             )),
@@ -178,7 +179,7 @@ impl Material {
                 distrib,
                 roughness,
             } => Bxdf::Dielectric(DielectricBxdf::new(
-                AlphaTexture::distrib(roughness.as_ref(), *distrib, uv),
+                AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
                 ior.ior(lambda.lambda[0]),
             )),
             Material::ThinDielectric { ior } => {
@@ -186,10 +187,28 @@ impl Material {
                     ior.ior(lambda.lambda[i])
                 })))
             }
-            Material::Plastic(p) => Bxdf::Plastic(p.bxdf(uv, lambda)),
-            Material::Preview(p) => return p.bsdf(uv, ns, lambda),
+            Material::Plastic(p) => Bxdf::Plastic(p.bxdf(tc, lambda)),
+            Material::Preview(p) => return p.bsdf(tc, ns, lambda),
         };
         Bsdf::new(bxdf, ns)
+    }
+
+    /// True when the BSDF reads a texture: only then do the integrators compute the hit's
+    /// footprint for [`Material::bsdf`] (an untextured material gets [`TexCoord::point`]).
+    #[inline]
+    pub fn is_textured(&self) -> bool {
+        match self {
+            Material::Diffuse { reflectance } => reflectance.is_textured(),
+            Material::OrenNayar { reflectance, sigma } => {
+                reflectance.is_textured() || sigma.is_textured()
+            }
+            Material::Conductor { roughness, .. } | Material::Dielectric { roughness, .. } => {
+                roughness.is_some()
+            }
+            Material::ThinDielectric { .. } => false,
+            Material::Plastic(p) => p.reflectance.is_textured() || p.roughness.is_some(),
+            Material::Preview(p) => p.bsdf_is_textured(),
+        }
     }
 
     /// True when the direction of a refracted ray depends on the wavelength: the integrator

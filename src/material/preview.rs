@@ -14,9 +14,10 @@
 //!
 //! **Textures.** Every input but `useSpecularWorkflow`, `ior` and `opacityThreshold` may be
 //! connected to a `UsdUVTexture` ([`PreviewTextures`]): the BSDF's inputs are looked up at the
-//! hit's st per BSDF, colours uplifted per lookup (`crate::texture`); `normal` is applied by
-//! the scene to the hit's shading normal; `emissiveColor` by the mesh's triangle lights
-//! (`light::triangle`). A textured `roughness` or `clearcoatRoughness` sets the GGX α exactly;
+//! hit's st per BSDF, filtered over the pixel footprint, colours uplifted per lookup
+//! (`crate::texture`); `normal` is applied by the scene to the hit's shading normal;
+//! `emissiveColor` by the mesh's triangle lights (`light::triangle`); those two and `opacity`
+//! are looked up at the finest level (pbrt-v4 does the same). A textured `roughness` or `clearcoatRoughness` sets the GGX α exactly;
 //! the coats' energy compensation (albedo E(μ), T̄) comes from the nearest of 33 roughness
 //! levels precomputed at build time, and a textured `specularColor` interpolates it exactly
 //! between F0 = 0 and 1 (`coat_levels`).
@@ -41,7 +42,7 @@ use crate::bxdf::{
 use crate::scene::desc::PreviewSurfaceDesc;
 use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
-use crate::texture::TextureInput;
+use crate::texture::{TexCoord, TextureInput};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
 
@@ -204,16 +205,16 @@ impl PreviewMaterial {
         });
     }
 
-    /// The base GGX distribution, its coat albedo and average transmittance at st = `uv`;
+    /// The base GGX distribution, its coat albedo and average transmittance at `tc`;
     /// `f0` is the Schlick bound of a textured `specularColor` there.
     #[inline]
-    fn base_coat(&self, uv: Vec2, f0: f32) -> (TrowbridgeReitz, CoatAlbedo, f32) {
+    fn base_coat(&self, tc: TexCoord, f0: f32) -> (TrowbridgeReitz, CoatAlbedo, f32) {
         let Some(coats) = &self.textures.base_coats else {
             return (self.distrib, self.base_albedo, self.base_t_avg);
         };
         let (r, distrib) = match &self.textures.roughness {
             Some(t) => {
-                let r = Self::scalar(Some(t), 0.0, uv);
+                let r = Self::scalar(Some(t), 0.0, tc);
                 (r, TrowbridgeReitz::isotropic(r * r))
             }
             None => (self.roughness, self.distrib),
@@ -222,15 +223,15 @@ impl PreviewMaterial {
         (distrib, albedo, t_avg)
     }
 
-    /// The clearcoat's GGX distribution and albedo at st = `uv`.
+    /// The clearcoat's GGX distribution and albedo at `tc`.
     #[inline]
-    fn clearcoat_coat(&self, uv: Vec2) -> (TrowbridgeReitz, CoatAlbedo) {
+    fn clearcoat_coat(&self, tc: TexCoord) -> (TrowbridgeReitz, CoatAlbedo) {
         match (
             &self.textures.clearcoat_roughness,
             &self.textures.clearcoat_coats,
         ) {
             (Some(t), Some(levels)) => {
-                let r = Self::scalar(Some(t), 0.0, uv);
+                let r = Self::scalar(Some(t), 0.0, tc);
                 let (albedo, _) = levels.get(levels.level(r));
                 (TrowbridgeReitz::isotropic(r * r), albedo)
             }
@@ -238,16 +239,16 @@ impl PreviewMaterial {
         }
     }
 
-    /// The plastic coat's Fresnel at st = `uv` and, for a textured `specularColor`, the
+    /// The plastic coat's Fresnel at `tc` and, for a textured `specularColor`, the
     /// scalar bound of its F0 (the albedo's; 0 otherwise).
     #[inline]
-    fn base_fresnel(&self, uv: Vec2, lambda: &SampledWavelengths) -> (CoatFresnel, f32) {
+    fn base_fresnel(&self, tc: TexCoord, lambda: &SampledWavelengths) -> (CoatFresnel, f32) {
         let Some(s) = &self.specular else {
             return (CoatFresnel::Dielectric { eta: self.ior }, 0.0);
         };
         match &self.textures.specular {
             Some(t) => {
-                let sigmoid = reflectance_lookup(t.rgb(uv));
+                let sigmoid = reflectance_lookup(t.rgb(tc));
                 let f0 = SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]));
                 let f0 = f0.map(|v| v.clamp(0.0, 1.0));
                 let bound = sigmoid.max_value().clamp(0.0, 1.0);
@@ -264,7 +265,7 @@ impl PreviewMaterial {
     #[inline]
     pub fn opacity(&self, uv: Vec2) -> f32 {
         match &self.textures.opacity {
-            Some(t) => presence(t.float(uv), self.textures.opacity_threshold),
+            Some(t) => presence(t.float(uv.into()), self.textures.opacity_threshold),
             None => self.opacity,
         }
     }
@@ -274,12 +275,12 @@ impl PreviewMaterial {
         self.textures.opacity.is_none() && self.opacity >= 1.0
     }
 
-    /// The diffuse reflectance at st = `uv`, clamped to [0, 1].
+    /// The diffuse reflectance at `tc`, clamped to [0, 1].
     #[inline]
-    fn rho(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+    fn rho(&self, tc: TexCoord, lambda: &SampledWavelengths) -> SampledSpectrum {
         let s = match &self.textures.diffuse {
             Some(t) => {
-                let sigmoid = reflectance_lookup(t.rgb(uv));
+                let sigmoid = reflectance_lookup(t.rgb(tc));
                 SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]))
             }
             None => self.diffuse.sample(lambda),
@@ -287,12 +288,12 @@ impl PreviewMaterial {
         s.map(|v| v.clamp(0.0, 1.0))
     }
 
-    /// A scalar input: the texture's float output at `uv` or the constant, clamped to [0, 1].
+    /// A scalar input: the texture's float output at `tc` or the constant, clamped to [0, 1].
     #[inline]
-    fn scalar(t: Option<&TextureInput>, constant: f32, uv: Vec2) -> f32 {
+    fn scalar(t: Option<&TextureInput>, constant: f32, tc: TexCoord) -> f32 {
         match t {
             Some(t) => {
-                let v = t.float(uv);
+                let v = t.float(tc);
                 if v.is_finite() {
                     v.clamp(0.0, 1.0)
                 } else {
@@ -303,18 +304,18 @@ impl PreviewMaterial {
         }
     }
 
-    /// The BSDF at a hit with st = `uv` and shading normal `ns`.
+    /// The BSDF at a hit with texture coordinates `tc` and shading normal `ns`.
     #[inline]
-    pub fn bsdf(&self, uv: Vec2, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
-        let rho = self.rho(uv, lambda);
+    pub fn bsdf(&self, tc: TexCoord, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
+        let rho = self.rho(tc, lambda);
         let metallic = if self.specular.is_some() {
             0.0
         } else {
-            Self::scalar(self.textures.metallic.as_ref(), self.metallic, uv)
+            Self::scalar(self.textures.metallic.as_ref(), self.metallic, tc)
         };
-        let clearcoat = Self::scalar(self.textures.clearcoat.as_ref(), self.clearcoat, uv);
-        let (fresnel, f0_bound) = self.base_fresnel(uv, lambda);
-        let (distrib, albedo, t_avg) = self.base_coat(uv, f0_bound);
+        let clearcoat = Self::scalar(self.textures.clearcoat.as_ref(), self.clearcoat, tc);
+        let (fresnel, f0_bound) = self.base_fresnel(tc, lambda);
+        let (distrib, albedo, t_avg) = self.base_coat(tc, f0_bound);
         let base = PlasticBxdf::with_coat(
             SpecularCoat::new(distrib, fresnel),
             albedo,
@@ -322,7 +323,7 @@ impl PreviewMaterial {
             self.base_fdr_internal,
             t_avg,
         );
-        let (cc_distrib, cc_albedo) = self.clearcoat_coat(uv);
+        let (cc_distrib, cc_albedo) = self.clearcoat_coat(tc);
         let bxdf = PreviewBxdf {
             base,
             metal: SpecularCoat::new(distrib, CoatFresnel::Schlick { f0: rho }),
@@ -337,6 +338,22 @@ impl PreviewMaterial {
         Bsdf::new(Bxdf::Preview(bxdf), ns)
     }
 
+    /// True when an input of the BSDF is textured (not `normal`, `opacity` or
+    /// `emissiveColor`, which are looked up at the finest level).
+    pub fn bsdf_is_textured(&self) -> bool {
+        let t = &self.textures;
+        [
+            &t.diffuse,
+            &t.specular,
+            &t.metallic,
+            &t.roughness,
+            &t.clearcoat,
+            &t.clearcoat_roughness,
+        ]
+        .iter()
+        .any(|t| t.is_some())
+    }
+
     /// True when `normal` (constant or textured) perturbs the shading normal.
     pub fn perturbs_normal(&self) -> bool {
         self.textures.normal.is_some() || self.normal != Vec3::Z
@@ -347,7 +364,7 @@ impl PreviewMaterial {
     #[inline]
     pub fn shading_normal(&self, uv: Vec2, ns: Vec3, ng: Vec3, dpduv: [Vec3; 2]) -> Vec3 {
         let n_t = match &self.textures.normal {
-            Some(t) => normal_map::texel_normal(t.rgb(uv)),
+            Some(t) => normal_map::texel_normal(t.rgb(uv.into())),
             None => self.normal,
         };
         normal_map::perturb(n_t, ns, ng, dpduv)
@@ -450,7 +467,10 @@ mod tests {
             lambda: [450.0, 520.0, 600.0, 680.0],
             pdf: [1.0; 4],
         };
-        let (a, b) = (a.bsdf(uv, Vec3::Z, &lambda), b.bsdf(uv, Vec3::Z, &lambda));
+        let (a, b) = (
+            a.bsdf(uv.into(), Vec3::Z, &lambda),
+            b.bsdf(uv.into(), Vec3::Z, &lambda),
+        );
         let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
         for wi in [
             Vec3::new(-0.2, 0.4, 0.8),

@@ -1,10 +1,11 @@
 //! Scenes: the USD reader (`usd.rs`, the only module naming openusd), the plain description
 //! (`desc.rs`), the builder (`build.rs`) and the immutable render scene with its ray queries
-//! (`render_scene.rs`).
+//! (`render_scene.rs`), and texture footprints at hits (`texcoord.rs`).
 
 pub mod build;
 pub mod desc;
 pub mod render_scene;
+mod texcoord;
 pub mod usd;
 
 pub use build::build;

@@ -46,6 +46,8 @@ pub struct SurfaceHit {
     pub uv: Vec2,
     pub t: f32,
     pub material: u32,
+    /// The triangle hit (for its ∂p/∂u, ∂p/∂v: `Scene::tex_coord`).
+    pub tri: TriRef,
     /// The emissive triangle's light, if the surface is a mesh light.
     pub light: Option<u32>,
 }
@@ -165,6 +167,7 @@ impl Scene {
             uv,
             t: hit.t,
             material: mesh.material,
+            tri: r,
             light: mesh.light_offset.map(|o| o + r.tri),
         }
     }

@@ -20,7 +20,7 @@
 use crate::geometry::Ray;
 use crate::sampling::warp::concentric_disk;
 use crate::scene::desc::CameraDesc;
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Quat, Vec3};
 use std::f32::consts::PI;
 
 /// A lens point sampled towards a reference point, with the importance arriving there
@@ -62,6 +62,10 @@ pub struct Camera {
     pub exposure_scale: f32,
     /// Inverse of `to_world` (a rigid transform).
     pub from_world: Mat4,
+    /// The smallest change of a camera ray's unit direction per pixel step in x and in y, in
+    /// the frame where the ray looks along −Z (pbrt-v4 `minDirDifferentialX/Y`), for
+    /// [`Camera::approximate_dp_dxy`].
+    pub min_dir_differentials: [Vec3; 2],
 }
 
 impl Camera {
@@ -75,6 +79,7 @@ impl Camera {
             half_h = half_w / aspect;
         }
         let thin_lens = desc.lens_radius > 0.0 && desc.focus_distance > 0.0;
+        let min_dir_differentials = min_dir_differentials(half_w, half_h, width, height);
         Camera {
             prim_path: desc.prim_path.clone(),
             to_world: desc.to_world,
@@ -88,7 +93,37 @@ impl Camera {
             clip_far: desc.clip_far,
             exposure_scale: desc.exposure.exp2(),
             from_world: desc.to_world.inverse(),
+            min_dir_differentials,
         }
+    }
+
+    /// ∂p/∂x and ∂p/∂y at a surface point `p` with normal `n`, per pixel step, times `scale`,
+    /// without ray differentials (pbrt-v4 `CameraBase::Approximate_dp_dxy`, PBR 4ed
+    /// §10.1.1): the camera's smallest direction differentials are rotated from −Z onto the
+    /// direction towards `p`, the two offset rays from the camera's centre intersected with
+    /// the tangent plane at `p`, and their offsets from `p` returned. Both camera models have
+    /// no position differential (pbrt's thin lens keeps the lens point for its differential
+    /// rays, and the minimum is taken at the lens centre), so the rays start at the camera's
+    /// position. A plane seen exactly edge-on gives non-finite offsets, returned as 0
+    /// (the finest level); nearly edge-on ones give large finite offsets (coarse levels).
+    pub fn approximate_dp_dxy(&self, p: Vec3, n: Vec3, scale: f32) -> [Vec3; 2] {
+        let pc = self.from_world.transform_point3(p);
+        let nc = self.from_world.transform_vector3(n);
+        let Some(dir) = pc.try_normalize() else {
+            return [Vec3::ZERO; 2];
+        };
+        let rot = Quat::from_rotation_arc(Vec3::NEG_Z, dir);
+        let plane = nc.dot(pc);
+        self.min_dir_differentials.map(|dd| {
+            let w = rot * (Vec3::NEG_Z + dd);
+            let t = plane / nc.dot(w);
+            let dp = self.to_world.transform_vector3(w * t - pc) * scale;
+            if dp.is_finite() {
+                dp
+            } else {
+                Vec3::ZERO
+            }
+        })
     }
 
     /// The world-space ray through continuous raster position `film` (pixels, origin top
@@ -253,6 +288,36 @@ impl Camera {
     }
 }
 
+/// The shortest change of the unit ray direction for a one-pixel step in x and in y, over
+/// points along the film's diagonal (pbrt-v4 `CameraBase::FindMinimumDifferentials`), each
+/// expressed in the frame that turns its ray to −Z.
+fn min_dir_differentials(half_w: f32, half_h: f32, width: u32, height: u32) -> [Vec3; 2] {
+    const N: usize = 512;
+    let (w, h) = (width as f32, height as f32);
+    let dir = |fx: f32, fy: f32| {
+        let sx = (2.0 * fx / w - 1.0) * half_w;
+        let sy = (1.0 - 2.0 * fy / h) * half_h;
+        Vec3::new(sx, sy, -1.0).normalize()
+    };
+    let mut best = [Vec3::INFINITY; 2];
+    for i in 0..N {
+        let f = i as f32 / (N - 1) as f32;
+        let (fx, fy) = (f * w, f * h);
+        let d = dir(fx, fy);
+        let to_axis = Quat::from_rotation_arc(d, Vec3::NEG_Z);
+        for (k, next) in [dir(fx + 1.0, fy), dir(fx, fy + 1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let dd = to_axis * next - Vec3::NEG_Z;
+            if dd.length_squared() < best[k].length_squared() {
+                best[k] = dd;
+            }
+        }
+    }
+    best.map(|d| if d.is_finite() { d } else { Vec3::ZERO })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -377,5 +442,50 @@ mod tests {
         assert!(cam.sample_wi(Vec3::new(0.0, 0.0, 5.0), [0.5; 2]).is_none());
         let ws = cam.sample_wi(Vec3::new(0.0, 0.0, 0.0), [0.5; 2]).unwrap();
         assert!((ws.visible_fraction - (3.9 - 0.001) / 3.9).abs() < 1e-5);
+    }
+
+    #[test]
+    fn footprint_of_a_plane_facing_the_camera() {
+        // 256 pixels over 2·half_w at distance 1: a pixel at distance 2 spans 2·2·half_w/256
+        // near the centre; the minimum (at the image corners, 27° off axis) is ~cos² of it.
+        let cam = Camera::new(&desc(), 256, 256);
+        let p = Vec3::new(0.0, 0.0, 3.9 - 2.0);
+        let [dx, dy] = cam.approximate_dp_dxy(p, Vec3::Z, 1.0);
+        let pixel = 4.0 * cam.half_w / 256.0;
+        for d in [dx, dy] {
+            assert!(d.z.abs() < 1e-6 * pixel, "{d}");
+            assert!(
+                d.length() < pixel && d.length() > 0.75 * pixel,
+                "{d} vs {pixel}"
+            );
+        }
+        // Not orthogonal (the two minima come from different film points, pbrt's too), but
+        // spanning the plane.
+        assert!(dx.cross(dy).length() > 0.5 * pixel * pixel);
+        // Scaled by the factor, and linear in distance.
+        let [sx, _] = cam.approximate_dp_dxy(p, Vec3::Z, 0.25);
+        assert!((sx.length() / dx.length() - 0.25).abs() < 1e-5);
+        let far = Vec3::new(0.0, 0.0, 3.9 - 6.0);
+        let [fx, _] = cam.approximate_dp_dxy(far, Vec3::Z, 1.0);
+        assert!((fx.length() / dx.length() - 3.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn footprint_grows_at_grazing_angles_and_never_is_nan() {
+        let cam = Camera::new(&desc(), 64, 64);
+        let p = Vec3::new(0.0, 0.0, 0.0);
+        let flat = cam.approximate_dp_dxy(p, Vec3::Z, 1.0);
+        let tilted = cam.approximate_dp_dxy(p, Vec3::new(0.0, 0.995, 0.0998).normalize(), 1.0);
+        let longest = |d: [Vec3; 2]| d[0].length().max(d[1].length());
+        assert!(longest(tilted) > 5.0 * longest(flat));
+        for n in [Vec3::Y, Vec3::X, Vec3::ZERO, Vec3::splat(f32::NAN)] {
+            for d in cam.approximate_dp_dxy(p, n, 1.0) {
+                assert!(d.is_finite(), "{n}: {d}");
+            }
+        }
+        // At the camera's own position.
+        for d in cam.approximate_dp_dxy(cam.position(), Vec3::Z, 1.0) {
+            assert_eq!(d, Vec3::ZERO);
+        }
     }
 }

@@ -52,6 +52,7 @@ use crate::integrator::{IntegratorKind, MisHeuristic, PathIntegrator};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::spectral::{xyz::sampled_to_xyz, SampledWavelengths};
+use crate::texture::TextureFilter;
 use glam::{DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -289,6 +290,7 @@ impl<'a> Estimator<'a> {
         let path = MeterIntegrator {
             path: PathIntegrator {
                 max_depth: opts.max_depth,
+                filter: TextureFilter::Finest,
             },
         };
         match BidirMeter::new(scene, opts.integrator, opts.mis, opts.max_depth) {

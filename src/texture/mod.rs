@@ -13,10 +13,17 @@
 //!   composed `UsdTransform2d` nodes (`TextureInput::transform`: in · scale, rotated
 //!   counter-clockwise by `rotation` degrees, plus `translation`, as the UsdPreviewSurface
 //!   specification defines it).
-//! - **Filtering.** Bilinear between the four texel centres around (u·w − ½, (1 − v)·h − ½);
-//!   no mip-mapping and no ray differentials, so minified textures alias (noise that the
-//!   pixel samples average out, not bias in the mean over a texel-constant region). A
-//!   footprint would have to reach `Material::bsdf` from every integrator; not done yet.
+//! - **MIP pyramid** (`mip.rs`, PBR 4ed §10.4.3): built once at load, every level the exact
+//!   box average of the one above at ⌊size / 2⌋ per axis, down to 1 × 1.
+//! - **Filtering.** A lookup takes a [`TexCoord`]: st and its derivatives per pixel
+//!   (`coord.rs`; from the camera's footprint at the hit, `Scene::tex_coord`). Within a
+//!   level, bilinear between the four texel centres around (u·w − ½, (1 − v)·h − ½); across
+//!   levels trilinear, as pbrt-v4's `MIPMap::Filter` with `FilterFunction::Trilinear`: the
+//!   level log2(width · max(w, h)) for width = 2 · max |∂st/∂x|, |∂st/∂y|, interpolated
+//!   between the two levels around it. A zero footprint ([`TexCoord::point`]) is bilinear at
+//!   level 0, exactly the lookup without MIP-mapping; normal maps, opacity and emission use
+//!   it (as pbrt-v4), and so does every lookup when filtering is off
+//!   ([`TextureFilter::Finest`]). A UsdTransform2d maps the derivatives by its linear part.
 //! - **Wrap modes** (UsdUVTexture `wrapS`/`wrapT`): repeat, clamp (to the edge texel), mirror
 //!   (period 2n), black (texels outside the image are (0, 0, 0, 0)); `useMetadata` is read as
 //!   repeat. The output is `texel · scale + bias`, per channel, as the spec says.
@@ -36,6 +43,11 @@
 //! }
 //! ```
 
+mod coord;
+mod mip;
+
+pub use coord::{TexCoord, TextureFilter};
+
 use crate::imageio;
 use crate::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
 use glam::{Affine2, Vec2};
@@ -43,23 +55,34 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// A decoded image: linear RGBA texels, row-major, top row first.
+/// A decoded image with its MIP pyramid: linear RGBA texels, row-major, top row first.
 #[derive(Debug)]
 pub struct ImageTexture {
+    /// Level 0 is the image; level k + 1 is level k box-filtered to ⌊size / 2⌋ per axis (at
+    /// least 1), down to 1 × 1 (`mip.rs`).
+    levels: Vec<Level>,
+}
+
+/// One level of the pyramid.
+#[derive(Debug)]
+struct Level {
     width: usize,
     height: usize,
     texels: Vec<[f32; 4]>,
 }
 
 impl ImageTexture {
-    /// An image from texels (row-major, top row first); `None` when the sizes disagree or a
-    /// texel is not finite.
+    /// An image from texels (row-major, top row first) and its pyramid; `None` when the sizes
+    /// disagree or a texel is not finite.
     pub fn from_texels(width: usize, height: usize, texels: Vec<[f32; 4]>) -> Option<Self> {
         let finite = texels.iter().flatten().all(|x| x.is_finite());
-        (width > 0 && height > 0 && texels.len() == width * height && finite).then_some(Self {
-            width,
-            height,
-            texels,
+        let ok = width > 0 && height > 0 && texels.len() == width * height && finite;
+        ok.then(|| Self {
+            levels: mip::pyramid(Level {
+                width,
+                height,
+                texels,
+            }),
         })
     }
 
@@ -84,6 +107,56 @@ impl ImageTexture {
             .ok_or_else(|| format!("image {} has non-finite texels", path.display()))
     }
 
+    /// The number of pyramid levels (1 + ⌊log2 max(w, h)⌋).
+    pub fn levels(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// (width, height) of pyramid level `k`.
+    pub fn level_size(&self, k: usize) -> (usize, usize) {
+        let l = &self.levels[k];
+        (l.width, l.height)
+    }
+
+    /// Texel (x, y) of level `k` (x right, y down from the top row), without wrapping.
+    pub fn level_texel(&self, k: usize, x: usize, y: usize) -> [f32; 4] {
+        let l = &self.levels[k];
+        l.texels[y * l.width + x]
+    }
+
+    /// Bilinear lookup of level 0 at USD st = `uv` ((0, 0) is the bottom-left of the image).
+    #[inline]
+    pub fn bilinear(&self, uv: Vec2, wrap: [Wrap; 2]) -> [f32; 4] {
+        self.levels[0].bilinear(uv, wrap)
+    }
+
+    /// Trilinear lookup for a filter `width` in st units (pbrt-v4 `MIPMap::Filter` with
+    /// `FilterFunction::Trilinear`, PBR 4ed §10.4.3): the level whose texels are `width`
+    /// wide, level = log2(width · max(w, h)) clamped to the pyramid, interpolated linearly
+    /// between the bilinear lookups of the two levels around it. A width of 0 (or NaN) is
+    /// exactly [`ImageTexture::bilinear`].
+    #[inline]
+    pub fn trilinear(&self, uv: Vec2, width: f32, wrap: [Wrap; 2]) -> [f32; 4] {
+        let base = &self.levels[0];
+        let level = (width * base.width.max(base.height) as f32).log2();
+        let last = self.levels.len() - 1;
+        if level.is_nan() || level <= 0.0 {
+            return base.bilinear(uv, wrap);
+        }
+        if level >= last as f32 {
+            return self.levels[last].bilinear(uv, wrap);
+        }
+        let k = level as usize;
+        let t = level - k as f32;
+        let (a, b) = (
+            self.levels[k].bilinear(uv, wrap),
+            self.levels[k + 1].bilinear(uv, wrap),
+        );
+        std::array::from_fn(|c| a[c] + t * (b[c] - a[c]))
+    }
+}
+
+impl Level {
     /// The texel at integer coordinates (x right, y down from the top row), after wrapping.
     #[inline]
     fn texel(&self, x: i64, y: i64, wrap: [Wrap; 2]) -> [f32; 4] {
@@ -96,9 +169,9 @@ impl ImageTexture {
         }
     }
 
-    /// Bilinear lookup at USD st = `uv` ((0, 0) is the bottom-left of the image).
+    /// Bilinear between the four texel centres around (u·w − ½, (1 − v)·h − ½).
     #[inline]
-    pub fn bilinear(&self, uv: Vec2, wrap: [Wrap; 2]) -> [f32; 4] {
+    fn bilinear(&self, uv: Vec2, wrap: [Wrap; 2]) -> [f32; 4] {
         let x = uv.x as f64 * self.width as f64 - 0.5;
         let y = (1.0 - uv.y as f64) * self.height as f64 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
@@ -157,24 +230,25 @@ pub struct TextureInput {
 }
 
 impl TextureInput {
-    /// `texel · scale + bias` at st = `uv` (through the UsdTransform2d), all four channels.
+    /// `texel · scale + bias` at `tc` (through the UsdTransform2d), all four channels,
+    /// filtered over `tc`'s footprint (bilinear at level 0 for a point).
     #[inline]
-    pub fn rgba(&self, uv: Vec2) -> [f32; 4] {
-        let uv = match &self.transform {
-            Some(t) => t.transform_point2(uv),
-            None => uv,
+    pub fn rgba(&self, tc: TexCoord) -> [f32; 4] {
+        let tc = match &self.transform {
+            Some(t) => tc.transformed(t),
+            None => tc,
         };
-        if !uv.is_finite() {
+        if !tc.uv.is_finite() {
             return self.fallback;
         }
-        let t = self.image.bilinear(uv, self.wrap);
+        let t = self.image.trilinear(tc.uv, tc.filter_width(), self.wrap);
         std::array::from_fn(|c| t[c] * self.scale[c] + self.bias[c])
     }
 
     /// The colour output: `outputs:rgb`, or a single channel replicated.
     #[inline]
-    pub fn rgb(&self, uv: Vec2) -> [f32; 3] {
-        let t = self.rgba(uv);
+    pub fn rgb(&self, tc: TexCoord) -> [f32; 3] {
+        let t = self.rgba(tc);
         match self.channel.index() {
             Some(c) => [t[c]; 3],
             None => [t[0], t[1], t[2]],
@@ -183,8 +257,8 @@ impl TextureInput {
 
     /// The float output: `outputs:r/g/b/a`, or the red channel of `outputs:rgb`.
     #[inline]
-    pub fn float(&self, uv: Vec2) -> f32 {
-        self.rgba(uv)[self.channel.index().unwrap_or(0)]
+    pub fn float(&self, tc: TexCoord) -> f32 {
+        self.rgba(tc)[self.channel.index().unwrap_or(0)]
     }
 }
 

@@ -18,6 +18,7 @@ use crate::light::{LightHit, LightSampleContext};
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
+use crate::texture::TextureFilter;
 use glam::Vec3;
 
 /// What every bidirectional technique needs to know about the render.
@@ -28,10 +29,12 @@ pub struct BidirContext<'a> {
     pub sphere: SceneSphere,
     pub mis: Mis,
     pub max_depth: u32,
+    /// Texture footprints: the camera's for images (`render.rs`), none for meters.
+    pub filter: TextureFilter,
 }
 
 impl<'a> BidirContext<'a> {
-    /// The camera as sensor, the scene's emission sphere.
+    /// The camera as sensor, the scene's emission sphere, textures at the finest level.
     pub fn new(scene: &'a Scene, mis: Mis, max_depth: u32) -> BidirContext<'a> {
         BidirContext {
             scene,
@@ -39,7 +42,13 @@ impl<'a> BidirContext<'a> {
             sphere: SceneSphere::of(scene),
             mis,
             max_depth,
+            filter: TextureFilter::Finest,
         }
+    }
+
+    /// The same render with texture footprints from `filter`.
+    pub fn with_filter(&self, filter: TextureFilter) -> BidirContext<'a> {
+        BidirContext { filter, ..*self }
     }
 
     /// The same render with another sensor (a meter).
@@ -243,7 +252,7 @@ pub fn trace_light_subpath(
         if walk.depth > ctx.max_depth {
             return;
         }
-        let bsdf = bsdf_at(ctx.scene, &si, lambda);
+        let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
         let v = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
         if !bsdf.is_specular() {
             path.vertices.push(v);

@@ -7,6 +7,7 @@ use crate::bxdf::{Bsdf, TransportMode};
 use crate::light::LightHit;
 use crate::scene::{Scene, SurfaceHit};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
+use crate::texture::TextureFilter;
 use glam::Vec3;
 
 /// A scattering vertex of a light (y_i) or camera (z_i) subpath, i ≥ 1.
@@ -138,14 +139,21 @@ pub fn shading_correction(ns: Vec3, ng: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 
 /// The BSDF at a surface hit for the path's wavelengths: the one place subpaths build one.
 /// `lambda` is the tuple shared by both subpaths of a sample, mutable so that a dispersive
-/// material can terminate the secondary wavelengths here, for the whole path.
+/// material can terminate the secondary wavelengths here, for the whole path. Textures are
+/// filtered per `filter` with the camera's footprint at the point, on light subpaths too
+/// (as pbrt-v4's BDPT), so both subpaths see the same filtered surface.
 #[inline]
-pub fn bsdf_at(scene: &Scene, si: &SurfaceHit, lambda: &mut SampledWavelengths) -> Bsdf {
+pub fn bsdf_at(
+    scene: &Scene,
+    si: &SurfaceHit,
+    filter: TextureFilter,
+    lambda: &mut SampledWavelengths,
+) -> Bsdf {
     let material = &scene.materials[si.material as usize];
     if material.is_dispersive() {
         lambda.terminate_secondary();
     }
-    material.bsdf(si.uv, si.ns, lambda)
+    material.bsdf(scene.tex_coord(si, filter), si.ns, lambda)
 }
 
 /// Area density at `p_to` (geometric normal `n_to`) of a direction density `pdf_w` at
