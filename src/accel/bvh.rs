@@ -130,9 +130,15 @@ impl StackSize {
 /// Triangles per leaf (the CWBVH maximum).
 const LEAF_SIZE: u32 = 3;
 
+/// Nodes reinserted at least (all of them in smaller trees): see [`build_cwbvh`].
+const REINSERTION_NODES: f32 = 4096.0;
+
 /// Builds the CWBVH with the settings of obvhs's `medium_build` preset: PLOC with search radius
 /// 14 (`PlocSearchDistance::Medium`, `search_depth_threshold` 3, 64-bit Morton codes),
-/// reinsertion over 5% of the nodes, then collapse to 8-wide nodes with up to [`LEAF_SIZE`]
+/// reinsertion over 5% of the nodes but at least [`REINSERTION_NODES`] (on small scenes the full
+/// pass costs little and the tree shape matters most: on the Cornell box it saves 12% of the
+/// traversal instructions, while 20% instead of 5% on 50k-triangle scenes saves nothing and
+/// costs 37% more build), then collapse to 8-wide nodes with up to [`LEAF_SIZE`]
 /// triangles per leaf, children ordered by octant. No spatial pre-splits: a leaf's box must
 /// bound its whole triangles, which the conservative box test relies on for watertightness at
 /// leaf boundaries.
@@ -147,7 +153,8 @@ fn build_cwbvh(triangles: &[Triangle]) -> CwBvh {
         SortPrecision::U64,
         3,
     );
-    ReinsertionOptimizer::default().run(&mut bvh2, 0.05, None);
+    let ratio = (REINSERTION_NODES / bvh2.nodes.len() as f32).clamp(0.05, 1.0);
+    ReinsertionOptimizer::default().run(&mut bvh2, ratio, None);
     bvh2_to_cwbvh(&bvh2, LEAF_SIZE, true, false)
 }
 
@@ -390,13 +397,14 @@ impl RayBoxes {
         let neg = inv.cmplt(Vec4::ZERO).bitmask() as usize;
         let splats = |v: Vec4| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
         RayBoxes {
-            near: [neg & 1, 2 + (neg >> 1 & 1), 4 + (neg >> 2 & 1)],
-            far: [1 - (neg & 1), 3 - (neg >> 1 & 1), 5 - (neg >> 2 & 1)],
+            near: [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)],
+            far: [1 ^ (neg & 1), 3 ^ (neg >> 1 & 1), 5 ^ (neg >> 2 & 1)],
             o_near: splats(Vec4::select(finite, o, Vec4::ZERO)),
             inv_near: splats(Vec4::select(finite, inv, Vec4::ZERO)),
             o_far: splats(Vec4::select(finite, o, Vec4::NEG_INFINITY)),
             inv_far: splats(Vec4::select(finite, inv, Vec4::ONE)),
-            oct: ((neg & 1) << 2 | (neg & 2) | (neg & 4) >> 2) as u32,
+            // The sign bits x, y, z reversed to (x << 2 | y << 1 | z).
+            oct: [0, 4, 2, 6, 1, 5, 3, 7][neg & 7],
         }
     }
 }

@@ -291,6 +291,23 @@ fn intersect_f64(
     })
 }
 
+/// The test with the f64 path only: the reference the f32 path is checked against.
+#[cfg(test)]
+pub(crate) fn intersect_reference(
+    ray: &Ray,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let ray = WatertightRay::new(ray)?;
+    if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
+        return None;
+    }
+    let tri = PackedTriangle::new(p0, p1, p2);
+    intersect_f64(&ray, &tri, &ray.transform(&tri), t_max)
+}
+
 /// Edge function `u.x v.y − u.y v.x` of the transformed vertices. Both products of f32 are exact
 /// in f64 and the difference is rounded once, so the sign is exact and swapping `u` and `v`
 /// negates the value exactly (the watertightness argument of PBR 4ed §6.8.4).
@@ -582,6 +599,191 @@ mod tests {
         }
         assert!(rays > 100_000, "only {rays} rays tested");
         assert_eq!(misses, 0, "{misses} of {rays} rays fell through the mesh");
+    }
+
+    /// Asserts that the f32 path and the f64 reference agree: same hit/miss, and when both
+    /// hit, the barycentrics to f32 accuracy and t to f32 accuracy over |cos θ| (θ between ray
+    /// and normal: seen edge-on, a barycentric rounding moves the hit far along the ray).
+    fn assert_paths_agree(r: &Ray, tri: &[Vec3; 3]) -> bool {
+        let fast = intersect(r, tri[0], tri[1], tri[2], f32::INFINITY);
+        let reference = intersect_reference(r, tri[0], tri[1], tri[2], f32::INFINITY);
+        match (fast, reference) {
+            (None, None) => false,
+            (Some(f), Some(g)) => {
+                check_hit(&f);
+                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+                let cos = n.dot(r.d.normalize()).abs().max(1e-6);
+                let tol = 1e-5 * g.t / cos;
+                assert!((f.t - g.t).abs() <= tol, "{r:?} {tri:?}: {f:?} vs {g:?}");
+                for (a, b) in [(f.b0, g.b0), (f.b1, g.b1), (f.b2, g.b2)] {
+                    assert!((a - b).abs() <= 1e-4, "{r:?} {tri:?}: {f:?} vs {g:?}");
+                }
+                true
+            }
+            (f, g) => panic!("{r:?} {tri:?}: f32 path {f:?}, f64 reference {g:?}"),
+        }
+    }
+
+    /// The f32 edge functions (with the f64 fallback on zero) decide hit/miss exactly as the f64
+    /// ones for rays through shared vertices, edges and cell diagonals of a displaced grid, from
+    /// every side and at angles down to 10° above the surface.
+    #[test]
+    fn f32_path_agrees_with_the_f64_reference() {
+        let mut rng = Rng::new(19);
+        let grid = Grid::new(16, &mut rng);
+        let normal = grid.normal();
+        let (mut tests, mut hits) = (0, 0);
+        for k in 0..60_000 {
+            let (i, j) = (1 + rng.below(grid.n - 1), 1 + rng.below(grid.n - 1));
+            let p = grid.vert(i, j);
+            let target = match k % 4 {
+                0 => p,
+                1 => 0.5 * (p + grid.vert(i + 1, j)),
+                2 => p.lerp(grid.vert(i + 1, j + 1), rng.f32()),
+                _ => p.lerp(grid.vert(i, j + 1), rng.f32()),
+            };
+            let side = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
+            let o = origin_towards(&mut rng, target, normal, side, 80.0);
+            let r = ray(o, target - o);
+            for tri in grid.around(i, j) {
+                tests += 1;
+                hits += assert_paths_agree(&r, &tri) as usize;
+            }
+        }
+        assert!(
+            hits > 60_000 && tests > 400_000,
+            "{hits} hits in {tests} tests"
+        );
+    }
+
+    /// A closed mesh: an icosahedron subdivided `levels` times, vertices shared by index and
+    /// moved radially by up to ±3%, in a tilted frame with "ugly" coordinates. Star-shaped
+    /// around `center`.
+    struct Sphere {
+        center: Vec3,
+        verts: Vec<Vec3>,
+        faces: Vec<[usize; 3]>,
+    }
+
+    impl Sphere {
+        fn new(levels: usize, rng: &mut Rng) -> Sphere {
+            let phi = (1.0 + 5.0f32.sqrt()) / 2.0;
+            let mut dirs: Vec<Vec3> = [
+                [-1.0, phi, 0.0],
+                [1.0, phi, 0.0],
+                [-1.0, -phi, 0.0],
+                [1.0, -phi, 0.0],
+                [0.0, -1.0, phi],
+                [0.0, 1.0, phi],
+                [0.0, -1.0, -phi],
+                [0.0, 1.0, -phi],
+                [phi, 0.0, -1.0],
+                [phi, 0.0, 1.0],
+                [-phi, 0.0, -1.0],
+                [-phi, 0.0, 1.0],
+            ]
+            .map(|v| Vec3::from(v).normalize())
+            .to_vec();
+            let mut faces = vec![
+                [0, 11, 5],
+                [0, 5, 1],
+                [0, 1, 7],
+                [0, 7, 10],
+                [0, 10, 11],
+                [1, 5, 9],
+                [5, 11, 4],
+                [11, 10, 2],
+                [10, 7, 6],
+                [7, 1, 8],
+                [3, 9, 4],
+                [3, 4, 2],
+                [3, 2, 6],
+                [3, 6, 8],
+                [3, 8, 9],
+                [4, 9, 5],
+                [2, 4, 11],
+                [6, 2, 10],
+                [8, 6, 7],
+                [9, 8, 1],
+            ];
+            for _ in 0..levels {
+                let mut midpoints = std::collections::HashMap::new();
+                let mut mid = |a: usize, b: usize, dirs: &mut Vec<Vec3>| {
+                    *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                        dirs.push((dirs[a] + dirs[b]).normalize());
+                        dirs.len() - 1
+                    })
+                };
+                faces = faces
+                    .iter()
+                    .flat_map(|&[a, b, c]| {
+                        let (ab, bc, ca) = (
+                            mid(a, b, &mut dirs),
+                            mid(b, c, &mut dirs),
+                            mid(c, a, &mut dirs),
+                        );
+                        [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+                    })
+                    .collect();
+            }
+            let center = Vec3::new(-2.71, 5.33, 1.09);
+            let frame = glam::Quat::from_axis_angle(Vec3::new(0.3, -0.8, 0.5).normalize(), 0.7);
+            let verts = dirs
+                .iter()
+                .map(|&d| center + frame * d * 1.37 * rng.range(0.97, 1.03))
+                .collect();
+            Sphere {
+                center,
+                verts,
+                faces,
+            }
+        }
+
+        fn triangles(&self) -> Vec<[Vec3; 3]> {
+            self.faces
+                .iter()
+                .map(|f| f.map(|i| self.verts[i]))
+                .collect()
+        }
+
+        /// A random point on a shared edge (k odd) or a shared vertex (k even).
+        fn edge_or_vertex(&self, k: usize, rng: &mut Rng) -> Vec3 {
+            let f = self.faces[rng.below(self.faces.len())];
+            let e = rng.below(3);
+            let (a, b) = (self.verts[f[e]], self.verts[f[(e + 1) % 3]]);
+            if k % 2 == 0 {
+                a
+            } else {
+                a.lerp(b, rng.f32())
+            }
+        }
+    }
+
+    /// No ray slips through a closed mesh at a shared edge or vertex: rays from inside (near the
+    /// center) out through edges and vertices, and from outside in towards the center through
+    /// them, all hit; and the f32 path agrees with the f64 reference on every triangle.
+    #[test]
+    fn closed_mesh_has_no_cracks() {
+        let mut rng = Rng::new(23);
+        let sphere = Sphere::new(3, &mut rng);
+        let tris = sphere.triangles();
+        assert_eq!(tris.len(), 1280);
+        let mut misses = 0;
+        for k in 0..20_000 {
+            let target = sphere.edge_or_vertex(k, &mut rng);
+            let r = if k % 4 < 2 {
+                let o = sphere.center + rng.unit_vector() * rng.range(0.0, 0.05);
+                ray(o, target - o)
+            } else {
+                let o = sphere.center + (target - sphere.center) * rng.range(1.5, 10.0);
+                ray(o, sphere.center - o)
+            };
+            let hits = tris.iter().filter(|t| assert_paths_agree(&r, t)).count();
+            if hits == 0 {
+                misses += 1;
+            }
+        }
+        assert_eq!(misses, 0, "{misses} rays fell through the closed mesh");
     }
 
     #[test]
