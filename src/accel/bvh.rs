@@ -781,6 +781,35 @@ mod tests {
         }
     }
 
+    /// Rays parallel to an axis whose origin lies exactly in box planes of that axis (where a
+    /// naive slab test computes 0·∞ = NaN): walls standing on y = 0 hit at their bottom edge
+    /// by rays running along y = 0, and boxes the ray only touches.
+    #[test]
+    fn axis_parallel_rays_in_box_planes() {
+        let mut rng = Rng::new(8);
+        // Unit quads in the planes x = 2, 3, ..., 9, spanning y in [0, 1] and z in [0, 1].
+        let mut tris = Vec::new();
+        for i in 2..10 {
+            let x = i as f32;
+            let (a, b) = (Vec3::new(x, 0.0, 0.0), Vec3::new(x, 1.0, 0.0));
+            let (c, d) = (Vec3::new(x, 1.0, 1.0), Vec3::new(x, 0.0, 1.0));
+            tris.extend([[a, b, c], [a, c, d]]);
+        }
+        let bvh = Bvh::build(&tris);
+        let mut hits = 0;
+        for k in 0..4000 {
+            // y and z on the box planes 0 and 1 or inside; x before, between or after the walls.
+            let on_plane = |rng: &mut Rng| [0.0, 1.0, rng.f32()][rng.below(3)];
+            let o = Vec3::new(rng.range(0.0, 11.0), on_plane(&mut rng), on_plane(&mut rng));
+            let d = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Z][k % 4] * rng.range(0.5, 2.0);
+            let r = Ray::new(o, d);
+            let t_max = random_t_max(&mut rng, 10.0);
+            assert_agrees(&bvh, &tris, &r, t_max);
+            hits += bvh.intersect(&r, t_max).is_some() as usize;
+        }
+        assert!(hits > 1000, "{hits}");
+    }
+
     /// obvhs's own node test ignores boxes left before t = 1e-4; ours must not.
     #[test]
     fn finds_hits_at_tiny_t() {

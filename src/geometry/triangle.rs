@@ -142,6 +142,7 @@ impl WatertightRay {
 }
 
 /// The transformed vertices a, b, c (= p0, p1, p2) in lanes 0–2 of each coordinate.
+#[derive(Clone, Copy)]
 struct Sheared {
     x: Vec4,
     y: Vec4,
@@ -215,7 +216,7 @@ pub fn intersect_packed(
     }
     let det = e.x + e.y + e.z;
     if neg | pos != 0b111 || !det.is_finite() {
-        return intersect_f64(ray, tri, &v, t_max);
+        return intersect_f64(ray, tri, v, t_max);
     }
     let t = woop_t(ray, tri, &v, e, det)?;
     if !(t < t_max) {
@@ -263,7 +264,7 @@ fn woop_t(
 fn intersect_f64(
     ray: &WatertightRay,
     tri: &PackedTriangle,
-    v: &Sheared,
+    v: Sheared,
     t_max: f32,
 ) -> Option<TriangleHit> {
     let [a, b, c] = v.vertices();
@@ -305,7 +306,7 @@ pub(crate) fn intersect_reference(
         return None;
     }
     let tri = PackedTriangle::new(p0, p1, p2);
-    intersect_f64(&ray, &tri, &ray.transform(&tri), t_max)
+    intersect_f64(&ray, &tri, ray.transform(&tri), t_max)
 }
 
 /// Edge function `u.x v.y − u.y v.x` of the transformed vertices. Both products of f32 are exact
