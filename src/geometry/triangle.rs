@@ -219,7 +219,8 @@ pub fn intersect_packed(
         return intersect_f64(ray, tri, v, t_max);
     }
     let t = woop_t(ray, tri, &v, e, det)?;
-    if !(t < t_max) {
+    // t is finite and positive here; a NaN t_max rejects the hit.
+    if t_max.is_nan() || t >= t_max {
         return None;
     }
     // |eᵢ| ≤ |det| (same signs), so the correctly rounded quotients lie in [0, 1].
@@ -752,7 +753,7 @@ mod tests {
             let f = self.faces[rng.below(self.faces.len())];
             let e = rng.below(3);
             let (a, b) = (self.verts[f[e]], self.verts[f[(e + 1) % 3]]);
-            if k % 2 == 0 {
+            if k.is_multiple_of(2) {
                 a
             } else {
                 a.lerp(b, rng.f32())
