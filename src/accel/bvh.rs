@@ -20,9 +20,10 @@
 //!   BVH primitive order (no index indirection per test).
 //! - Child boxes are the exact bounds of their triangles (the CWBVH's 8-bit quantised boxes are
 //!   not used), and the box test is conservative in the spirit of PBR 4ed §6.8.2
-//!   ("Conservative Ray–Bounds Intersections"): see [`RayBoxes`]. A box the exact ray meets
-//!   within t ∈ [0, t_max] is never culled, in particular not one whose face holds a triangle
-//!   (every axis-aligned floor), and nothing is clipped at t = 1e-4 as in obvhs's own node test.
+//!   ("Conservative Ray–Bounds Intersections"; see `RayBoxes` in the source). A box the exact
+//!   ray meets within t ∈ [0, t_max] is never culled, in particular not one whose face holds a
+//!   triangle (every axis-aligned floor), and nothing is clipped at t = 1e-4 as in obvhs's own
+//!   node test.
 //!
 //! Degenerate triangles (zero area, or a non-finite vertex) are left out of the tree: they can
 //! never be hit. `Bvh` is plain data (`Send + Sync`); queries allocate nothing (the traversal

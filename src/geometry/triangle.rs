@@ -64,7 +64,7 @@ pub fn is_degenerate(p0: Vec3, p1: Vec3, p2: Vec3) -> bool {
 /// A triangle stored by coordinate: `rows[k]` holds coordinate k of p0, p1, p2 in lanes 0–2
 /// (lane 3 is 0 and ignored). 48 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PackedTriangle {
+pub(crate) struct PackedTriangle {
     rows: [Vec4; 3],
 }
 
@@ -198,11 +198,11 @@ pub fn intersect_prepared(
     intersect_packed(ray, &PackedTriangle::new(p0, p1, p2), t_max)
 }
 
-/// [`intersect_prepared`] for triangles already known not to be degenerate and packed (the BVH
-/// filters and packs them at build time). A degenerate triangle still never hits here: its edge
-/// functions sum to zero, which the f64 path rejects.
+/// [`intersect_prepared`] for triangles already known not to be degenerate, packed (the BVH
+/// filters and packs them at build time). Not for degenerate triangles: rounded by the shear,
+/// their vertices need not stay collinear, and Woop's t does not look at the plane normal.
 #[inline(always)]
-pub fn intersect_packed(
+pub(crate) fn intersect_packed(
     ray: &WatertightRay,
     tri: &PackedTriangle,
     t_max: f32,
