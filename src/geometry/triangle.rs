@@ -8,17 +8,29 @@
 //! edge function of a shared edge is the exact negation of its twin, so a ray through the interior
 //! of a closed mesh cannot slip between triangles (PBR 4ed §6.8.4).
 //!
-//! Deviations from pbrt-v4, for precision (same watertight edge test):
-//! - the edge functions are evaluated in f64, where the products of two f32 are exact and the
-//!   difference is rounded once, so their signs are those of the exactly evaluated edge functions
-//!   of the transformed vertices (pbrt falls back to f64 only when an f32 edge function is zero);
-//! - t comes from the plane equation in f64 with a forward error bound that certifies t > 0
-//!   (`plane_t`) instead of Woop's t with pbrt's δt bound (PBR 4ed §6.8.7), which rejects valid
-//!   hits on slivers and at grazing angles.
+//! The three vertices are processed together, one per SIMD lane ([`PackedTriangle`] stores the
+//! triangle by coordinate rows, so the per-ray axis permutation is a choice of rows). Each lane
+//! performs exactly the scalar operations, so the watertightness argument is unchanged.
+//!
+//! Precision:
+//! - **Edge functions** are evaluated in f32 first. Rounding is monotonic, so
+//!   fl(fl(ab) − fl(cd)) has the sign of the exact ab − cd or is zero; a zero (or a NaN from
+//!   overflow) sends the test to f64, where the products of two f32 are exact and the
+//!   difference is rounded once, so the sign is exact (pbrt-v4 `IntersectTriangle` falls back the
+//!   same way). Either way the hit/miss decision is that of the exactly evaluated edge functions
+//!   of the transformed vertices.
+//! - **t** is Woop's t = Σ eᵢ zᵢ / Σ eᵢ, a convex combination of the vertices' sheared depths
+//!   zᵢ (all eᵢ share one sign). The sign of each computed zᵢ = fl(fl(pᵢ − o)_z · s_z) is exact,
+//!   so when all three are positive the whole triangle lies in front of the origin and t > 0 is
+//!   certain, for the exact and the computed t alike. This replaces pbrt's δt bound
+//!   (PBR 4ed §6.8.7), which rejects valid hits on slivers and at grazing angles. A triangle with
+//!   all zᵢ ≤ 0 lies behind the origin. One that straddles the origin's plane (a spawned ray next
+//!   to its own surface) takes t from the plane equation in f64 with a forward error bound that
+//!   certifies t > 0 (`plane_t`).
 //!
 //! Barycentric convention: `p = b0 p0 + b1 p1 + b2 p2`, `b0 + b1 + b2 = 1`, `bi ≥ 0`.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4, Vec4Swizzles};
 
 use super::offset::gamma;
 use super::ray::Ray;
@@ -49,62 +61,123 @@ pub fn is_degenerate(p0: Vec3, p1: Vec3, p2: Vec3) -> bool {
     !finite || (p1 - p0).cross(p2 - p0) == Vec3::ZERO
 }
 
+/// A triangle stored by coordinate: `rows[k]` holds coordinate k of p0, p1, p2 in lanes 0–2
+/// (lane 3 is 0 and ignored). 48 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PackedTriangle {
+    rows: [Vec4; 3],
+}
+
+impl PackedTriangle {
+    #[inline]
+    pub fn new(p0: Vec3, p1: Vec3, p2: Vec3) -> PackedTriangle {
+        let row = |k: usize| Vec4::new(p0[k], p1[k], p2[k], 0.0);
+        PackedTriangle {
+            rows: [row(0), row(1), row(2)],
+        }
+    }
+
+    /// `[p0, p1, p2]`.
+    #[inline]
+    pub fn vertices(&self) -> [Vec3; 3] {
+        let [x, y, z] = self.rows;
+        [
+            Vec3::new(x.x, y.x, z.x),
+            Vec3::new(x.y, y.y, z.y),
+            Vec3::new(x.z, y.z, z.z),
+        ]
+    }
+}
+
 /// Per-ray part of the watertight test (axis permutation and shear, PBR 4ed §6.5.3), computed once
 /// per ray and reused for every triangle the ray is tested against.
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
     o: Vec3,
     d: Vec3,
-    /// Axis indices: the ray's largest |d| component becomes z.
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    /// Shear taking the permuted direction to (0, 0, 1): x' = x + sx z, y' = y + sy z, z' = sz z.
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    /// Rows of a [`PackedTriangle`] that become x, y, z: the ray's largest |d| component is z.
+    axes: [usize; 3],
+    /// The origin's permuted coordinates, each splatted.
+    o_perm: [Vec4; 3],
+    /// Shear taking the permuted direction to (0, 0, 1): x' = x + sx z, y' = y + sy z,
+    /// z' = sz z; `[sx, sy, sz]`, each splatted.
+    shear: [Vec4; 3],
 }
 
 impl WatertightRay {
     /// None for a zero or non-finite direction or a non-finite origin (such a ray hits nothing).
-    #[inline]
+    #[inline(always)]
     pub fn new(ray: &Ray) -> Option<WatertightRay> {
-        if !(ray.o.is_finite() && ray.d.is_finite()) {
+        let (o, d) = (ray.o.to_array(), ray.d.to_array());
+        if !(Vec4::from((ray.o, 0.0)).is_finite() && Vec4::from((ray.d, 0.0)).is_finite()) {
             return None;
         }
         let kz = ray.d.abs().max_position();
-        let kx = if kz == 2 { 0 } else { kz + 1 };
-        let ky = if kx == 2 { 0 } else { kx + 1 };
-        let dz = ray.d[kz];
+        let [kx, ky] = [[1, 2], [2, 0], [0, 1]][kz];
+        let dz = d[kz];
         if dz == 0.0 {
             return None;
         }
         Some(WatertightRay {
             o: ray.o,
             d: ray.d,
-            kx,
-            ky,
-            kz,
-            sx: -ray.d[kx] / dz,
-            sy: -ray.d[ky] / dz,
-            sz: 1.0 / dz,
+            axes: [kx, ky, kz],
+            o_perm: [o[kx], o[ky], o[kz]].map(Vec4::splat),
+            shear: [-d[kx] / dz, -d[ky] / dz, 1.0 / dz].map(Vec4::splat),
         })
     }
 
-    /// Translates, permutes and shears a vertex; z is scaled by `sz` (a vertex's t is its z).
-    #[inline]
-    fn transform(&self, p: Vec3) -> Vec3 {
-        // A 4-array indexed with `k & 3` needs no bounds check (glam's `Index` is a match with
-        // a panic arm, ~1/3 of this test's instructions before).
-        let p = (p - self.o).extend(0.0).to_array();
-        let (x, y, z) = (p[self.kx & 3], p[self.ky & 3], p[self.kz & 3]);
-        Vec3::new(x + self.sx * z, y + self.sy * z, z * self.sz)
+    /// Translates, permutes and shears the three vertices; z is scaled by `sz` (a vertex's t is
+    /// its z).
+    #[inline(always)]
+    fn transform(&self, tri: &PackedTriangle) -> Sheared {
+        let [kx, ky, kz] = self.axes;
+        let z = tri.rows[kz] - self.o_perm[2];
+        Sheared {
+            x: (tri.rows[kx] - self.o_perm[0]) + self.shear[0] * z,
+            y: (tri.rows[ky] - self.o_perm[1]) + self.shear[1] * z,
+            z: z * self.shear[2],
+        }
     }
 }
 
-/// Watertight ray–triangle test (Woop, Benthin, Wald 2013; PBR 4ed §6.5.3) with a conservative
-/// bound so that hits at t ≤ 0 are rejected (see `plane_t` in the source). `t_max` is
-/// exclusive. Returns None for degenerate (zero-area) triangles and never a NaN.
+/// The transformed vertices a, b, c (= p0, p1, p2) in lanes 0–2 of each coordinate.
+#[derive(Clone, Copy)]
+struct Sheared {
+    x: Vec4,
+    y: Vec4,
+    z: Vec4,
+}
+
+impl Sheared {
+    /// `(edge(b, c), edge(c, a), edge(a, b), 0)` with `edge(u, v) = u.x v.y − u.y v.x` in f32,
+    /// lane by lane without fused multiply-add, so `edge(v, u)` is exactly `−edge(u, v)`.
+    #[inline(always)]
+    fn edge_functions(&self) -> Vec4 {
+        let (x1, x2) = (self.x.yzxw(), self.x.zxyw());
+        let (y1, y2) = (self.y.yzxw(), self.y.zxyw());
+        x1 * y2 - y1 * x2
+    }
+
+    fn vertices(&self) -> [Vec3; 3] {
+        let (x, y, z) = (self.x, self.y, self.z);
+        [
+            Vec3::new(x.x, y.x, z.x),
+            Vec3::new(x.y, y.y, z.y),
+            Vec3::new(x.z, y.z, z.z),
+        ]
+    }
+}
+
+/// Lanes 0–2 of a comparison mask as 3 bits.
+#[inline(always)]
+fn mask3(m: glam::BVec4A) -> u32 {
+    m.bitmask() & 0b111
+}
+
+/// Watertight ray–triangle test (Woop, Benthin, Wald 2013; PBR 4ed §6.5.3) that never reports a
+/// hit at t ≤ 0 (see the module docs). `t_max` is exclusive. Returns None for degenerate
+/// (zero-area) triangles and never a NaN.
 #[inline]
 pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3, t_max: f32) -> Option<TriangleHit> {
     intersect_prepared(&WatertightRay::new(ray)?, p0, p1, p2, t_max)
@@ -122,25 +195,81 @@ pub fn intersect_prepared(
     if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
         return None;
     }
-    intersect_non_degenerate(ray, p0, p1, p2, t_max)
+    intersect_packed(ray, &PackedTriangle::new(p0, p1, p2), t_max)
 }
 
-/// [`intersect_prepared`] for triangles already known not to be degenerate (the BVH filters them
-/// at build time). A degenerate triangle still never hits here, through the zero plane normal.
-#[inline]
-pub(crate) fn intersect_non_degenerate(
+/// [`intersect_prepared`] for triangles already known not to be degenerate, packed (the BVH
+/// filters and packs them at build time). Not for degenerate triangles: rounded by the shear,
+/// their vertices need not stay collinear, and Woop's t does not look at the plane normal.
+#[inline(always)]
+pub(crate) fn intersect_packed(
     ray: &WatertightRay,
-    p0: Vec3,
-    p1: Vec3,
-    p2: Vec3,
+    tri: &PackedTriangle,
     t_max: f32,
 ) -> Option<TriangleHit> {
-    let (a, b, c) = (ray.transform(p0), ray.transform(p1), ray.transform(p2));
-    let e = [
-        edge_function(b, c),
-        edge_function(c, a),
-        edge_function(a, b),
-    ];
+    let v = ray.transform(tri);
+    let e = v.edge_functions();
+    let (neg, pos) = (mask3(e.cmplt(Vec4::ZERO)), mask3(e.cmpgt(Vec4::ZERO)));
+    if neg != 0 && pos != 0 {
+        // Nonzero f32 edge functions have exact signs: certainly outside.
+        return None;
+    }
+    let det = e.x + e.y + e.z;
+    if neg | pos != 0b111 || !det.is_finite() {
+        return intersect_f64(ray, tri, v, t_max);
+    }
+    let t = woop_t(ray, tri, &v, e, det)?;
+    // t is finite and positive here; a NaN t_max rejects the hit.
+    if t_max.is_nan() || t >= t_max {
+        return None;
+    }
+    // |eᵢ| ≤ |det| (same signs), so the correctly rounded quotients lie in [0, 1].
+    let b = e / det;
+    Some(TriangleHit {
+        t,
+        b0: b.x,
+        b1: b.y,
+        b2: b.z,
+    })
+}
+
+/// Woop's t = Σ eᵢ zᵢ / det when all three vertices lie in front of the origin (t > 0 is then
+/// certain, see the module docs), None when none does, else the f64 plane t.
+#[inline(always)]
+fn woop_t(
+    ray: &WatertightRay,
+    tri: &PackedTriangle,
+    v: &Sheared,
+    e: Vec4,
+    det: f32,
+) -> Option<f32> {
+    if mask3(v.z.cmpgt(Vec4::ZERO)) == 0b111 {
+        let ez = e * v.z;
+        let t = (ez.x + ez.y + ez.z) / det;
+        // A zero (underflow) or infinite (overflow) t goes to the f64 path.
+        if t > 0.0 && t < f32::INFINITY {
+            return Some(t);
+        }
+    } else if mask3(v.z.cmple(Vec4::ZERO)) == 0b111 {
+        return None;
+    }
+    let t = plane_t(ray, tri)? as f32;
+    (t > 0.0).then_some(t)
+}
+
+/// The test with f64 edge functions (pbrt-v4's fallback when an f32 edge function is zero) and
+/// the f64 plane t: rays through an edge or a vertex, overflow, and the reference the f32 path
+/// is checked against in the tests.
+#[cold]
+#[inline(never)]
+fn intersect_f64(
+    ray: &WatertightRay,
+    tri: &PackedTriangle,
+    v: Sheared,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let [a, b, c] = v.vertices();
+    let e = [edge_f64(b, c), edge_f64(c, a), edge_f64(a, b)];
     let has_neg = e[0] < 0.0 || e[1] < 0.0 || e[2] < 0.0;
     let has_pos = e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0;
     if has_neg && has_pos {
@@ -150,7 +279,7 @@ pub(crate) fn intersect_non_degenerate(
     if det == 0.0 {
         return None;
     }
-    let t = plane_t(ray, p0, p1, p2)? as f32;
+    let t = plane_t(ray, tri)? as f32;
     // Written so that a NaN rejects the hit.
     if !(t > 0.0 && t < t_max) {
         return None;
@@ -164,11 +293,28 @@ pub(crate) fn intersect_non_degenerate(
     })
 }
 
+/// The test with the f64 path only: the reference the f32 path is checked against.
+#[cfg(test)]
+pub(crate) fn intersect_reference(
+    ray: &Ray,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let ray = WatertightRay::new(ray)?;
+    if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
+        return None;
+    }
+    let tri = PackedTriangle::new(p0, p1, p2);
+    intersect_f64(&ray, &tri, ray.transform(&tri), t_max)
+}
+
 /// Edge function `u.x v.y − u.y v.x` of the transformed vertices. Both products of f32 are exact
 /// in f64 and the difference is rounded once, so the sign is exact and swapping `u` and `v`
 /// negates the value exactly (the watertightness argument of PBR 4ed §6.8.4).
 #[inline]
-fn edge_function(u: Vec3, v: Vec3) -> f64 {
+fn edge_f64(u: Vec3, v: Vec3) -> f64 {
     u.x as f64 * v.y as f64 - u.y as f64 * v.x as f64
 }
 
@@ -190,8 +336,9 @@ const fn gamma64(n: i32) -> f64 {
 /// triangle's projected area, so it rejects valid hits on slivers (area 1e-12) and at grazing
 /// angles; the f64 plane equation is accurate to ~1e-15 relative in both cases.
 #[inline]
-fn plane_t(ray: &WatertightRay, p0: Vec3, p1: Vec3, p2: Vec3) -> Option<f64> {
+fn plane_t(ray: &WatertightRay, tri: &PackedTriangle) -> Option<f64> {
     let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+    let [p0, p1, p2] = tri.vertices();
     let (q0, q1, q2, o, d) = (f(p0), f(p1), f(p2), f(ray.o), f(ray.d));
     let e1 = [q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]];
     let e2 = [q2[0] - q0[0], q2[1] - q0[1], q2[2] - q0[2]];
@@ -454,6 +601,191 @@ mod tests {
         }
         assert!(rays > 100_000, "only {rays} rays tested");
         assert_eq!(misses, 0, "{misses} of {rays} rays fell through the mesh");
+    }
+
+    /// Asserts that the f32 path and the f64 reference agree: same hit/miss, and when both
+    /// hit, the barycentrics to f32 accuracy and t to f32 accuracy over |cos θ| (θ between ray
+    /// and normal: seen edge-on, a barycentric rounding moves the hit far along the ray).
+    fn assert_paths_agree(r: &Ray, tri: &[Vec3; 3]) -> bool {
+        let fast = intersect(r, tri[0], tri[1], tri[2], f32::INFINITY);
+        let reference = intersect_reference(r, tri[0], tri[1], tri[2], f32::INFINITY);
+        match (fast, reference) {
+            (None, None) => false,
+            (Some(f), Some(g)) => {
+                check_hit(&f);
+                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+                let cos = n.dot(r.d.normalize()).abs().max(1e-6);
+                let tol = 1e-5 * g.t / cos;
+                assert!((f.t - g.t).abs() <= tol, "{r:?} {tri:?}: {f:?} vs {g:?}");
+                for (a, b) in [(f.b0, g.b0), (f.b1, g.b1), (f.b2, g.b2)] {
+                    assert!((a - b).abs() <= 1e-4, "{r:?} {tri:?}: {f:?} vs {g:?}");
+                }
+                true
+            }
+            (f, g) => panic!("{r:?} {tri:?}: f32 path {f:?}, f64 reference {g:?}"),
+        }
+    }
+
+    /// The f32 edge functions (with the f64 fallback on zero) decide hit/miss exactly as the f64
+    /// ones for rays through shared vertices, edges and cell diagonals of a displaced grid, from
+    /// every side and at angles down to 10° above the surface.
+    #[test]
+    fn f32_path_agrees_with_the_f64_reference() {
+        let mut rng = Rng::new(19);
+        let grid = Grid::new(16, &mut rng);
+        let normal = grid.normal();
+        let (mut tests, mut hits) = (0, 0);
+        for k in 0..60_000 {
+            let (i, j) = (1 + rng.below(grid.n - 1), 1 + rng.below(grid.n - 1));
+            let p = grid.vert(i, j);
+            let target = match k % 4 {
+                0 => p,
+                1 => 0.5 * (p + grid.vert(i + 1, j)),
+                2 => p.lerp(grid.vert(i + 1, j + 1), rng.f32()),
+                _ => p.lerp(grid.vert(i, j + 1), rng.f32()),
+            };
+            let side = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
+            let o = origin_towards(&mut rng, target, normal, side, 80.0);
+            let r = ray(o, target - o);
+            for tri in grid.around(i, j) {
+                tests += 1;
+                hits += assert_paths_agree(&r, &tri) as usize;
+            }
+        }
+        assert!(
+            hits > 60_000 && tests > 400_000,
+            "{hits} hits in {tests} tests"
+        );
+    }
+
+    /// A closed mesh: an icosahedron subdivided `levels` times, vertices shared by index and
+    /// moved radially by up to ±3%, in a tilted frame with "ugly" coordinates. Star-shaped
+    /// around `center`.
+    struct Sphere {
+        center: Vec3,
+        verts: Vec<Vec3>,
+        faces: Vec<[usize; 3]>,
+    }
+
+    impl Sphere {
+        fn new(levels: usize, rng: &mut Rng) -> Sphere {
+            let phi = (1.0 + 5.0f32.sqrt()) / 2.0;
+            let mut dirs: Vec<Vec3> = [
+                [-1.0, phi, 0.0],
+                [1.0, phi, 0.0],
+                [-1.0, -phi, 0.0],
+                [1.0, -phi, 0.0],
+                [0.0, -1.0, phi],
+                [0.0, 1.0, phi],
+                [0.0, -1.0, -phi],
+                [0.0, 1.0, -phi],
+                [phi, 0.0, -1.0],
+                [phi, 0.0, 1.0],
+                [-phi, 0.0, -1.0],
+                [-phi, 0.0, 1.0],
+            ]
+            .map(|v| Vec3::from(v).normalize())
+            .to_vec();
+            let mut faces = vec![
+                [0, 11, 5],
+                [0, 5, 1],
+                [0, 1, 7],
+                [0, 7, 10],
+                [0, 10, 11],
+                [1, 5, 9],
+                [5, 11, 4],
+                [11, 10, 2],
+                [10, 7, 6],
+                [7, 1, 8],
+                [3, 9, 4],
+                [3, 4, 2],
+                [3, 2, 6],
+                [3, 6, 8],
+                [3, 8, 9],
+                [4, 9, 5],
+                [2, 4, 11],
+                [6, 2, 10],
+                [8, 6, 7],
+                [9, 8, 1],
+            ];
+            for _ in 0..levels {
+                let mut midpoints = std::collections::HashMap::new();
+                let mut mid = |a: usize, b: usize, dirs: &mut Vec<Vec3>| {
+                    *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                        dirs.push((dirs[a] + dirs[b]).normalize());
+                        dirs.len() - 1
+                    })
+                };
+                faces = faces
+                    .iter()
+                    .flat_map(|&[a, b, c]| {
+                        let (ab, bc, ca) = (
+                            mid(a, b, &mut dirs),
+                            mid(b, c, &mut dirs),
+                            mid(c, a, &mut dirs),
+                        );
+                        [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+                    })
+                    .collect();
+            }
+            let center = Vec3::new(-2.71, 5.33, 1.09);
+            let frame = glam::Quat::from_axis_angle(Vec3::new(0.3, -0.8, 0.5).normalize(), 0.7);
+            let verts = dirs
+                .iter()
+                .map(|&d| center + frame * d * 1.37 * rng.range(0.97, 1.03))
+                .collect();
+            Sphere {
+                center,
+                verts,
+                faces,
+            }
+        }
+
+        fn triangles(&self) -> Vec<[Vec3; 3]> {
+            self.faces
+                .iter()
+                .map(|f| f.map(|i| self.verts[i]))
+                .collect()
+        }
+
+        /// A random point on a shared edge (k odd) or a shared vertex (k even).
+        fn edge_or_vertex(&self, k: usize, rng: &mut Rng) -> Vec3 {
+            let f = self.faces[rng.below(self.faces.len())];
+            let e = rng.below(3);
+            let (a, b) = (self.verts[f[e]], self.verts[f[(e + 1) % 3]]);
+            if k.is_multiple_of(2) {
+                a
+            } else {
+                a.lerp(b, rng.f32())
+            }
+        }
+    }
+
+    /// No ray slips through a closed mesh at a shared edge or vertex: rays from inside (near the
+    /// center) out through edges and vertices, and from outside in towards the center through
+    /// them, all hit; and the f32 path agrees with the f64 reference on every triangle.
+    #[test]
+    fn closed_mesh_has_no_cracks() {
+        let mut rng = Rng::new(23);
+        let sphere = Sphere::new(3, &mut rng);
+        let tris = sphere.triangles();
+        assert_eq!(tris.len(), 1280);
+        let mut misses = 0;
+        for k in 0..20_000 {
+            let target = sphere.edge_or_vertex(k, &mut rng);
+            let r = if k % 4 < 2 {
+                let o = sphere.center + rng.unit_vector() * rng.range(0.0, 0.05);
+                ray(o, target - o)
+            } else {
+                let o = sphere.center + (target - sphere.center) * rng.range(1.5, 10.0);
+                ray(o, sphere.center - o)
+            };
+            let hits = tris.iter().filter(|t| assert_paths_agree(&r, t)).count();
+            if hits == 0 {
+                misses += 1;
+            }
+        }
+        assert_eq!(misses, 0, "{misses} rays fell through the closed mesh");
     }
 
     #[test]

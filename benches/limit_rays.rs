@@ -1,0 +1,212 @@
+//! The ray classes of `../shared/limit` (the Embree 3 traversal ceiling on this machine) traced
+//! through our BVH, for a direct Mrays/s comparison with its "mode 1" (one ray per call)
+//! figures. The scene is read from the same OBJ subset (`v`, `f`, and the `#@camera` /
+//! `#@emitter` directives, see `../shared/limit/README.md`) and the rays are made the same way:
+//!
+//! - primary: pinhole camera, one jittered sample per pixel per pass, 8×8 pixel tiles;
+//! - diffuse: one per primary hit, from the hit offset by eps along the normal facing the
+//!   camera, cosine-distributed around it;
+//! - shadow: one per primary hit, towards a uniform point on the emitter, stopping eps short
+//!   (skipped when the point is behind the surface or the emitter faces away).
+//!
+//! eps = 1e-4 × the scene's bounding-box diagonal. Rays are generated before timing; closest
+//! hits (`Bvh::intersect`) for primary and diffuse rays, any hit (`Bvh::occluded`) for shadow
+//! rays, on one thread (median of 5 runs) and on all rayon threads.
+//!
+//! `cargo bench --bench limit_rays [-- SCENE.obj [SPP]]`; default `../shared/limit/scenes/cbox.obj`
+//! at 4 spp (256×256 from the camera line: 262,144 primary rays).
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use spectral_render::accel::bvh::Bvh;
+use spectral_render::geometry::Ray;
+
+/// A scene of the limit benchmark: triangles, camera, emitter.
+struct LimitScene {
+    triangles: Vec<[Vec3; 3]>,
+    /// Position, view direction, up, horizontal field of view (degrees), width, height.
+    camera: (Vec3, Vec3, Vec3, f32, usize, usize),
+    /// Parallelogram `o + s e1 + t e2`, emitting along `e1 × e2`.
+    emitter: Option<(Vec3, Vec3, Vec3)>,
+}
+
+fn parse_obj(text: &str) -> LimitScene {
+    let (mut verts, mut triangles) = (Vec::new(), Vec::new());
+    let (mut camera, mut emitter) = (None, None);
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        let tag = words.next().unwrap_or("");
+        let nums: Vec<f32> = words.clone().filter_map(|w| w.parse().ok()).collect();
+        let v3 = |k: usize| Vec3::new(nums[k], nums[k + 1], nums[k + 2]);
+        match tag {
+            "v" => verts.push(v3(0)),
+            "f" => {
+                let index = |w: &str| {
+                    let i: i64 = w.split('/').next().unwrap().parse().unwrap();
+                    (if i < 0 { verts.len() as i64 + i } else { i - 1 }) as usize
+                };
+                let f: Vec<usize> = words.map(index).collect();
+                for k in 1..f.len() - 1 {
+                    triangles.push([verts[f[0]], verts[f[k]], verts[f[k + 1]]]);
+                }
+            }
+            "#@camera" => {
+                camera = Some((
+                    v3(0),
+                    v3(3),
+                    v3(6),
+                    nums[9],
+                    nums[10] as usize,
+                    nums[11] as usize,
+                ))
+            }
+            "#@emitter" => emitter = Some((v3(0), v3(3), v3(6))),
+            _ => {}
+        }
+    }
+    let camera = camera.expect("the scene file has no #@camera line");
+    LimitScene {
+        triangles,
+        camera,
+        emitter,
+    }
+}
+
+/// SplitMix64 (Steele et al. 2014), uniform floats in [0, 1).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// Pass-major, 8×8 pixel tiles, scanlines inside a tile.
+fn primary_rays(scene: &LimitScene, spp: usize, rng: &mut Rng) -> Vec<Ray> {
+    let (pos, f, up, hfov, w, h) = scene.camera;
+    let (f, tx) = (f.normalize(), (0.5 * hfov).to_radians().tan());
+    let (r, ty) = (f.cross(up).normalize(), tx * h as f32 / w as f32);
+    let u = r.cross(f);
+    let mut rays = Vec::with_capacity(w * h * spp);
+    for _ in 0..spp {
+        for (y0, x0) in (0..h)
+            .step_by(8)
+            .flat_map(|y| (0..w).step_by(8).map(move |x| (y, x)))
+        {
+            for (y, x) in
+                (y0..(y0 + 8).min(h)).flat_map(|y| (x0..(x0 + 8).min(w)).map(move |x| (y, x)))
+            {
+                let sx = (2.0 * (x as f32 + rng.next()) / w as f32 - 1.0) * tx;
+                let sy = (1.0 - 2.0 * (y as f32 + rng.next()) / h as f32) * ty;
+                rays.push(Ray::new(pos, (f + r * sx + u * sy).normalize()));
+            }
+        }
+    }
+    rays
+}
+
+/// Diffuse and shadow rays from the primary hits.
+fn secondary_rays(
+    scene: &LimitScene,
+    bvh: &Bvh,
+    primary: &[Ray],
+    rng: &mut Rng,
+) -> (Vec<Ray>, Vec<(Ray, f32)>) {
+    let (lo, hi) = bvh.bounds();
+    let eps = 1e-4 * (hi - lo).length();
+    let (mut diffuse, mut shadow) = (Vec::new(), Vec::new());
+    for ray in primary {
+        let Some(hit) = bvh.intersect(ray, f32::INFINITY) else {
+            continue;
+        };
+        let [p0, p1, p2] = scene.triangles[hit.prim as usize];
+        let mut n = (p1 - p0).cross(p2 - p0).normalize();
+        if n.dot(ray.d) > 0.0 {
+            n = -n;
+        }
+        let org = ray.at(hit.hit.t) + n * eps;
+        let (u1, u2) = (rng.next(), rng.next());
+        let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
+        let (t, b) = n.any_orthonormal_pair();
+        let w = (t * (u1.sqrt() * c) + b * (u1.sqrt() * s) + n * (1.0 - u1).max(0.0).sqrt())
+            .normalize();
+        diffuse.push(Ray::new(org, w));
+        if let Some((o, e1, e2)) = scene.emitter {
+            let v = o + e1 * rng.next() + e2 * rng.next() - org;
+            let (dist, w) = (v.length(), v.normalize());
+            if w.dot(n) > 0.0 && w.dot(e1.cross(e2)) < 0.0 {
+                shadow.push((Ray::new(org, w), dist * (1.0 - 1e-4) - eps));
+            }
+        }
+    }
+    (diffuse, shadow)
+}
+
+/// Mrays/s on one thread (median of 5 runs) and on all rayon threads, and the hit fraction.
+fn throughput<T: Sync>(rays: &[T], f: impl Fn(&T) -> bool + Sync) -> (f64, f64, f64) {
+    let mut single: Vec<f64> = (0..5)
+        .map(|_| {
+            let start = Instant::now();
+            std::hint::black_box(rays.iter().filter(|r| f(r)).count());
+            rays.len() as f64 / start.elapsed().as_secs_f64() / 1e6
+        })
+        .collect();
+    single.sort_by(f64::total_cmp);
+    let start = Instant::now();
+    let hits = rays.par_iter().filter(|r| f(r)).count();
+    let parallel = rays.len() as f64 / start.elapsed().as_secs_f64() / 1e6;
+    (single[2], parallel, hits as f64 / rays.len() as f64)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let path = args.first().cloned().unwrap_or_else(|| {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../shared/limit/scenes/cbox.obj"
+        )
+        .to_string()
+    });
+    let spp = args.get(1).map_or(4, |s| s.parse().expect("SPP"));
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        println!("limit_rays: no scene at {path}; pass an OBJ of ../shared/limit as argument");
+        return;
+    };
+    let scene = parse_obj(&text);
+    let start = Instant::now();
+    let bvh = Bvh::build(&scene.triangles);
+    let build = start.elapsed().as_secs_f64();
+    let mut rng = Rng(7);
+    let primary = primary_rays(&scene, spp, &mut rng);
+    let (diffuse, shadow) = secondary_rays(&scene, &bvh, &primary, &mut rng);
+    println!(
+        "{path}: {} triangles, build {build:.3} s",
+        scene.triangles.len()
+    );
+    println!(
+        "{:>8} {:>9} {:>7} {:>14} {:>14}",
+        "class", "rays", "hit %", "Mrays/s 1 thr", "all threads"
+    );
+    let closest = |r: &Ray| bvh.intersect(r, f32::INFINITY).is_some();
+    let any = |(r, t): &(Ray, f32)| bvh.occluded(r, *t);
+    let rows = [
+        ("primary", primary.len(), throughput(&primary, closest)),
+        ("diffuse", diffuse.len(), throughput(&diffuse, closest)),
+        ("shadow", shadow.len(), throughput(&shadow, any)),
+    ];
+    for (class, n, (one, all, hit)) in rows {
+        println!(
+            "{class:>8} {n:>9} {:>7.1} {one:>14.2} {all:>14.2}",
+            100.0 * hit
+        );
+    }
+}
