@@ -172,25 +172,19 @@ fn quadrant(out: &spectral_render::render::RenderOutput, q: usize, ch: usize) ->
     mean_and_sem(pixels.map(|i| out.rgb[i][ch]))
 }
 
-#[test]
-fn textured_diffuse_colour_round_trips_under_a_uniform_dome() {
-    let l = 50.0f32;
-    let dir = temp_dir("tex-render");
-    let q = [
-        [204, 51, 25, 255],
-        [25, 153, 76, 255],
-        [13, 26, 230, 255],
-        [128, 128, 128, 255],
-    ];
-    quadrant_png(&dir.join("checker.png"), q);
-    let stage = textured_stage(
-        l,
-        "checker.png",
-        "            token inputs:sourceColorSpace = \"raw\"\n",
-        "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n",
-    );
-    let out = render_file(&write(&dir, "tex.usda", &stage), (32, 32), 64, 7, None);
-    for (k, texel) in q.iter().enumerate() {
+/// The four texels of the round-trip checker (sRGB bytes read as raw).
+const CHECKER: [[u8; 4]; 4] = [
+    [204, 51, 25, 255],
+    [25, 153, 76, 255],
+    [13, 26, 230, 255],
+    [128, 128, 128, 255],
+];
+
+/// Renders `stage` (a textured plane under a uniform dome of radiance `l`, textured with
+/// [`CHECKER`]) and checks that each quadrant reads L·texel within 6e-3·L + 5 SEM.
+fn assert_round_trip(dir: &Path, stage: &str, l: f32) {
+    let out = render_file(&write(dir, "tex.usda", stage), (32, 32), 64, 7, None);
+    for (k, texel) in CHECKER.iter().enumerate() {
         for (ch, &byte) in texel[..3].iter().enumerate() {
             let (mean, sem) = quadrant(&out, k, ch);
             let expected = f64::from(l) * f64::from(byte) / 255.0;
@@ -201,6 +195,20 @@ fn textured_diffuse_colour_round_trips_under_a_uniform_dome() {
             );
         }
     }
+}
+
+#[test]
+fn textured_diffuse_colour_round_trips_under_a_uniform_dome() {
+    let l = 50.0f32;
+    let dir = temp_dir("tex-render");
+    quadrant_png(&dir.join("checker.png"), CHECKER);
+    let stage = textured_stage(
+        l,
+        "checker.png",
+        "            token inputs:sourceColorSpace = \"raw\"\n",
+        "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n",
+    );
+    assert_round_trip(&dir, &stage, l);
 }
 
 #[test]
@@ -637,13 +645,7 @@ fn spectral_stage(l: f32, file: &str, tex_inputs: &str, id: &str, inputs: &str) 
 fn textured_spectral_diffuse_reflectance_round_trips_under_a_uniform_dome() {
     let l = 50.0f32;
     let dir = temp_dir("tex-spectral-diffuse");
-    let q = [
-        [204, 51, 25, 255],
-        [25, 153, 76, 255],
-        [13, 26, 230, 255],
-        [128, 128, 128, 255],
-    ];
-    quadrant_png(&dir.join("checker.png"), q);
+    quadrant_png(&dir.join("checker.png"), CHECKER);
     let stage = spectral_stage(
         l,
         "checker.png",
@@ -651,18 +653,7 @@ fn textured_spectral_diffuse_reflectance_round_trips_under_a_uniform_dome() {
         "spectral:diffuse",
         "            color3f inputs:reflectance.connect = </Looks/Paint/Tex.outputs:rgb>\n",
     );
-    let out = render_file(&write(&dir, "tex.usda", &stage), (32, 32), 64, 7, None);
-    for (k, texel) in q.iter().enumerate() {
-        for (ch, &byte) in texel[..3].iter().enumerate() {
-            let (mean, sem) = quadrant(&out, k, ch);
-            let expected = f64::from(l) * f64::from(byte) / 255.0;
-            let tol = 6e-3 * f64::from(l) + 5.0 * sem;
-            assert!(
-                (mean - expected).abs() < tol,
-                "quadrant {k} channel {ch}: {mean} vs {expected} (sem {sem})"
-            );
-        }
-    }
+    assert_round_trip(&dir, &stage, l);
 }
 
 #[test]
