@@ -751,12 +751,6 @@ fn assert_quadrants(dir: &Path, stage: &str, l: f32, q: [[u8; 4]; 4]) {
     }
 }
 
-const CHECKER: [[u8; 4]; 4] = [
-    [204, 51, 25, 255],
-    [25, 153, 76, 255],
-    [13, 26, 230, 255],
-    [128, 128, 128, 255],
-];
 const RAW: &str = "            token inputs:sourceColorSpace = \"raw\"\n";
 const DIFFUSE_CONNECTED: &str =
     "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
