@@ -11,28 +11,19 @@ use glam::Vec3;
 use rayon::prelude::*;
 use spectral_render::accel::bvh::Bvh;
 use spectral_render::geometry::Ray;
+use spectral_render::sampling::warp::uniform_sphere;
+use spectral_render::sampling::Sampler;
 
-/// SplitMix64, enough for benchmark inputs.
-struct Rng(u64);
+/// Benchmark inputs from the renderer's own generator.
+struct Rng(Sampler);
 
 impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-
     fn vec3(&mut self) -> Vec3 {
-        Vec3::new(self.next(), self.next(), self.next())
+        Vec3::new(self.0.get_1d(), self.0.get_1d(), self.0.get_1d())
     }
 
     fn unit_vector(&mut self) -> Vec3 {
-        let z = 2.0 * self.next() - 1.0;
-        let phi = std::f32::consts::TAU * self.next();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        uniform_sphere(self.0.get_2d())
     }
 }
 
@@ -138,7 +129,7 @@ fn main() {
     } else {
         (300_000, 1_000_000)
     };
-    let mut rng = Rng(42);
+    let mut rng = Rng(Sampler::new(42, 0, 0));
     bench_scene("random soup", &random_soup(n, &mut rng), n_rays, &mut rng);
     bench_scene("terrain", &terrain(n), n_rays, &mut rng);
     if !quick {

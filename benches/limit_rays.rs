@@ -22,6 +22,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use spectral_render::accel::bvh::Bvh;
 use spectral_render::geometry::Ray;
+use spectral_render::sampling::Sampler;
 
 /// A scene of the limit benchmark: triangles, camera, emitter.
 struct LimitScene {
@@ -74,21 +75,8 @@ fn parse_obj(text: &str) -> LimitScene {
     }
 }
 
-/// SplitMix64 (Steele et al. 2014), uniform floats in [0, 1).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
 /// Pass-major, 8×8 pixel tiles, scanlines inside a tile.
-fn primary_rays(scene: &LimitScene, spp: usize, rng: &mut Rng) -> Vec<Ray> {
+fn primary_rays(scene: &LimitScene, spp: usize, rng: &mut Sampler) -> Vec<Ray> {
     let (pos, f, up, hfov, w, h) = scene.camera;
     let (f, tx) = (f.normalize(), (0.5 * hfov).to_radians().tan());
     let (r, ty) = (f.cross(up).normalize(), tx * h as f32 / w as f32);
@@ -102,8 +90,8 @@ fn primary_rays(scene: &LimitScene, spp: usize, rng: &mut Rng) -> Vec<Ray> {
             for (y, x) in
                 (y0..(y0 + 8).min(h)).flat_map(|y| (x0..(x0 + 8).min(w)).map(move |x| (y, x)))
             {
-                let sx = (2.0 * (x as f32 + rng.next()) / w as f32 - 1.0) * tx;
-                let sy = (1.0 - 2.0 * (y as f32 + rng.next()) / h as f32) * ty;
+                let sx = (2.0 * (x as f32 + rng.get_1d()) / w as f32 - 1.0) * tx;
+                let sy = (1.0 - 2.0 * (y as f32 + rng.get_1d()) / h as f32) * ty;
                 rays.push(Ray::new(pos, (f + r * sx + u * sy).normalize()));
             }
         }
@@ -116,7 +104,7 @@ fn secondary_rays(
     scene: &LimitScene,
     bvh: &Bvh,
     primary: &[Ray],
-    rng: &mut Rng,
+    rng: &mut Sampler,
 ) -> (Vec<Ray>, Vec<(Ray, f32)>) {
     let (lo, hi) = bvh.bounds();
     let eps = 1e-4 * (hi - lo).length();
@@ -131,14 +119,14 @@ fn secondary_rays(
             n = -n;
         }
         let org = ray.at(hit.hit.t) + n * eps;
-        let (u1, u2) = (rng.next(), rng.next());
+        let (u1, u2) = (rng.get_1d(), rng.get_1d());
         let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
         let (t, b) = n.any_orthonormal_pair();
         let w = (t * (u1.sqrt() * c) + b * (u1.sqrt() * s) + n * (1.0 - u1).max(0.0).sqrt())
             .normalize();
         diffuse.push(Ray::new(org, w));
         if let Some((o, e1, e2)) = scene.emitter {
-            let v = o + e1 * rng.next() + e2 * rng.next() - org;
+            let v = o + e1 * rng.get_1d() + e2 * rng.get_1d() - org;
             let (dist, w) = (v.length(), v.normalize());
             if w.dot(n) > 0.0 && w.dot(e1.cross(e2)) < 0.0 {
                 shadow.push((Ray::new(org, w), dist * (1.0 - 1e-4) - eps));
@@ -185,7 +173,7 @@ fn main() {
     let start = Instant::now();
     let bvh = Bvh::build(&scene.triangles);
     let build = start.elapsed().as_secs_f64();
-    let mut rng = Rng(7);
+    let mut rng = Sampler::new(7, 0, 0);
     let primary = primary_rays(&scene, spp, &mut rng);
     let (diffuse, shadow) = secondary_rays(&scene, &bvh, &primary, &mut rng);
     println!(
