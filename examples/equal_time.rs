@@ -16,9 +16,9 @@
 //!    time actually spent, and the ratios PT/BDPT of the MSE and of MSE × time (the inverse
 //!    efficiency, fair even if the times differ a little).
 
-use spectral_render::integrator::{IntegratorKind, MisHeuristic};
 use spectral_render::output::exr;
-use spectral_render::render::{self, RenderOptions};
+use spectral_render::session::{self, RenderOptions};
+use spectral_render::{Integrator, MisHeuristic};
 use std::path::PathBuf;
 
 struct Args {
@@ -73,7 +73,7 @@ fn parse() -> Result<Args, String> {
 fn render_y(
     scene: &spectral_render::scene::Scene,
     args: &Args,
-    integrator: IntegratorKind,
+    integrator: Integrator,
     seconds: f64,
     seed: u64,
 ) -> (Vec<f64>, f64, u64) {
@@ -83,10 +83,9 @@ fn render_y(
         threads: args.threads,
         max_depth: args.max_depth,
         integrator,
-        mis: MisHeuristic::Power,
         ..Default::default()
     };
-    let out = render::render(scene, &opts).expect("render");
+    let out = session::render(scene, &opts).expect("render");
     assert_eq!(out.dropped_samples, 0, "non-finite samples");
     let y = out.xyz.iter().map(|p| p[1] as f64).collect();
     (y, out.wall_time_s, out.spp)
@@ -106,8 +105,24 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
         }
     }
     let half = 0.5 * args.reference_time;
-    let (a, ta, sa) = render_y(scene, args, IntegratorKind::Bdpt, half, 1001);
-    let (b, tb, sb) = render_y(scene, args, IntegratorKind::Bdpt, half, 1002);
+    let (a, ta, sa) = render_y(
+        scene,
+        args,
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+        half,
+        1001,
+    );
+    let (b, tb, sb) = render_y(
+        scene,
+        args,
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+        half,
+        1002,
+    );
     eprintln!(
         "reference: BDPT {} + {} spp in {:.0} + {:.0} s",
         sa, sb, ta, tb
@@ -167,8 +182,13 @@ fn main() {
     );
     let mut rows = Vec::new();
     for (name, kind) in [
-        ("path", IntegratorKind::Path),
-        ("bdpt", IntegratorKind::Bdpt),
+        ("path", Integrator::Path),
+        (
+            "bdpt",
+            Integrator::Bdpt {
+                mis: MisHeuristic::Power,
+            },
+        ),
     ] {
         let (y, t, spp) = render_y(&scene, &args, kind, args.time, 7);
         let mse = y

@@ -5,6 +5,7 @@ use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// A decoded image as linear RGB, row-major, top row first.
@@ -16,9 +17,8 @@ pub struct RgbImage {
 
 /// Reads PNG, JPEG or EXR. 8- and 16-bit images are taken as sRGB-encoded and linearised
 /// (IEC 61966-2-1); float images (EXR) are taken as linear.
-pub fn read_rgb_linear(path: &Path) -> Result<RgbImage, String> {
-    let img =
-        image::open(path).map_err(|e| format!("cannot read image {}: {e}", path.display()))?;
+pub fn read_rgb_linear(path: &Path) -> Result<RgbImage> {
+    let img = open(path)?;
     let is_float = matches!(
         img,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
@@ -48,9 +48,8 @@ pub struct RgbaImage {
 
 /// Reads PNG, JPEG or EXR as stored: integers mapped to [0, 1], floats as they are, alpha 1
 /// when the file has none. The caller decides whether to linearise (material textures).
-pub fn read_rgba_raw(path: &Path) -> Result<RgbaImage, String> {
-    let img =
-        image::open(path).map_err(|e| format!("cannot read image {}: {e}", path.display()))?;
+pub fn read_rgba_raw(path: &Path) -> Result<RgbaImage> {
+    let img = open(path)?;
     let is_float = matches!(
         img,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
@@ -66,7 +65,18 @@ pub fn read_rgba_raw(path: &Path) -> Result<RgbaImage, String> {
     })
 }
 
-/// PNG-encodes 8-bit RGBA `bytes` into `path` (test images, texture tooling).
+/// Decodes the image at `path`: an I/O error when it cannot be read, a scene error when it
+/// is not an image the decoder understands.
+fn open(path: &Path) -> Result<image::DynamicImage> {
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| Error::io(path, format!("cannot read image: {e}")))?;
+    reader
+        .decode()
+        .map_err(|e| Error::scene(path, format!("cannot decode image: {e}")))
+}
+
+/// PNG-encodes 8-bit RGBA `bytes` into `path` (test images).
+#[cfg(any(test, feature = "testing"))]
 pub fn write_png_rgba8(path: &Path, bytes: &[u8], width: u32, height: u32) -> io::Result<()> {
     let mut file = File::create(path)?;
     let mut buffered = BufWriter::new(&mut file);

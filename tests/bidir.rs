@@ -23,22 +23,23 @@ use spectral_render::integrator::bidir::connect::{
 };
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
+use spectral_render::testing::chi2::ln_gamma;
 use spectral_render::texture::TextureFilter;
 
 /// The bidirectional context's default (`BidirContext::new`): textures unfiltered.
 const FINEST: TextureFilter = TextureFilter::Finest;
-use spectral_render::integrator::bidir::{
-    BidirContext, LightOrigin, Mis, MisHeuristic, PathVertex, Sensor, SensorRay, Walk,
-};
-use spectral_render::integrator::IntegratorKind;
+use spectral_render::integrator::bidir::vertex::LightOrigin;
+use spectral_render::integrator::bidir::{BidirContext, Mis, MisHeuristic, PathVertex, Walk};
 use spectral_render::light::emit::LightLeSample;
 use spectral_render::light::{Light, LightHit, LightLiSample, LightSampleContext};
-use spectral_render::render::{self, RenderOptions, RenderOutput};
 use spectral_render::sampling::Sampler;
 use spectral_render::scene::{self, Hit, Scene, SurfaceHit};
-use spectral_render::sensor::meter::{origin_error, Meter, MeterKind, MeterSensor};
+use spectral_render::sensor::meter::{Meter, MeterKind, MeterSensor};
+use spectral_render::sensor::{Sensor, SensorRay};
+use spectral_render::session::{self, RenderOptions, RenderOutput};
 use spectral_render::spectral::SampledWavelengths;
-use std::path::{Path, PathBuf};
+use spectral_render::Integrator;
+use std::path::Path;
 
 // ---------------------------------------------------------------------------------------------
 // Stages
@@ -341,49 +342,6 @@ fn small_light_stage_with(panel_look: &str) -> String {
     s
 }
 
-/// The white furnace of `tests/transport.rs`: a closed cube whose walls emit `le` nits on both
-/// sides and reflect a flat 0.8; the camera inside.
-fn furnace_stage(le: f32) -> String {
-    let flat = "        float2[] inputs:reflectance:samples = [(360, 0.8), (830, 0.8)]\n";
-    let mut s = header();
-    s += &camera(0.5, 0.8, 0.0);
-    s += "def Scope \"Looks\"\n{\n";
-    s += &material("Wall", "spectral:diffuse", flat);
-    s += "}\n\n";
-    for (i, f) in cube_faces(1.0).iter().enumerate() {
-        s += &polygon(&format!("Face{i}"), f, None, "")
-            .replace(
-                "[\"MaterialBindingAPI\"]",
-                "[\"MeshLightAPI\", \"MaterialBindingAPI\"]",
-            )
-            .replace(
-                "}\n\n",
-                &format!(
-                    "    uniform bool doubleSided = 1\n    float inputs:intensity = {le}\n{}}}\n\n",
-                    binding("Wall")
-                ),
-            );
-    }
-    s
-}
-
-/// The six faces of the cube [−h, h]³, facing inwards.
-fn cube_faces(h: f32) -> [[[f32; 3]; 4]; 6] {
-    let (a, b) = (-h, h);
-    [
-        [[a, a, a], [a, b, a], [b, b, a], [b, a, a]],
-        [[a, a, b], [b, a, b], [b, b, b], [a, b, b]],
-        [[a, a, a], [a, a, b], [a, b, b], [a, b, a]],
-        [[b, a, a], [b, b, a], [b, b, b], [b, a, b]],
-        [[a, a, a], [b, a, a], [b, a, b], [a, a, b]],
-        [[a, b, a], [a, b, b], [b, b, b], [b, b, a]],
-    ]
-}
-
-fn cbox() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda")
-}
-
 fn load_text(name: &str, text: &str, res: (u32, u32)) -> Scene {
     let dir = temp_dir(name);
     let path = write(&dir, &format!("{name}.usda"), text);
@@ -392,7 +350,7 @@ fn load_text(name: &str, text: &str, res: (u32, u32)) -> Scene {
 
 fn render_with(
     scene: &Scene,
-    integrator: IntegratorKind,
+    integrator: Integrator,
     spp: u32,
     seed: u64,
     max_depth: u32,
@@ -404,7 +362,7 @@ fn render_with(
         integrator,
         ..Default::default()
     };
-    let out = render::render(scene, &opts).unwrap();
+    let out = session::render(scene, &opts).unwrap();
     assert_finite(&out);
     out
 }
@@ -412,28 +370,6 @@ fn render_with(
 // ---------------------------------------------------------------------------------------------
 // Statistics
 // ---------------------------------------------------------------------------------------------
-
-/// ln Γ(x) for x > 0 (Lanczos approximation, g = 7, 9 terms; Press et al. 2007 §6.1).
-fn ln_gamma(x: f64) -> f64 {
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + 7.5;
-    for (i, c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
 
 /// Regularised incomplete beta I_x(a, b) by its continued fraction (modified Lentz).
 fn inc_beta(a: f64, b: f64, x: f64) -> f64 {
@@ -497,7 +433,7 @@ struct Batches {
 
 fn batches(
     scene: &Scene,
-    integrator: IntegratorKind,
+    integrator: Integrator,
     k: usize,
     spp: u32,
     max_depth: u32,
@@ -603,7 +539,7 @@ struct AgreementCase {
 const AGREEMENT: &[AgreementCase] = &[
     AgreementCase {
         name: "cornell box",
-        scene: || scene::load(&cbox(), Some((20, 20))).unwrap(),
+        scene: || scene::load(&cbox_path(), Some((20, 20))).unwrap(),
         max_depth: 7,
         batches: 32,
         spp: 32,
@@ -630,9 +566,14 @@ fn path_light_and_bdpt_agree_per_pixel() {
     for case in AGREEMENT {
         let scene = (case.scene)();
         let run = |kind, base| batches(&scene, kind, case.batches, case.spp, case.max_depth, base);
-        let pt = run(IntegratorKind::Path, 1000);
-        let lt = run(IntegratorKind::Light, 2000);
-        let bd = run(IntegratorKind::Bdpt, 3000);
+        let pt = run(Integrator::Path, 1000);
+        let lt = run(Integrator::Light, 2000);
+        let bd = run(
+            Integrator::Bdpt {
+                mis: MisHeuristic::Power,
+            },
+            3000,
+        );
         for (label, a, b) in [
             ("PT-LT", &pt, &lt),
             ("PT-BDPT", &pt, &bd),
@@ -1378,7 +1319,7 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
             p,
             dir: dir.normalize(),
         };
-        SensorEnd::Meter(MeterSensor::new(&m, origin_error(&scene, p)))
+        SensorEnd::Meter(MeterSensor::new(&m, scene.point_error(p)))
     };
     let sensors = [
         SensorEnd::Camera(scene.camera.lens_point([0.5; 2])),
@@ -1448,9 +1389,17 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
 #[test]
 fn white_furnace_with_bdpt_and_light_tracing() {
     let le = 2.0f32;
-    let scene = load_text("furnace", &furnace_stage(le), (16, 16));
+    let scene = load_text("furnace", &furnace_stage(le, 0.8), (16, 16));
     let expected = le as f64 / (1.0 - 0.8);
-    for (kind, spp) in [(IntegratorKind::Bdpt, 256), (IntegratorKind::Light, 4096)] {
+    for (kind, spp) in [
+        (
+            Integrator::Bdpt {
+                mis: MisHeuristic::Power,
+            },
+            256,
+        ),
+        (Integrator::Light, 4096),
+    ] {
         let out = render_with(&scene, kind, spp, 5, 10_000);
         let (mean, sem) = mean_and_sem(out.xyz.iter().map(|p| p[1]));
         eprintln!("furnace {kind:?}: Y {mean:.4} ± {sem:.4}, expected {expected}");
@@ -1467,27 +1416,20 @@ fn white_furnace_with_bdpt_and_light_tracing() {
 #[test]
 fn plane_under_a_uniform_dome_reads_albedo_times_radiance() {
     let l = 50.0f32;
-    let mut s = header();
-    s += &camera(1.0, 0.2, 0.0);
-    s += &format!("def DomeLight \"Sky\"\n{{\n    float inputs:intensity = {l}\n}}\n\n");
-    s += "def Scope \"Looks\"\n{\n";
-    s += &material(
-        "Paint",
-        "spectral:diffuse",
-        "        float2[] inputs:reflectance:samples = [(360, 0.5), (830, 0.5)]\n",
-    );
-    s += "}\n\n";
-    s += &quad(
-        "Plane",
-        0.0,
-        1.0,
-        &binding("Paint"),
-        "\"MaterialBindingAPI\"",
-    );
+    let flat = "        float2[] inputs:reflectance:samples = [(360, 0.5), (830, 0.5)]\n";
+    let s = dome_plane_stage("spectral:diffuse", flat, l);
     let scene = load_text("dome-plane", &s, (12, 12));
     let expected = 0.5 * l as f64;
     // Light tracing reaches the small visible part of the plane rarely: more paths.
-    for (kind, spp) in [(IntegratorKind::Bdpt, 256), (IntegratorKind::Light, 4096)] {
+    for (kind, spp) in [
+        (
+            Integrator::Bdpt {
+                mis: MisHeuristic::Power,
+            },
+            256,
+        ),
+        (Integrator::Light, 4096),
+    ] {
         let out = render_with(&scene, kind, spp, 3, 7);
         let (mean, sem) = mean_and_sem(out.xyz.iter().map(|p| p[1]));
         eprintln!("dome plane {kind:?}: Y {mean:.4} ± {sem:.4}, expected {expected}");
@@ -1520,7 +1462,7 @@ fn strategy_images_sum_to_the_bdpt_image() {
         .arg(dir.join("st"))
         .arg("-o")
         .arg(dir.join("bdpt.exr"))
-        .arg(cbox())
+        .arg(cbox_path())
         .output()
         .unwrap();
     assert!(
@@ -1602,9 +1544,11 @@ fn no_nan_with_a_point_like_light_on_a_wall_or_a_camera_inside_a_box() {
         ("camera inside a box", &inside),
     ] {
         for kind in [
-            IntegratorKind::Path,
-            IntegratorKind::Light,
-            IntegratorKind::Bdpt,
+            Integrator::Path,
+            Integrator::Light,
+            Integrator::Bdpt {
+                mis: MisHeuristic::Power,
+            },
         ] {
             let out = render_with(scene, kind, 64, 1, 7);
             assert!(
@@ -1617,8 +1561,13 @@ fn no_nan_with_a_point_like_light_on_a_wall_or_a_camera_inside_a_box() {
 
 #[test]
 fn bidirectional_images_are_bit_identical_for_one_and_two_threads() {
-    let scene = scene::load(&cbox(), Some((24, 24))).unwrap();
-    for kind in [IntegratorKind::Light, IntegratorKind::Bdpt] {
+    let scene = scene::load(&cbox_path(), Some((24, 24))).unwrap();
+    for kind in [
+        Integrator::Light,
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+    ] {
         let run = |threads| {
             let opts = RenderOptions {
                 spp: Some(4),
@@ -1627,7 +1576,7 @@ fn bidirectional_images_are_bit_identical_for_one_and_two_threads() {
                 integrator: kind,
                 ..Default::default()
             };
-            let out = render::render(&scene, &opts).unwrap();
+            let out = session::render(&scene, &opts).unwrap();
             assert_finite(&out);
             out.xyz
                 .iter()
@@ -1645,7 +1594,7 @@ fn command_line_options_of_the_bidirectional_integrators() {
     let run = |args: &[&str]| {
         std::process::Command::new(env!("CARGO_BIN_EXE_spectral-render"))
             .args(args)
-            .arg(cbox())
+            .arg(cbox_path())
             .current_dir(&dir)
             .output()
             .unwrap()

@@ -7,7 +7,10 @@ use common::*;
 const L: f32 = 100.0;
 
 /// Per-pixel luminance of a camera looking straight at a large white RectLight.
-fn direct_view(light_exposure: f32, camera_exposure: f32) -> spectral_render::render::RenderOutput {
+fn direct_view(
+    light_exposure: f32,
+    camera_exposure: f32,
+) -> spectral_render::session::RenderOutput {
     let dir = temp_dir("direct");
     let text = format!(
         "{}{}def RectLight \"Panel\"\n{{\n    float inputs:width = 4\n    float inputs:height = 4\n    float inputs:intensity = {L}\n    float inputs:exposure = {light_exposure}\n}}\n",
@@ -27,7 +30,7 @@ fn direct_view(light_exposure: f32, camera_exposure: f32) -> spectral_render::re
 /// Each pixel's luminance is an average of 4096 × 4 wavelength samples of K_m L(λ)ȳ(λ)/p(λ)
 /// (per-pixel standard deviation ≈ 0.08 %, measured from the spread over pixels), so every
 /// pixel is held to the 0.5 % (> 5σ) and the mean to a bound from its standard error.
-fn check_luminance(out: &spectral_render::render::RenderOutput, expected: f64) {
+fn check_luminance(out: &spectral_render::session::RenderOutput, expected: f64) {
     let (mean, sem) = mean_and_sem(out.xyz.iter().map(|p| p[1]));
     assert!(
         (mean / expected - 1.0).abs() < 1e-3 + 5.0 * sem / expected,

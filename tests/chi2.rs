@@ -25,15 +25,15 @@ use spectral_render::light::{
     SphereLight, TriangleLight,
 };
 use spectral_render::math::Frame;
-use spectral_render::sampling::chi2::{
-    Chi2Outcome, Chi2Test, IntervalDomain, PlanarDomain, SphericalDomain,
-};
 use spectral_render::sampling::distribution::{Distribution1D, Distribution2D};
 use spectral_render::sampling::warp;
 use spectral_render::spectral::uplift::RgbIlluminantSpectrum;
 use spectral_render::spectral::wavelengths::visible_wavelength_pdf;
 use spectral_render::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
 use spectral_render::spectral::{LAMBDA_MAX, LAMBDA_MIN};
+use spectral_render::testing::chi2::{
+    Chi2Outcome, Chi2Test, IntervalDomain, PlanarDomain, SphericalDomain,
+};
 use std::f32::consts::PI;
 
 // ---------------------------------------------------------------------------------------------
@@ -173,7 +173,7 @@ const MODELS: &[Model] = &[
 
 /// A named instance from `bxdf::examples()` (the UsdPreviewSurface composites).
 fn example(name: &str) -> Bxdf {
-    spectral_render::bxdf::examples()
+    spectral_render::testing::examples()
         .into_iter()
         .find(|e| e.name == name)
         .map(|e| e.bxdf)

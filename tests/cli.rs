@@ -5,19 +5,6 @@
 mod common;
 use common::*;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn spectral_render(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_spectral-render"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("run spectral-render")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// A small lit scene: a grey plane under a dome, seen by a camera.
 fn small_stage() -> String {
@@ -32,7 +19,7 @@ fn small_stage() -> String {
 fn renders_an_exr_with_calibrated_channels_and_a_preview() {
     let dir = temp_dir("cli-render");
     write(&dir, "small.usda", &small_stage());
-    let o = spectral_render(
+    let o = run_cli(
         &[
             "small.usda",
             "--spp",
@@ -67,8 +54,8 @@ fn renders_an_exr_with_calibrated_channels_and_a_preview() {
 #[test]
 fn renders_the_peers_cornell_box() {
     let dir = temp_dir("cli-cbox");
-    let cbox = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda");
-    let o = spectral_render(
+    let cbox = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/cbox.usda");
+    let o = run_cli(
         &[
             cbox.to_str().unwrap(),
             "-o",
@@ -95,7 +82,7 @@ fn assert_clean_error(name: &str, text: Option<&str>, must_mention: &[&str]) {
     if let Some(t) = text {
         write(&dir, name, t);
     }
-    let o = spectral_render(&[name, "--spp", "1"], &dir);
+    let o = run_cli(&[name, "--spp", "1"], &dir);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{name}: {err}");
     assert!(!err.contains("panicked"), "{name}: {err}");
@@ -177,7 +164,7 @@ fn bad_options_are_rejected() {
         ["small.usda", "--resolution", "0x5"],
         ["small.usda", "--integrator", "magic"],
     ] {
-        let o = spectral_render(&args, &dir);
+        let o = run_cli(&args, &dir);
         assert!(!o.status.success(), "{args:?} accepted");
         assert!(!stderr(&o).contains("panicked"));
     }

@@ -1,5 +1,5 @@
 //! Issue 3: the material library's energy, reciprocity, consistency, limit and stability
-//! checks, on every model of `spectral_render::bxdf::examples()` and on rendered scenes.
+//! checks, on every model of `spectral_render::testing::examples()` and on rendered scenes.
 //!
 //! Monte Carlo tolerances come from the estimators' own standard errors (fixed seeds, so the
 //! tests are deterministic); run with `-- --nocapture` to see the measured numbers.
@@ -8,14 +8,15 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use spectral_render::bxdf::{examples, Bxdf, DielectricBxdf, Example, TransportMode};
+use spectral_render::bxdf::{Bxdf, DielectricBxdf, TransportMode};
 use spectral_render::bxdf::{PlasticBxdf, TrowbridgeReitz};
 use spectral_render::material::Material;
-use spectral_render::render::RenderOutput;
 use spectral_render::sampling::warp::uniform_sphere;
 use spectral_render::sampling::Sampler;
+use spectral_render::session::RenderOutput;
 use spectral_render::spectral::sellmeier::Sellmeier;
 use spectral_render::spectral::{data, SampledSpectrum, SampledWavelengths, Spectrum};
+use spectral_render::testing::{examples, Example};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -766,7 +767,7 @@ fn bad_material_inputs_are_errors_naming_the_prim() {
 fn path_tracer_collapses_wavelengths_only_at_dispersive_glass() {
     // Camera rays through the centre of a glass ball: with a Sellmeier (dispersive) IOR only
     // the hero lane of li() is non-zero; with a constant IOR all four lanes carry radiance.
-    use spectral_render::integrator::PathIntegrator;
+    use spectral_render::integrator::path::PathIntegrator;
     let looks = material(
         "Const",
         "spectral:dielectric",

@@ -1,7 +1,7 @@
 //! Light meters against closed-form answers (all references computed here): point-like,
 //! rectangle (Lambert's polygon formula), disk, sphere, dome and distant lights; flux
 //! conservation in a closed black box; an integrating sphere; a white furnace; coverage of the
-//! 95% interval; stage units; the CLI's JSON, grid outputs and errors. The analytic cases are
+//! 95% interval; stage units (the command line: `tests/meter_cli.rs`). The analytic cases are
 //! checked with the path tracer, light tracing and BDPT (`--integrator`), which must also agree
 //! with each other in the Cornell box.
 //!
@@ -12,15 +12,14 @@
 mod common;
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
-use spectral_render::integrator::bidir::Workspace;
-use spectral_render::integrator::meter_bidir::BidirMeter;
-use spectral_render::integrator::{IntegratorKind, MisHeuristic};
+use spectral_render::integrator::{Settings, Workspace};
 use spectral_render::sampling::Sampler;
 use spectral_render::scene::{self, Scene};
-use spectral_render::sensor::meter::{
-    measure, origin_error, Meter, MeterOptions, MeterSensor, Reading, Stop,
-};
+use spectral_render::sensor::meter::MeterSensor;
+use spectral_render::session::{measure, MeterOptions, Reading, Stop};
 use spectral_render::spectral::SampledWavelengths;
+use spectral_render::texture::TextureFilter;
+use spectral_render::{Integrator, Meter, MisHeuristic};
 use std::f64::consts::PI;
 
 /// The issue's accuracy bound for analytic cases.
@@ -35,14 +34,16 @@ fn load(name: &str, text: &str) -> Scene {
 }
 
 /// The integrators that estimate illuminance (light tracing cannot estimate luminance).
-const ALL: [IntegratorKind; 3] = [
-    IntegratorKind::Path,
-    IntegratorKind::Light,
-    IntegratorKind::Bdpt,
+const ALL: [Integrator; 3] = [
+    Integrator::Path,
+    Integrator::Light,
+    Integrator::Bdpt {
+        mis: MisHeuristic::Power,
+    },
 ];
 
 fn read(scene: &Scene, meters: &[Meter], stop: Stop, seed: u64, max_depth: u32) -> Vec<Reading> {
-    read_with(scene, meters, stop, seed, max_depth, IntegratorKind::Path)
+    read_with(scene, meters, stop, seed, max_depth, Integrator::Path)
 }
 
 fn read_with(
@@ -51,7 +52,7 @@ fn read_with(
     stop: Stop,
     seed: u64,
     max_depth: u32,
-    integrator: IntegratorKind,
+    integrator: Integrator,
 ) -> Vec<Reading> {
     let opts = MeterOptions {
         stop,
@@ -101,29 +102,6 @@ fn assert_exact(label: &str, r: &Reading, exact: f64) -> f64 {
 // ---------------------------------------------------------------------------------------
 // Stage text
 // ---------------------------------------------------------------------------------------
-
-/// `xformOp`s in order (outermost first): ("translate", "(x, y, z)") or ("rotateX", "deg").
-fn xform(ops: &[(&str, String)]) -> String {
-    let mut s = String::new();
-    let mut order = Vec::new();
-    for (op, value) in ops {
-        let ty = if *op == "translate" {
-            "double3"
-        } else {
-            "float"
-        };
-        s += &format!("    {ty} xformOp:{op} = {value}\n");
-        order.push(format!("\"xformOp:{op}\""));
-    }
-    s + &format!(
-        "    uniform token[] xformOpOrder = [{}]\n",
-        order.join(", ")
-    )
-}
-
-fn prim(ty: &str, name: &str, body: &str) -> String {
-    format!("def {ty} \"{name}\"\n{{\n{body}}}\n\n")
-}
 
 /// A Lambertian material of flat reflectance `rho` under /Looks.
 fn looks(name: &str, rho: f64) -> String {
@@ -278,7 +256,7 @@ fn integrating_sphere(rho: f64) -> IntegratingSphere {
 }
 
 /// Measures meters `which` of `case` with `kind` and checks them against the exact values.
-fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: IntegratorKind) {
+fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Integrator) {
     let meters: Vec<Meter> = which.iter().map(|&i| case.meters[i]).collect();
     let stop = Stop::RelError(REL_SPHERE);
     let readings = read_with(&case.scene, &meters, stop, 1, 1000, kind);
@@ -307,7 +285,7 @@ fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Int
 #[test]
 fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
     let case = integrating_sphere(0.9);
-    check_integrating_sphere(&case, &[0, 1, 2], IntegratorKind::Path);
+    check_integrating_sphere(&case, &[0, 1, 2], Integrator::Path);
 }
 
 /// The integrating sphere with light tracing and BDPT. Both cost O(path length) and
@@ -316,7 +294,12 @@ fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
 #[test]
 fn integrating_sphere_with_light_tracing_and_bdpt() {
     let case = integrating_sphere(0.7);
-    for kind in [IntegratorKind::Light, IntegratorKind::Bdpt] {
+    for kind in [
+        Integrator::Light,
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+    ] {
         check_integrating_sphere(&case, &[2], kind);
     }
 }
@@ -324,27 +307,6 @@ fn integrating_sphere_with_light_tracing_and_bdpt() {
 // ---------------------------------------------------------------------------------------
 // Analytic lights
 // ---------------------------------------------------------------------------------------
-
-/// Lambert's polygon formula (Lambert 1760; e.g. Arvo 1995, "Applications of irradiance
-/// tensors", eq. 3): the illuminance from a uniform polygon of luminance L at `p` on a
-/// surface of normal `n` is E = (L/2) Σᵢ βᵢ n·(rᵢ × rᵢ₊₁)/|rᵢ × rᵢ₊₁|, rᵢ the unit vectors to
-/// the vertices and βᵢ the angle between rᵢ and rᵢ₊₁. Valid when the whole polygon is in
-/// front of the surface (checked). Returns E/L.
-fn lambert(p: DVec3, n: DVec3, verts: &[DVec3]) -> f64 {
-    assert!(
-        verts.iter().all(|v| n.dot(*v - p) > 0.0),
-        "polygon not above the horizon"
-    );
-    let r: Vec<DVec3> = verts.iter().map(|v| (*v - p).normalize()).collect();
-    let sum: f64 = (0..r.len())
-        .map(|i| {
-            let (a, b) = (r[i], r[(i + 1) % r.len()]);
-            let c = a.cross(b);
-            c.length().atan2(a.dot(b)) * n.dot(c.normalize())
-        })
-        .sum();
-    0.5 * sum.abs()
-}
 
 /// A RectLight of `w` × `h` (m) and `l` nits at `c`, turned to face down (rotateX −90) and
 /// then yawed about Y; returns the stage text and its world corners (USD op semantics).
@@ -693,44 +655,6 @@ fn flux_through_the_walls_of_a_closed_black_box_is_the_sources_flux() {
 // Furnace and agreement between estimators
 // ---------------------------------------------------------------------------------------
 
-/// A white furnace: the closed cube [−1, 1]³ whose walls emit `le` nits on both sides and
-/// reflect a flat `rho`.
-fn furnace(le: f64, rho: f64) -> Scene {
-    let (pts, faces) = cube(1.0);
-    let body = mesh("Walls", &pts, &faces, "Wall").replace(
-        "[\"MaterialBindingAPI\"]",
-        "[\"MeshLightAPI\", \"MaterialBindingAPI\"]",
-    );
-    let body = body.replacen(
-        "    rel material:binding",
-        &format!("    uniform bool doubleSided = 1\n    float inputs:intensity = {le}\n    rel material:binding"),
-        1,
-    );
-    load(
-        &format!("furnace-{rho}"),
-        &(header() + &looks("Wall", rho) + &body),
-    )
-}
-
-/// The cube [−h, h]³: corners and six quads.
-fn cube(h: f64) -> (Vec<DVec3>, Vec<Vec<usize>>) {
-    let pts = (0..8)
-        .map(|i| {
-            let c = |bit: usize| if i & bit != 0 { h } else { -h };
-            DVec3::new(c(1), c(2), c(4))
-        })
-        .collect();
-    let faces = [
-        [0, 1, 3, 2],
-        [4, 6, 7, 5],
-        [0, 4, 5, 1],
-        [2, 3, 7, 6],
-        [0, 2, 6, 4],
-        [1, 5, 7, 3],
-    ];
-    (pts, faces.iter().map(|f| f.to_vec()).collect())
-}
-
 /// In a furnace every point sees L = Le / (1 − ρ) in every direction (the Neumann series of
 /// a closed, uniformly emitting and reflecting enclosure), so E = π Le / (1 − ρ) on any
 /// surface: luminance with the path tracer and BDPT (the delta-direction sensor), illuminance
@@ -740,7 +664,7 @@ fn furnace_meters_read_le_over_one_minus_rho_with_every_integrator() {
     // ρ = 0.5 keeps paths short (this is about the estimators, not about long paths, which
     // the integrating sphere covers).
     let (le, rho) = (2.0, 0.5);
-    let scene = furnace(le, rho);
+    let scene = load("furnace", &furnace_stage(le as f32, rho as f32));
     let l = le / (1.0 - rho);
     let at = Vec3::new(0.2, -0.3, 0.1);
     let e_meter = [Meter::illuminance(at, Vec3::new(0.3, 1.0, -0.2)).unwrap()];
@@ -748,7 +672,7 @@ fn furnace_meters_read_le_over_one_minus_rho_with_every_integrator() {
     for kind in ALL {
         let r = read_with(&scene, &e_meter, Stop::RelError(REL), 9, 10_000, kind)[0];
         assert_exact(&format!("{}: furnace illuminance", kind.name()), &r, PI * l);
-        if kind != IntegratorKind::Light {
+        if kind != Integrator::Light {
             let r = read_with(&scene, &l_meter, Stop::RelError(REL), 9, 10_000, kind)[0];
             assert_exact(&format!("{}: furnace luminance", kind.name()), &r, l);
         }
@@ -762,8 +686,7 @@ fn z_score(a: &Reading, b: &Reading) -> f64 {
 }
 
 fn cbox() -> Scene {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda");
-    scene::load(&path, Some((1, 1))).unwrap_or_else(|e| panic!("{e}"))
+    scene::load(&cbox_path(), Some((1, 1))).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Path tracing, light tracing and BDPT agree within their intervals where the light is
@@ -814,8 +737,17 @@ fn path_light_and_bdpt_meters_agree_in_the_cornell_box() {
             );
         }
     }
-    let pt = read_with(&scene, &l_meters, stop, 22, 7, IntegratorKind::Path);
-    let bd = read_with(&scene, &l_meters, stop, 22, 7, IntegratorKind::Bdpt);
+    let pt = read_with(&scene, &l_meters, stop, 22, 7, Integrator::Path);
+    let bd = read_with(
+        &scene,
+        &l_meters,
+        stop,
+        22,
+        7,
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+    );
     for ((m, a), b) in l_meters.iter().zip(&pt).zip(&bd) {
         let z = z_score(a, b);
         worst = worst.max(z.abs());
@@ -925,7 +857,7 @@ fn shaped_lights_agree_with_path_light_and_bdpt() {
 /// contributions on both subpaths before and after it).
 #[test]
 fn meters_agree_through_dispersive_glass() {
-    let (pts, faces) = cube(1.0);
+    let (pts, faces) = cube_mesh(1.0);
     let slab: Vec<DVec3> = pts
         .iter()
         .map(|p| DVec3::new(p.x, 1.1 + 0.1 * p.y, p.z))
@@ -955,15 +887,24 @@ fn meters_agree_through_dispersive_glass() {
     let meters = [Meter::illuminance(Vec3::new(0.1, 0.5, -0.2), Vec3::NEG_Y).unwrap()];
     // The bidirectional estimators hand the termination back to the caller, which converts
     // the estimate with the final wavelengths.
-    let sensor = MeterSensor::new(&meters[0], origin_error(&scene, meters[0].p));
-    for kind in [IntegratorKind::Light, IntegratorKind::Bdpt] {
-        let est = BidirMeter::new(&scene, kind, MisHeuristic::Power, 7).unwrap();
+    let sensor = MeterSensor::new(&meters[0], scene.point_error(meters[0].p));
+    let settings = Settings {
+        max_depth: 7,
+        filter: TextureFilter::Finest,
+    };
+    for kind in [
+        Integrator::Light,
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+    ] {
+        let est = kind.estimator(&scene, settings);
         let mut ws = Workspace::new(7, 0);
         let terminated = (0..200u64)
             .filter(|&i| {
                 let mut sampler = Sampler::new(1, 0, i);
                 let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
-                let l = est.sample(&sensor, &mut lambda, &mut sampler, &mut ws);
+                let l = est.meter_sample(&sensor, &mut lambda, &mut sampler, &mut ws);
                 assert!(l.is_finite());
                 lambda.secondary_terminated()
             })
@@ -1037,9 +978,14 @@ fn readings_do_not_depend_on_the_number_of_threads() {
     let other = Meter::illuminance(Vec3::new(1.0, 0.0, 0.5), Vec3::Y).unwrap();
     // Light tracing and BDPT reuse a per-thread workspace: still no dependence.
     for (integrator, stop) in [
-        (IntegratorKind::Path, Stop::RelError(0.01)),
-        (IntegratorKind::Light, Stop::Samples(2048)),
-        (IntegratorKind::Bdpt, Stop::Samples(2048)),
+        (Integrator::Path, Stop::RelError(0.01)),
+        (Integrator::Light, Stop::Samples(2048)),
+        (
+            Integrator::Bdpt {
+                mis: MisHeuristic::Power,
+            },
+            Stop::Samples(2048),
+        ),
     ] {
         let run = |threads| {
             let opts = MeterOptions {
@@ -1057,542 +1003,5 @@ fn readings_do_not_depend_on_the_number_of_threads() {
                 .collect::<Vec<_>>()
         };
         assert_eq!(bits(run(1)), bits(run(2)), "{integrator:?}");
-    }
-}
-
-// ---------------------------------------------------------------------------------------
-// The command line
-// ---------------------------------------------------------------------------------------
-
-fn cli(args: &[&str], cwd: &std::path::Path) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_spectral-render"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("run spectral-render")
-}
-
-fn stdout(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// The raw JSON text of `"key":` in `entry` (a number, string, bool or flat array).
-fn field<'a>(entry: &'a str, key: &str) -> &'a str {
-    let pat = format!("\"{key}\":");
-    let start = entry
-        .find(&pat)
-        .unwrap_or_else(|| panic!("no {key} in {entry}"))
-        + pat.len();
-    let rest = entry[start..].trim_start();
-    let end = if rest.starts_with('[') {
-        rest.find(']').unwrap() + 1
-    } else {
-        rest.find([',', '}']).unwrap()
-    };
-    rest[..end].trim()
-}
-
-fn number(entry: &str, key: &str) -> f64 {
-    field(entry, key)
-        .parse()
-        .unwrap_or_else(|_| panic!("{key} is not a number in {entry}"))
-}
-
-fn numbers(entry: &str, key: &str) -> Vec<f64> {
-    let a = field(entry, key);
-    a[1..a.len() - 1]
-        .split(',')
-        .map(|x| x.trim().parse().unwrap())
-        .collect()
-}
-
-/// A Z-up stage in centimetres: a normalized 100 × 50 cm RectLight of 1000 "nits" (so
-/// L = 1000 / 0.5 m² = 2000 cd/m² in world units) 250 cm up, facing down (its local −Z).
-fn cm_stage() -> String {
-    "#usda 1.0\n(\n    metersPerUnit = 0.01\n    upAxis = \"Z\"\n)\n\n".to_string()
-        + &prim(
-            "RectLight",
-            "Panel",
-            &(String::from("    float inputs:width = 100\n    float inputs:height = 50\n    float inputs:intensity = 1000\n    bool inputs:normalize = 1\n")
-                + &xform(&[("translate", "(0, 0, 250)".into())])),
-        )
-}
-
-/// Lambert's formula is scale-free, so the reference is computed in stage coordinates.
-fn cm_stage_exact(at: DVec3, n: DVec3) -> f64 {
-    let c = [(-50.0, -25.0), (50.0, -25.0), (50.0, 25.0), (-50.0, 25.0)]
-        .map(|(x, y)| DVec3::new(x, y, 250.0));
-    2000.0 * lambert(at, n, &c)
-}
-
-#[test]
-fn cli_json_readings_in_stage_units() {
-    let dir = temp_dir("cli-meter");
-    write(&dir, "room.usda", &cm_stage());
-    let o = cli(
-        &[
-            "meter",
-            "room.usda",
-            "--at",
-            "30,-40,0",
-            "--normal",
-            "0,0,1",
-            "--at",
-            "-20,10,120",
-            "--normal",
-            "0,-1,1",
-            "--rel-error",
-            "0.002",
-            "--seed",
-            "3",
-            "--json",
-        ],
-        &dir,
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("loaded"), "no load summary");
-    let out = stdout(&o);
-    assert!(
-        out.trim_start().starts_with("{\"meters\":[") && out.trim_end().ends_with("]}"),
-        "{out}"
-    );
-    let entries: Vec<&str> = out.split("{\"kind\"").skip(1).collect();
-    assert_eq!(entries.len(), 2, "{out}");
-    for (entry, (at, n)) in entries.iter().zip([
-        (DVec3::new(30.0, -40.0, 0.0), DVec3::new(0.0, 0.0, 1.0)),
-        (DVec3::new(-20.0, 10.0, 120.0), DVec3::new(0.0, -1.0, 1.0)),
-    ]) {
-        assert!(entry.starts_with(":\"illuminance\","), "{entry}");
-        let keys = [
-            "\"at\"",
-            "\"normal\"",
-            "\"value\"",
-            "\"unit\"",
-            "\"ci95\"",
-            "\"samples\"",
-        ];
-        let pos: Vec<usize> = keys.iter().map(|k| entry.find(k).unwrap()).collect();
-        assert!(pos.windows(2).all(|w| w[0] < w[1]), "key order in {entry}");
-        assert_eq!(numbers(entry, "at"), [at.x, at.y, at.z]);
-        assert_eq!(numbers(entry, "normal"), [n.x, n.y, n.z]);
-        assert_eq!(field(entry, "unit"), "\"lx\"");
-        assert_eq!(field(entry, "converged"), "true");
-        let (value, ci95) = (number(entry, "value"), number(entry, "ci95"));
-        assert!(number(entry, "samples") >= 1024.0 && ci95 > 0.0 && ci95 / value < 0.002);
-        let exact = cm_stage_exact(at, n.normalize());
-        eprintln!("CLI, Z-up cm stage at {at}: {value} vs {exact} (ci95 {ci95})");
-        assert!((value / exact - 1.0).abs() < TOL, "{value} vs {exact}");
-    }
-    // A luminance meter looking up at the panel reads its luminance; one looking down, 0.
-    let o = cli(
-        &[
-            "meter",
-            "room.usda",
-            "--luminance",
-            "--at",
-            "0,0,100",
-            "--dir",
-            "0,0,1",
-            "--at",
-            "0,0,100",
-            "--dir",
-            "0,0,-1",
-            "--spp",
-            "4096",
-            "--json",
-        ],
-        &dir,
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let out = stdout(&o);
-    let entries: Vec<&str> = out.split("{\"kind\"").skip(1).collect();
-    assert_eq!(entries.len(), 2, "{out}");
-    for e in &entries {
-        assert!(e.starts_with(":\"luminance\","), "{e}");
-        assert_eq!(field(e, "unit"), "\"cd/m2\"");
-        assert_eq!(number(e, "samples"), 4096.0);
-    }
-    assert_eq!(numbers(entries[0], "dir"), [0.0, 0.0, 1.0]);
-    let (l, ci) = (number(entries[0], "value"), number(entries[0], "ci95"));
-    assert!(
-        (l - 2000.0).abs() < 4.0 * ci / 1.96 + 1e-9 && ci / l < 0.002,
-        "{l} ± {ci}"
-    );
-    assert_eq!(
-        (number(entries[1], "value"), number(entries[1], "ci95")),
-        (0.0, 0.0)
-    );
-}
-
-/// `--integrator light|bdpt` (and `--mis`) give the same JSON, with readings within the
-/// analytic tolerance; a luminance meter asked of light tracing is refused in one line that
-/// says why and what to use instead, before the stage is even loaded.
-#[test]
-fn cli_integrator_flag_selects_light_tracing_or_bdpt() {
-    let dir = temp_dir("cli-meter-integrator");
-    write(&dir, "room.usda", &cm_stage());
-    let (at, n) = (DVec3::new(30.0, -40.0, 0.0), DVec3::Z);
-    let exact = cm_stage_exact(at, n);
-    for extra in [
-        &["--integrator", "light"][..],
-        &["--integrator", "bdpt", "--mis", "balance"][..],
-        &["--integrator", "bdpt"][..],
-    ] {
-        let base = [
-            "meter",
-            "room.usda",
-            "--at",
-            "30,-40,0",
-            "--normal",
-            "0,0,1",
-            "--rel-error",
-            "0.002",
-            "--seed",
-            "4",
-            "--json",
-        ];
-        let o = cli(&[&base[..], extra].concat(), &dir);
-        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
-        let out = stdout(&o);
-        assert!(out.trim_start().starts_with("{\"meters\":[") && out.trim_end().ends_with("]}"));
-        assert_eq!(field(&out, "kind"), "\"illuminance\"");
-        assert_eq!(numbers(&out, "at"), [at.x, at.y, at.z]);
-        assert_eq!(field(&out, "unit"), "\"lx\"");
-        assert_eq!(field(&out, "converged"), "true");
-        let (value, ci95) = (number(&out, "value"), number(&out, "ci95"));
-        eprintln!("CLI {extra:?}: {value} ± {ci95} vs {exact}");
-        assert!(ci95 / value < 0.002 && (value / exact - 1.0).abs() < TOL);
-    }
-    let lum = [
-        "meter",
-        "room.usda",
-        "--luminance",
-        "--at",
-        "0,0,100",
-        "--dir",
-        "0,0,1",
-        "--spp",
-        "2048",
-        "--json",
-    ];
-    let o = cli(&[&lum[..], &["--integrator", "bdpt"]].concat(), &dir);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let (l, ci) = (number(&stdout(&o), "value"), number(&stdout(&o), "ci95"));
-    assert!((l - 2000.0).abs() < 4.0 * ci / 1.96 + 1e-9, "{l} ± {ci}");
-    let o = cli(&[&lum[..], &["--integrator", "light"]].concat(), &dir);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert_eq!(err.lines().count(), 1, "{err}");
-    for must in [
-        "error: ",
-        "luminance",
-        "delta sensor",
-        "light tracing",
-        "path",
-        "bdpt",
-    ] {
-        assert!(err.contains(must), "{must:?} missing: {err}");
-    }
-    assert!(
-        !err.contains("loaded"),
-        "refused after loading the stage: {err}"
-    );
-    assert!(stdout(&o).is_empty());
-}
-
-#[test]
-fn cli_grid_writes_csv_json_and_png_with_a_consistent_summary() {
-    let dir = temp_dir("cli-grid");
-    write(&dir, "room.usda", &cm_stage());
-    std::fs::create_dir_all(dir.join("out")).unwrap();
-    let o = cli(
-        &[
-            "meter",
-            "room.usda",
-            "--grid",
-            "-150,-100,0",
-            "--u",
-            "300,0,0",
-            "--v",
-            "0,200,0",
-            "--n",
-            "12,8",
-            "--normal",
-            "0,0,1",
-            "-o",
-            "out/floor",
-            "--spp",
-            "256",
-        ],
-        &dir,
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let console = stdout(&o);
-    for k in ["E_min", "E_avg", "E_max", "U0"] {
-        assert!(console.contains(k), "{k} missing from {console}");
-    }
-    let csv = std::fs::read_to_string(dir.join("out/floor.csv")).unwrap();
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("i,j,x,y,z,lux,ci95"));
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-        .collect();
-    assert_eq!(rows.len(), 96);
-    assert_eq!(rows[0][..5], [0.0, 0.0, -137.5, -87.5, 0.0]);
-    assert_eq!(rows[95][..5], [11.0, 7.0, 137.5, 87.5, 0.0]);
-    let lux: Vec<f64> = rows.iter().map(|r| r[5]).collect();
-    let (min, max) = lux
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-    let avg = lux.iter().sum::<f64>() / lux.len() as f64;
-    // Every cell is near its exact value (here a loose 5σ check of the whole map).
-    for r in &rows {
-        let exact = cm_stage_exact(DVec3::new(r[2], r[3], r[4]), DVec3::Z);
-        assert!(
-            (r[5] - exact).abs() < 5.0 * r[6] / 1.96,
-            "cell {r:?} vs {exact}"
-        );
-    }
-    let json = std::fs::read_to_string(dir.join("out/floor.json")).unwrap();
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
-    assert!(close(number(&json, "E_min"), min) && close(number(&json, "E_max"), max));
-    assert!(close(number(&json, "E_avg"), avg) && close(number(&json, "U0"), min / avg));
-    assert!(json.contains("\"summary\": {\"E_min\""));
-    assert_eq!(json.matches("\"ci95\"").count(), 96);
-    let png = std::fs::read(dir.join("out/floor.png")).unwrap();
-    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
-    let leftovers: Vec<_> = std::fs::read_dir(dir.join("out"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(leftovers.len(), 3, "{leftovers:?}");
-}
-
-#[test]
-fn cli_errors_are_one_line_with_exit_code_1() {
-    let dir = temp_dir("cli-meter-errors");
-    write(&dir, "room.usda", &cm_stage());
-    write(
-        &dir,
-        "broken.usda",
-        "#usda 1.0\ndef Xform \"A\"\n{\n    float x = (1, \n",
-    );
-    let cases: &[(&[&str], &str)] = &[
-        (
-            &[
-                "room.usda",
-                "--at",
-                "1,2,3",
-                "--at",
-                "0,0,0",
-                "--normal",
-                "0,0,1",
-            ],
-            "--normal",
-        ),
-        (
-            &["room.usda", "--at", "1,2,3", "--normal", "0,0,0"],
-            "zero length",
-        ),
-        (&["room.usda", "--at", "1,2", "--normal", "0,0,1"], "--at"),
-        (
-            &["room.usda", "--at", "nan,0,0", "--normal", "0,0,1"],
-            "--at",
-        ),
-        (
-            &[
-                "room.usda",
-                "--at",
-                "0,0,0",
-                "--normal",
-                "0,0,1",
-                "--spp",
-                "8",
-                "--rel-error",
-                "0.01",
-            ],
-            "--rel-error",
-        ),
-        (
-            &[
-                "room.usda",
-                "--at",
-                "0,0,0",
-                "--normal",
-                "0,0,1",
-                "--rel-error",
-                "-1",
-            ],
-            "--rel-error",
-        ),
-        (
-            &[
-                "room.usda",
-                "--at",
-                "0,0,0",
-                "--normal",
-                "0,0,1",
-                "--spp",
-                "1",
-            ],
-            "--spp",
-        ),
-        (&["room.usda"], "nothing to measure"),
-        (
-            &[
-                "room.usda",
-                "--luminance",
-                "--at",
-                "0,0,0",
-                "--normal",
-                "0,0,1",
-            ],
-            "--dir",
-        ),
-        (
-            &[
-                "room.usda",
-                "--grid",
-                "0,0,0",
-                "--u",
-                "1,0,0",
-                "--v",
-                "2,0,0",
-                "--n",
-                "4,4",
-                "--normal",
-                "0,0,1",
-            ],
-            "--v",
-        ),
-        (
-            &[
-                "room.usda",
-                "--grid",
-                "0,0,0",
-                "--u",
-                "1,0,0",
-                "--v",
-                "0,1,0",
-                "--n",
-                "0,4",
-                "--normal",
-                "0,0,1",
-            ],
-            "--n",
-        ),
-        (
-            &[
-                "room.usda",
-                "--grid",
-                "0,0,0",
-                "--u",
-                "1,0,0",
-                "--n",
-                "4,4",
-                "--normal",
-                "0,0,1",
-            ],
-            "--v",
-        ),
-        (
-            &[
-                "room.usda",
-                "--at",
-                "0,0,0",
-                "--normal",
-                "0,0,1",
-                "--integrator",
-                "vcm",
-            ],
-            "unknown integrator",
-        ),
-        (
-            &[
-                "room.usda",
-                "--at",
-                "0,0,0",
-                "--normal",
-                "0,0,1",
-                "--mis",
-                "cutoff",
-            ],
-            "unknown MIS heuristic",
-        ),
-        (
-            &[
-                "room.usda",
-                "--luminance",
-                "--at",
-                "0,0,0",
-                "--dir",
-                "0,0,1",
-                "--integrator",
-                "light",
-            ],
-            "delta sensor",
-        ),
-        (
-            &["missing.usda", "--at", "0,0,0", "--normal", "0,0,1"],
-            "missing.usda",
-        ),
-        (
-            &["broken.usda", "--at", "0,0,0", "--normal", "0,0,1"],
-            "broken.usda",
-        ),
-    ];
-    for (args, must) in cases {
-        let mut all = vec!["meter"];
-        all.extend_from_slice(args);
-        let o = cli(&all, &dir);
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-        assert!(!err.contains("panicked"), "{args:?}: {err}");
-        let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("loaded ")).collect();
-        assert_eq!(lines.len(), 1, "{args:?}: {err}");
-        assert!(
-            lines[0].starts_with("error: ") && lines[0].contains(must),
-            "{args:?}: {err}"
-        );
-        assert!(stdout(&o).is_empty(), "{args:?}");
-    }
-}
-
-#[test]
-fn cli_reports_readings_stopped_by_a_cap() {
-    let dir = temp_dir("cli-caps");
-    write(&dir, "room.usda", &cm_stage());
-    let base = [
-        "meter",
-        "room.usda",
-        "--at",
-        "30,-40,0",
-        "--normal",
-        "0,0,1",
-        "--json",
-        "--rel-error",
-        "1e-7",
-    ];
-    for (extra, warning) in [
-        (["--max-spp", "2048"], "sample cap"),
-        (["--time", "0.3"], "time cap"),
-    ] {
-        let t = std::time::Instant::now();
-        let o = cli(&[&base[..], &extra[..]].concat(), &dir);
-        assert!(o.status.success(), "{}", stderr(&o));
-        assert!(
-            t.elapsed().as_secs_f64() < 20.0,
-            "the cap did not stop sampling"
-        );
-        assert!(stderr(&o).contains(warning), "{}", stderr(&o));
-        let out = stdout(&o);
-        assert_eq!(field(&out, "converged"), "false", "{out}");
-        if warning == "sample cap" {
-            assert_eq!(number(&out, "samples"), 2048.0);
-        }
     }
 }

@@ -10,25 +10,17 @@ use common::*;
 use spectral_render::light::emission::color_temperature_rgb;
 use spectral_render::light::report::{self, LightReport};
 use spectral_render::light::{Light, LightSampleContext};
-use spectral_render::render::{self, RenderOptions};
 use spectral_render::sampling::Sampler;
 use spectral_render::scene;
+use spectral_render::session::{self, RenderOptions};
 use spectral_render::spectral::{blackbody, data, photometry, xyz};
 use spectral_render::spectral::{DenseSpectrum, SampledWavelengths};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn spectral_render(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_spectral-render"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("run spectral-render")
 }
 
 fn close(a: f64, b: f64, rel: f64) -> bool {
@@ -94,7 +86,7 @@ fn photometry_matches_colour_science() {
 
     let (stage, prims) = illuminant_stage();
     write(&dir, "illuminants.usda", &stage);
-    let out = spectral_render(&["lights", "illuminants.usda", "--json"], &dir);
+    let out = run_cli(&["lights", "illuminants.usda", "--json"], &dir);
     assert!(
         out.status.success(),
         "{}",
@@ -401,7 +393,7 @@ fn report_follows_geometry_and_photometric_overrides() {
     assert!((a - 2856.0).abs() < 2.0, "{a}");
 
     // The CLI prints the same report; JSON nulls where a quantity is not defined.
-    let out = spectral_render(&["lights", "lights.usda", "--json"], &dir);
+    let out = run_cli(&["lights", "lights.usda", "--json"], &dir);
     assert!(
         out.status.success(),
         "{}",
@@ -411,7 +403,7 @@ fn report_follows_geometry_and_photometric_overrides() {
     assert!(json.contains("\"prim\": \"/Sky\""), "{json}");
     assert!(json.contains("\"luminous_flux_lm\": null"));
     assert!(String::from_utf8_lossy(&out.stderr).starts_with("loaded "));
-    let table_out = spectral_render(&["lights", "lights.usda"], &dir);
+    let table_out = run_cli(&["lights", "lights.usda"], &dir);
     let text = String::from_utf8_lossy(&table_out.stdout);
     assert!(
         text.contains("/Tube") && text.contains("CylinderLight"),
@@ -583,7 +575,7 @@ fn ies_intensity_read_back_from_renders_matches_the_candela_table() {
                     max_depth: 1,
                     ..Default::default()
                 };
-                let out = render::render(&scene, &opts).unwrap();
+                let out = session::render(&scene, &opts).unwrap();
                 assert_finite(&out);
                 intensity_from_image(&out.xyz, res, half_tan, dist)
             })
@@ -648,7 +640,7 @@ fn malformed_ies_file_is_an_error_with_path_and_line() {
     assert!(e.contains("/Down"), "{e}");
     assert!(e.contains(&format!("{}:8:", bad.display())), "{e}");
     assert!(e.contains("'abc'") && !e.contains('\n'), "{e}");
-    let out = spectral_render(&["lights", "bad.usda"], &dir);
+    let out = run_cli(&["lights", "bad.usda"], &dir);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(

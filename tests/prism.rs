@@ -23,10 +23,10 @@ mod common;
 use glam::{DVec2, Vec3};
 use rayon::prelude::*;
 use spectral_render::geometry::Ray;
-use spectral_render::integrator::PathIntegrator;
-use spectral_render::render::{self, RenderOptions};
+use spectral_render::integrator::path::PathIntegrator;
 use spectral_render::sampling::Sampler;
 use spectral_render::scene::{self, Scene};
+use spectral_render::session::{self, RenderOptions};
 use spectral_render::spectral::data;
 use spectral_render::spectral::SampledWavelengths;
 use std::path::Path;
@@ -246,6 +246,6 @@ fn prism_scene_renders_without_nan() {
         seed: 3,
         ..Default::default()
     };
-    let out = render::render(&scene, &opts).unwrap();
+    let out = session::render(&scene, &opts).unwrap();
     common::assert_finite(&out);
 }

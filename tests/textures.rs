@@ -5,14 +5,14 @@ mod common;
 use common::*;
 use glam::{Vec2, Vec3};
 use spectral_render::bxdf::TransportMode;
+use spectral_render::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
 use spectral_render::geometry::Ray;
 use spectral_render::imageio;
-use spectral_render::integrator::IntegratorKind;
 use spectral_render::output::exr;
-use spectral_render::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
 use spectral_render::scene::{Hit, Scene, SurfaceHit};
 use spectral_render::spectral::SampledWavelengths;
 use spectral_render::texture::{ImageTexture, TextureCache};
+use spectral_render::Integrator;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -162,7 +162,7 @@ fn textured_stage_st(
 
 /// Mean and SEM of channel `ch` over the pixels of a 32×32 image in quadrant `q`
 /// (0 top-left, 1 top-right, 2 bottom-left, 3 bottom-right), away from the bilinear seam.
-fn quadrant(out: &spectral_render::render::RenderOutput, q: usize, ch: usize) -> (f64, f64) {
+fn quadrant(out: &spectral_render::session::RenderOutput, q: usize, ch: usize) -> (f64, f64) {
     assert_eq!((out.width, out.height), (32, 32));
     let (qx, qy) = (q % 2, q / 2);
     let pixels = (0..32 * 32).filter(move |i| {
@@ -371,8 +371,8 @@ fn ceiling_panel(name: &str, x0: f32, x1: f32, look: &str) -> String {
 
 /// Mean and SEM of the per-pixel difference of two images in channel `ch`.
 fn difference(
-    a: &spectral_render::render::RenderOutput,
-    b: &spectral_render::render::RenderOutput,
+    a: &spectral_render::session::RenderOutput,
+    b: &spectral_render::session::RenderOutput,
     ch: usize,
 ) -> (f64, f64) {
     mean_and_sem(a.rgb.iter().zip(&b.rgb).map(|(x, y)| x[ch] - y[ch]))
@@ -412,16 +412,16 @@ fn a_textured_emitter_lights_like_the_constant_emitters_it_is_made_of() {
     let one = lit_floor_stage(looks, &ceiling_panel("Panel", 0.3, 1.3, "Paint"));
     let (path_two, path_one) = (write(&dir, "two.usda", &two), write(&dir, "one.usda", &one));
     let reference = render_file(&path_two, (24, 24), 256, 3, None);
-    for integrator in [IntegratorKind::Path, IntegratorKind::Light] {
+    for integrator in [Integrator::Path, Integrator::Light] {
         let scene = spectral_render::scene::load(&path_one, Some((24, 24))).unwrap();
-        let opts = spectral_render::render::RenderOptions {
+        let opts = spectral_render::session::RenderOptions {
             spp: Some(256),
             seed: 11,
             max_depth: 3,
             integrator,
             ..Default::default()
         };
-        let out = spectral_render::render::render(&scene, &opts).unwrap();
+        let out = spectral_render::session::render(&scene, &opts).unwrap();
         assert_finite(&out);
         for ch in 0..3 {
             let (d, sem) = difference(&out, &reference, ch);
@@ -497,15 +497,15 @@ fn a_flat_normal_map_is_the_identity() {
     for (x, y) in POINTS {
         assert_eq!(surface_at(&a, x, y).ns, surface_at(&b, x, y).ns);
     }
-    let opts = spectral_render::render::RenderOptions {
+    let opts = spectral_render::session::RenderOptions {
         spp: Some(8),
         seed: 7,
         max_depth: 5,
         ..Default::default()
     };
     let (ia, ib) = (
-        spectral_render::render::render(&a, &opts).unwrap(),
-        spectral_render::render::render(&b, &opts).unwrap(),
+        spectral_render::session::render(&a, &opts).unwrap(),
+        spectral_render::session::render(&b, &opts).unwrap(),
     );
     assert_finite(&ia);
     for (pa, pb) in ia.rgb.iter().zip(&ib.rgb) {
@@ -863,14 +863,14 @@ fn per_pixel_stats(
 ) -> (Vec<f64>, f64) {
     let images: Vec<_> = (0..seeds)
         .map(|seed| {
-            let opts = spectral_render::render::RenderOptions {
+            let opts = spectral_render::session::RenderOptions {
                 spp: Some(spp),
                 seed,
                 max_depth: 3,
                 filter_textures,
                 ..Default::default()
             };
-            let out = spectral_render::render::render(scene, &opts).unwrap();
+            let out = spectral_render::session::render(scene, &opts).unwrap();
             assert_finite(&out);
             out
         })

@@ -4,38 +4,11 @@
 mod common;
 use common::*;
 
-/// A closed cube (half-size 1) whose walls all emit `le` nits (double-sided, so winding does
-/// not matter) and reflect a spectrally flat 0.8; the camera sits inside.
-fn furnace_stage(le: f32) -> String {
-    let flat = "        float2[] inputs:reflectance:samples = [(360, 0.8), (830, 0.8)]\n";
-    let light = format!("    float inputs:intensity = {le}\n{}", binding("Wall"));
-    // Six faces of the cube [-1, 1]³.
-    let faces = [
-        "(-1, -1, -1), (-1, 1, -1), (1, 1, -1), (1, -1, -1)",
-        "(-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)",
-        "(-1, -1, -1), (-1, -1, 1), (-1, 1, 1), (-1, 1, -1)",
-        "(1, -1, -1), (1, 1, -1), (1, 1, 1), (1, -1, 1)",
-        "(-1, -1, -1), (1, -1, -1), (1, -1, 1), (-1, -1, 1)",
-        "(-1, 1, -1), (-1, 1, 1), (1, 1, 1), (1, 1, -1)",
-    ];
-    let mut s = header();
-    s += &camera(0.5, 0.8, 0.0);
-    s += "def Scope \"Looks\"\n{\n";
-    s += &material("Wall", "spectral:diffuse", flat);
-    s += "}\n\n";
-    for (i, f) in faces.iter().enumerate() {
-        s += &format!(
-            "def Mesh \"Face{i}\" (\n    prepend apiSchemas = [\"MeshLightAPI\", \"MaterialBindingAPI\"]\n)\n{{\n    uniform bool doubleSided = 1\n    int[] faceVertexCounts = [4]\n    int[] faceVertexIndices = [0, 1, 2, 3]\n    point3f[] points = [{f}]\n{light}}}\n\n"
-        );
-    }
-    s
-}
-
 #[test]
 fn white_furnace_reads_le_over_one_minus_albedo() {
     let le = 2.0f32;
     let dir = temp_dir("furnace");
-    let path = write(&dir, "furnace.usda", &furnace_stage(le));
+    let path = write(&dir, "furnace.usda", &furnace_stage(le, 0.8));
     let out = render_file(&path, (16, 16), 1024, 10_000, None);
     let expected = le as f64 / (1.0 - 0.8);
     let (mean, sem) = mean_and_sem(out.xyz.iter().map(|p| p[1]));
@@ -45,24 +18,6 @@ fn white_furnace_reads_le_over_one_minus_albedo() {
         (mean / expected - 1.0).abs() < 0.01,
         "furnace Y = {mean}, expected {expected}"
     );
-}
-
-/// A Lambertian plane with `inputs` under a constant dome of `l` nits, seen head-on.
-fn dome_plane_stage(shader_id: &str, inputs: &str, l: f32) -> String {
-    let mut s = header();
-    s += &camera(1.0, 0.2, 0.0);
-    s += &format!("def DomeLight \"Sky\"\n{{\n    float inputs:intensity = {l}\n}}\n\n");
-    s += "def Scope \"Looks\"\n{\n";
-    s += &material("Paint", shader_id, inputs);
-    s += "}\n\n";
-    s += &quad(
-        "Plane",
-        0.0,
-        1.0,
-        &binding("Paint"),
-        "\"MaterialBindingAPI\"",
-    );
-    s
 }
 
 #[test]
@@ -101,21 +56,21 @@ fn preview_surface_colour_round_trips_under_d65() {
 
 #[test]
 fn one_and_two_threads_give_bit_identical_images() {
-    let cbox = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/cbox.usda");
+    let cbox = cbox_path();
     let scene = spectral_render::scene::load(&cbox, Some((32, 32))).unwrap();
     let run = |threads| {
-        let opts = spectral_render::render::RenderOptions {
+        let opts = spectral_render::session::RenderOptions {
             spp: Some(8),
             seed: 3,
             threads: Some(threads),
             ..Default::default()
         };
-        let out = spectral_render::render::render(&scene, &opts).unwrap();
+        let out = spectral_render::session::render(&scene, &opts).unwrap();
         assert_finite(&out);
         out
     };
     let (a, b) = (run(1), run(2));
-    let bits = |o: &spectral_render::render::RenderOutput| {
+    let bits = |o: &spectral_render::session::RenderOutput| {
         o.xyz
             .iter()
             .flatten()

@@ -508,7 +508,8 @@ fn bounds_of(triangles: &[[Vec3; 3]]) -> (Vec3, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::triangle::{intersect, test_rng::Rng};
+    use crate::geometry::triangle::intersect;
+    use crate::testing::rng::Rng;
 
     const _: () = {
         const fn assert_send_sync<T: Send + Sync>() {}

@@ -6,7 +6,7 @@
 //! Trowbridge–Reitz distribution, sampled by visible normals (PBR 4ed §9.6, eq. 9.33).
 //! The model is two-sided: ωo below the surface sees the mirror image of the upper side.
 //!
-//! Scene use (`spectral:conductor`, DESIGN.md §3):
+//! Scene use (`spectral:conductor`, docs/design.md §3):
 //! ```text
 //! def Shader "Gold" {
 //!     uniform token info:id = "spectral:conductor"

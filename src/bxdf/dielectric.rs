@@ -15,7 +15,7 @@
 //!   treated as smooth: its transmission lobe is narrower than α·10⁻³ rad and its
 //!   reflectance below 3·10⁻⁷, while the generalised half vector would lose all precision.
 //!
-//! Scene use (`spectral:dielectric`, DESIGN.md §3): `inputs:ior` (constant), `inputs:glass`
+//! Scene use (`spectral:dielectric`, docs/design.md §3): `inputs:ior` (constant), `inputs:glass`
 //! (`"BK7"`, `"fused_silica"`) or `inputs:sellmeierB`/`C` (dispersive), `inputs:roughness`
 //! (GGX α), `inputs:thin` (see `thin_dielectric.rs`).
 

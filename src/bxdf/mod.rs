@@ -1,6 +1,6 @@
 //! BxDFs: reflection models in a local shading frame where the normal is +Z.
 //!
-//! Conventions (DESIGN.md §2): `f()` excludes the cosine; pdfs are per unit solid angle;
+//! Conventions (docs/design.md §2): `f()` excludes the cosine; pdfs are per unit solid angle;
 //! `wo` and `wi` point away from the surface. One model per file, dispatched through the
 //! closed [`Bxdf`] enum; [`Bsdf`] adds the shading frame and is returned by value.
 //!
@@ -26,7 +26,6 @@ pub mod coat;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
-pub mod examples;
 pub mod fresnel;
 pub mod microfacet;
 pub mod oren_nayar;
@@ -42,7 +41,6 @@ pub use coat::{CoatAlbedo, CoatFresnel, SpecularCoat};
 pub use conductor::ConductorBxdf;
 pub use dielectric::DielectricBxdf;
 pub use diffuse::DiffuseBxdf;
-pub use examples::{examples, Example};
 pub use microfacet::TrowbridgeReitz;
 pub use oren_nayar::OrenNayarBxdf;
 pub use plastic::PlasticBxdf;

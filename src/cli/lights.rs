@@ -1,4 +1,4 @@
-//! `spectral-render lights STAGE [--json]`: the photometric report of every light (DESIGN.md
+//! `spectral-render lights STAGE [--json]`: the photometric report of every light (docs/design.md
 //! §1): luminous flux (lm), peak luminous intensity (cd), luminance (cd/m²), illuminance (lx,
 //! distant and dome lights), chromaticity x, y, CCT (K) and Duv, and the luminous efficacy of
 //! the spectrum (lm/W), computed from each light's spectral radiance and geometry
@@ -31,10 +31,13 @@
 //! }
 //! ```
 
-use super::render::print_summary;
+use super::common::{clap_message, print_summary};
+use crate::error::{Error, Result};
 use crate::light::report::{self, LightReport};
+use crate::output::json;
 use crate::scene;
 use clap::Parser;
+use serde::Serialize;
 use std::ffi::OsString;
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -52,13 +55,17 @@ struct LightsArgs {
 }
 
 /// Entry point: `argv[0]` is "lights".
-pub fn main(argv: Vec<OsString>) -> Result<(), String> {
-    let args = LightsArgs::parse_from(argv);
-    let scene = scene::load(&args.scene, None).map_err(|e| e.to_string())?;
+pub fn main(argv: Vec<OsString>) -> Result<()> {
+    let args = match LightsArgs::try_parse_from(argv) {
+        Ok(args) => args,
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => return Err(Error::option(clap_message(&e))),
+    };
+    let scene = scene::load(&args.scene, None)?;
     print_summary(&scene);
     let reports = report::report(&scene.lights);
     let out = if args.json {
-        json(&args.scene.display().to_string(), &reports)
+        document(&args.scene.display().to_string(), &reports)?
     } else {
         table(&reports)
     };
@@ -66,46 +73,59 @@ pub fn main(argv: Vec<OsString>) -> Result<(), String> {
     Ok(())
 }
 
-/// The report as JSON (format in the module docs).
-pub fn json(stage: &str, reports: &[LightReport]) -> String {
-    let mut s = format!("{{\n  \"stage\": {},\n  \"lights\": [", quote(stage));
-    for (i, r) in reports.iter().enumerate() {
-        let sp = &r.spectrum;
-        let fields = [
-            ("prim", quote(&r.prim_path)),
-            ("type", quote(r.kind)),
-            ("luminous_flux_lm", number(r.luminous_flux)),
-            ("peak_intensity_cd", number(r.peak_intensity)),
-            ("luminance_cd_m2", number(r.luminance)),
-            ("illuminance_lx", number(r.illuminance)),
-            ("area_m2", number(r.area)),
-            ("radiant_flux_w", number(r.radiant_flux)),
-            (
-                "chromaticity",
-                match sp.xy {
-                    Some([x, y]) => format!("{{ \"x\": {}, \"y\": {} }}", num(x), num(y)),
-                    None => "null".into(),
-                },
-            ),
-            ("cct_k", number(sp.cct.map(|c| c.kelvin))),
-            ("duv", number(sp.cct.map(|c| c.duv))),
-            ("luminous_efficacy_lm_w", number(sp.efficacy)),
-            ("shaped", r.shaped.to_string()),
-            ("note", r.note.map_or("null".into(), quote)),
-        ];
-        s += if i == 0 { "\n    {" } else { ",\n    {" };
-        for (k, (name, value)) in fields.iter().enumerate() {
-            let sep = if k + 1 < fields.len() { "," } else { "" };
-            let _ = write!(s, "\n      \"{name}\": {value}{sep}");
-        }
-        s += "\n    }";
-    }
-    s += if reports.is_empty() {
-        "]\n}\n"
-    } else {
-        "\n  ]\n}\n"
-    };
-    s
+/// The JSON document (format in the module docs).
+#[derive(Serialize)]
+struct Document<'a> {
+    stage: &'a str,
+    lights: Vec<LightJson<'a>>,
+}
+
+#[derive(Serialize)]
+struct LightJson<'a> {
+    prim: &'a str,
+    #[serde(rename = "type")]
+    kind: &'a str,
+    luminous_flux_lm: Option<f64>,
+    peak_intensity_cd: Option<f64>,
+    luminance_cd_m2: Option<f64>,
+    illuminance_lx: Option<f64>,
+    area_m2: Option<f64>,
+    radiant_flux_w: Option<f64>,
+    chromaticity: Option<Xy>,
+    cct_k: Option<f64>,
+    duv: Option<f64>,
+    luminous_efficacy_lm_w: Option<f64>,
+    shaped: bool,
+    note: Option<&'a str>,
+}
+
+#[derive(Serialize)]
+struct Xy {
+    x: f64,
+    y: f64,
+}
+
+fn document(stage: &str, reports: &[LightReport]) -> Result<String> {
+    let lights = reports
+        .iter()
+        .map(|r| LightJson {
+            prim: &r.prim_path,
+            kind: r.kind,
+            luminous_flux_lm: r.luminous_flux,
+            peak_intensity_cd: r.peak_intensity,
+            luminance_cd_m2: r.luminance,
+            illuminance_lx: r.illuminance,
+            area_m2: r.area,
+            radiant_flux_w: r.radiant_flux,
+            chromaticity: r.spectrum.xy.map(|[x, y]| Xy { x, y }),
+            cct_k: r.spectrum.cct.map(|c| c.kelvin),
+            duv: r.spectrum.cct.map(|c| c.duv),
+            luminous_efficacy_lm_w: r.spectrum.efficacy,
+            shaped: r.shaped,
+            note: r.note,
+        })
+        .collect();
+    json::pretty(&Document { stage, lights })
 }
 
 /// A human-readable table, one light per line.
@@ -138,50 +158,15 @@ fn table(reports: &[LightReport]) -> String {
     s
 }
 
-/// A JSON number, or null for None and non-finite values.
-fn number(v: Option<f64>) -> String {
-    v.map_or("null".into(), num)
-}
-
-fn num(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v}")
-    } else {
-        "null".into()
-    }
-}
-
-/// A JSON string literal.
-fn quote(s: &str) -> String {
-    let mut q = String::with_capacity(s.len() + 2);
-    q.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => q.push_str("\\\""),
-            '\\' => q.push_str("\\\\"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(q, "\\u{:04x}", c as u32);
-            }
-            c => q.push(c),
-        }
-    }
-    q.push('"');
-    q
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn json_escapes_and_nulls() {
-        assert_eq!(quote("a\"b\\c\n"), "\"a\\\"b\\\\c\\u000a\"");
-        assert_eq!(number(None), "null");
-        assert_eq!(number(Some(f64::NAN)), "null");
-        assert_eq!(number(Some(1.5)), "1.5");
+    fn json_escapes_the_stage_path() {
         assert_eq!(
-            json("s", &[]),
-            "{\n  \"stage\": \"s\",\n  \"lights\": []\n}\n"
+            document("s\"", &[]).unwrap(),
+            "{\n  \"stage\": \"s\\\"\",\n  \"lights\": []\n}\n"
         );
     }
 }

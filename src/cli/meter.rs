@@ -16,14 +16,18 @@
 //! `--rel-error` each entry also has `"converged"`). Option errors, clap's included, are one
 //! line and exit 1; so is a luminance meter asked of light tracing, which cannot estimate it.
 
-use crate::integrator::{IntegratorKind, MisHeuristic};
-use crate::output::map::{num, vec3, IlluminanceMap};
+use super::common::{clap_message, named, print_summary, warn_dropped, warn_limits};
+use crate::error::{Error, Result};
+use crate::integrator::{Integrator, MisHeuristic};
+use crate::output::json;
+use crate::output::map::{num, IlluminanceMap};
 use crate::scene;
-use crate::sensor::meter::{
-    self, measure, Cap, Meter, MeterKind, MeterOptions, MeterRun, Reading, Stop,
-};
+use crate::sensor::meter::{self, Meter, MeterKind};
+use crate::session::meter::{DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES};
+use crate::session::{measure, Cap, MeterOptions, MeterRun, Reading, Stop};
 use clap::Parser;
 use glam::{DMat4, DVec3};
+use serde::Serialize;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
@@ -85,11 +89,11 @@ struct MeterArgs {
     /// Print the readings as JSON on stdout.
     #[arg(long)]
     json: bool,
-    /// Estimator: path (path tracing), light (light tracing, illuminance only) or bdpt.
-    #[arg(long, default_value = "path", value_parser = super::render::parse_integrator)]
-    integrator: IntegratorKind,
-    /// MIS heuristic of --integrator bdpt: power or balance.
-    #[arg(long, default_value = "power", value_parser = super::render::parse_mis)]
+    /// Estimator (light tracing: illuminance only).
+    #[arg(long, default_value = "path", value_parser = named::<Integrator>("integrator"))]
+    integrator: Integrator,
+    /// MIS heuristic of the integrators that combine techniques (bdpt).
+    #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
     mis: MisHeuristic,
 }
 
@@ -116,30 +120,23 @@ const MAX_CELLS: usize = 4_000_000;
 
 /// Parses the arguments after `spectral-render` and measures. `--help` prints the usage; any
 /// option error (clap's included) is one line and exit code 1.
-pub fn main(argv: Vec<OsString>) -> Result<(), String> {
+pub fn main(argv: Vec<OsString>) -> Result<()> {
     match MeterArgs::try_parse_from(argv) {
         Ok(args) => run(&args),
         Err(e) if !e.use_stderr() => e.exit(),
-        Err(e) => Err(clap_message(&e)),
+        Err(e) => Err(Error::option(clap_message(&e))),
     }
 }
 
-/// The first line of clap's message, without its `error: ` prefix and usage block.
-fn clap_message(e: &clap::Error) -> String {
-    let text = e.to_string();
-    let first = text.lines().next().unwrap_or("invalid arguments");
-    format!("{} (see --help)", first.trim_start_matches("error: "))
-}
-
-fn run(args: &MeterArgs) -> Result<(), String> {
+fn run(args: &MeterArgs) -> Result<()> {
     let request = request(args)?;
     let opts = options(args)?;
     if let Request::Points(kind, _) = &request {
-        meter::check_integrator(*kind, opts.integrator)?;
+        opts.integrator.check_meter(*kind)?;
     }
-    let scene = scene::load(&args.scene, Some((1, 1))).map_err(|e| e.to_string())?;
-    super::render::print_summary(&scene);
-    super::render::warn_opacity(&scene, opts.integrator);
+    let scene = scene::load(&args.scene, Some((1, 1)))?;
+    print_summary(&scene);
+    warn_limits(&opts.integrator, &scene, false);
     match request {
         Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
         Request::Grid(g) => run_grid(args, &scene, &opts, &g),
@@ -152,21 +149,21 @@ fn run_points(
     opts: &MeterOptions,
     kind: MeterKind,
     points: &[(DVec3, DVec3)],
-) -> Result<(), String> {
+) -> Result<()> {
     let meters = points
         .iter()
         .map(|&(p, d)| world_meter(&scene.stage_to_world, kind, p, d))
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>>>()?;
     let run = measure(scene, &meters, opts)?;
     warn(&run, opts);
     let rel = matches!(opts.stop, Stop::RelError(_));
     if args.json {
-        let entries: Vec<String> = points
+        let meters = points
             .iter()
             .zip(&run.readings)
             .map(|(&(p, d), r)| json_entry(kind, p, d, r, rel))
             .collect();
-        println!("{{\"meters\":[\n{}\n]}}", entries.join(",\n"));
+        print!("{}", json::compact(&Readings { meters })?);
     } else {
         for (&(p, d), r) in points.iter().zip(&run.readings) {
             println!("{}", text_entry(kind, p, d, r));
@@ -180,7 +177,7 @@ fn run_grid(
     scene: &scene::Scene,
     opts: &MeterOptions,
     g: &GridSpec,
-) -> Result<(), String> {
+) -> Result<()> {
     let (nu, nv) = g.n;
     let m = &scene.stage_to_world;
     let mut meters = Vec::with_capacity(nu * nv);
@@ -218,7 +215,7 @@ fn run_grid(
         num(s.u0)
     );
     if args.json {
-        print!("{}", map.json());
+        print!("{}", map.json()?);
         eprintln!("{line}");
     } else {
         println!("{line}");
@@ -234,7 +231,7 @@ fn run_grid(
 }
 
 /// The meter in world space; a normal or direction that vanishes there is an error.
-fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter, String> {
+fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> {
     let p_w = meter::stage_point(m, p);
     match kind {
         MeterKind::Illuminance => Meter::illuminance(p_w, meter::stage_normal(m, d)),
@@ -244,12 +241,7 @@ fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter, 
 
 /// Warnings about dropped samples and readings a cap stopped.
 fn warn(run: &MeterRun, opts: &MeterOptions) {
-    if run.dropped > 0 {
-        eprintln!(
-            "warning: {} samples had a non-finite value and were dropped",
-            run.dropped
-        );
-    }
+    warn_dropped(run.dropped);
     for (cap, what) in [
         (Cap::Samples, "the sample cap (--max-spp)"),
         (Cap::Time, "the time cap (--time)"),
@@ -269,26 +261,46 @@ fn warn(run: &MeterRun, opts: &MeterOptions) {
     }
 }
 
-fn json_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading, rel: bool) -> String {
-    let key = match kind {
-        MeterKind::Illuminance => "normal",
-        MeterKind::Luminance => "dir",
+/// `--json`: `{"meters": [...]}`, one entry per meter in the order given.
+#[derive(Serialize)]
+struct Readings {
+    meters: Vec<ReadingJson>,
+}
+
+#[derive(Serialize)]
+struct ReadingJson {
+    kind: &'static str,
+    at: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    normal: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dir: Option<[f64; 3]>,
+    value: f64,
+    unit: &'static str,
+    ci95: f64,
+    samples: u64,
+    /// Under --rel-error: false when a cap stopped the reading.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    converged: Option<bool>,
+}
+
+fn json_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading, rel: bool) -> ReadingJson {
+    let d = Some(d.to_array());
+    let (normal, dir) = match kind {
+        MeterKind::Illuminance => (d, None),
+        MeterKind::Luminance => (None, d),
     };
-    let converged = if rel {
-        format!(",\"converged\":{}", r.capped.is_none())
-    } else {
-        String::new()
-    };
-    format!(
-        "{{\"kind\":\"{}\",\"at\":{},\"{key}\":{},\"value\":{},\"unit\":\"{}\",\"ci95\":{},\"samples\":{}{converged}}}",
-        kind.name(),
-        vec3(p.into()),
-        vec3(d.into()),
-        num(r.value),
-        kind.unit(),
-        num(r.ci95),
-        r.samples
-    )
+    ReadingJson {
+        kind: kind.name(),
+        at: p.to_array(),
+        normal,
+        dir,
+        value: r.value,
+        unit: kind.unit(),
+        ci95: r.ci95,
+        samples: r.samples,
+        converged: rel.then_some(r.capped.is_none()),
+    }
 }
 
 fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
@@ -328,7 +340,7 @@ fn output_base(o: Option<&Path>) -> PathBuf {
 }
 
 /// Checks which meters were asked for and parses their vectors.
-fn request(a: &MeterArgs) -> Result<Request, String> {
+fn request(a: &MeterArgs) -> Result<Request> {
     if a.grid.is_some() {
         return grid_request(a);
     }
@@ -339,57 +351,63 @@ fn request(a: &MeterArgs) -> Result<Request, String> {
         (a.output.is_some(), "-o"),
     ] {
         if given {
-            return Err(format!("{flag} belongs to --grid, which was not given"));
+            return Err(Error::option(format!(
+                "{flag} belongs to --grid, which was not given"
+            )));
         }
     }
     if a.at.is_empty() {
-        return Err(
+        return Err(Error::option(
             "nothing to measure: give --at X,Y,Z with --normal NX,NY,NZ \
-                    (illuminance), --luminance --at X,Y,Z --dir DX,DY,DZ, or --grid"
-                .into(),
-        );
+                    (illuminance), --luminance --at X,Y,Z --dir DX,DY,DZ, or --grid",
+        ));
     }
     let (kind, dirs, flag) = if a.luminance {
         if !a.normal.is_empty() {
-            return Err("--luminance meters take --dir, not --normal".into());
+            return Err(Error::option("--luminance meters take --dir, not --normal"));
         }
         (MeterKind::Luminance, &a.dir, "--dir")
     } else {
         if !a.dir.is_empty() {
-            return Err("--dir is for --luminance meters; illuminance meters take --normal".into());
+            return Err(Error::option(
+                "--dir is for --luminance meters; illuminance meters take --normal",
+            ));
         }
         (MeterKind::Illuminance, &a.normal, "--normal")
     };
     if dirs.len() != a.at.len() {
-        return Err(format!(
+        return Err(Error::option(format!(
             "{} --at but {} {flag}: give one {flag} per --at, in the same order",
             a.at.len(),
             dirs.len()
-        ));
+        )));
     }
     let points =
         a.at.iter()
             .zip(dirs)
             .map(|(p, d)| Ok((vector("--at", p)?, direction(flag, d)?)))
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>>>()?;
     Ok(Request::Points(kind, points))
 }
 
-fn grid_request(a: &MeterArgs) -> Result<Request, String> {
+fn grid_request(a: &MeterArgs) -> Result<Request> {
     if !a.at.is_empty() || a.luminance || !a.dir.is_empty() {
-        return Err(
-            "--grid measures illuminance on its own: drop --at, --dir and --luminance".into(),
-        );
+        return Err(Error::option(
+            "--grid measures illuminance on its own: drop --at, --dir and --luminance",
+        ));
     }
     let need = |v: &Option<String>, flag: &str| {
-        v.clone()
-            .ok_or_else(|| format!("--grid needs {flag} as well (origin, --u, --v, --n, --normal)"))
+        v.clone().ok_or_else(|| {
+            Error::option(format!(
+                "--grid needs {flag} as well (origin, --u, --v, --n, --normal)"
+            ))
+        })
     };
     let (u, v, n) = (need(&a.u, "--u")?, need(&a.v, "--v")?, need(&a.n, "--n")?);
     let normal = match a.normal.as_slice() {
         [one] => direction("--normal", one)?,
-        [] => return Err("--grid needs --normal NX,NY,NZ".into()),
-        _ => return Err("--grid takes one --normal for all its cells".into()),
+        [] => return Err(Error::option("--grid needs --normal NX,NY,NZ")),
+        _ => return Err(Error::option("--grid takes one --normal for all its cells")),
     };
     let g = GridSpec {
         origin: vector("--grid", a.grid.as_deref().unwrap_or_default())?,
@@ -399,17 +417,21 @@ fn grid_request(a: &MeterArgs) -> Result<Request, String> {
         normal,
     };
     if g.u.cross(g.v).length() == 0.0 {
-        return Err(format!(
+        return Err(Error::option(format!(
             "--u {u} and --v {v} do not span a rectangle (zero or parallel edges)"
-        ));
+        )));
     }
     Ok(Request::Grid(g))
 }
 
 /// Three comma-separated finite numbers.
-fn vector(flag: &str, s: &str) -> Result<DVec3, String> {
+fn vector(flag: &str, s: &str) -> Result<DVec3> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let bad = || format!("{flag} '{s}': expected three comma-separated numbers, e.g. 1,0.8,-2");
+    let bad = || {
+        Error::option(format!(
+            "{flag} '{s}': expected three comma-separated numbers, e.g. 1,0.8,-2"
+        ))
+    };
     if parts.len() != 3 {
         return Err(bad());
     }
@@ -424,17 +446,21 @@ fn vector(flag: &str, s: &str) -> Result<DVec3, String> {
 }
 
 /// A vector that must not be zero.
-fn direction(flag: &str, s: &str) -> Result<DVec3, String> {
+fn direction(flag: &str, s: &str) -> Result<DVec3> {
     let v = vector(flag, s)?;
     if v.length() == 0.0 {
-        return Err(format!("{flag} '{s}' has zero length"));
+        return Err(Error::option(format!("{flag} '{s}' has zero length")));
     }
     Ok(v)
 }
 
 /// `NU,NV`: two positive integers.
-fn cells(s: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("--n '{s}': expected two positive integers NU,NV, e.g. 20,10");
+fn cells(s: &str) -> Result<(usize, usize)> {
+    let bad = || {
+        Error::option(format!(
+            "--n '{s}': expected two positive integers NU,NV, e.g. 20,10"
+        ))
+    };
     let (a, b) = s.split_once(',').ok_or_else(bad)?;
     let nu: usize = a.trim().parse().map_err(|_| bad())?;
     let nv: usize = b.trim().parse().map_err(|_| bad())?;
@@ -442,49 +468,54 @@ fn cells(s: &str) -> Result<(usize, usize), String> {
         return Err(bad());
     }
     if nu.saturating_mul(nv) > MAX_CELLS {
-        return Err(format!("--n '{s}': at most {MAX_CELLS} cells"));
+        return Err(Error::option(format!(
+            "--n '{s}': at most {MAX_CELLS} cells"
+        )));
     }
     Ok((nu, nv))
 }
 
 /// Sampling options from the flags.
-fn options(a: &MeterArgs) -> Result<MeterOptions, String> {
+fn options(a: &MeterArgs) -> Result<MeterOptions> {
     let stop = match (a.spp, a.rel_error) {
-        (Some(_), Some(_)) => return Err("give --spp or --rel-error, not both".into()),
+        (Some(_), Some(_)) => return Err(Error::option("give --spp or --rel-error, not both")),
         (Some(n), None) if n < 2 => {
-            return Err("--spp must be at least 2 (a confidence interval needs two samples)".into())
+            return Err(Error::option(
+                "--spp must be at least 2 (a confidence interval needs two samples)",
+            ))
         }
         (Some(n), None) => Stop::Samples(n),
         (None, Some(r)) if !(r.is_finite() && r > 0.0) => {
-            return Err(format!(
+            return Err(Error::option(format!(
                 "--rel-error {r} must be a positive number, e.g. 0.005"
-            ))
+            )))
         }
         (None, Some(r)) => Stop::RelError(r),
-        (None, None) => Stop::Samples(meter::DEFAULT_SAMPLES),
+        (None, None) => Stop::Samples(DEFAULT_SAMPLES),
     };
     if a.max_spp.is_some() && a.rel_error.is_none() {
-        return Err("--max-spp caps --rel-error; use --spp for a fixed count".into());
+        return Err(Error::option(
+            "--max-spp caps --rel-error; use --spp for a fixed count",
+        ));
     }
     if a.max_spp.is_some_and(|n| n < 2) {
-        return Err("--max-spp must be at least 2".into());
+        return Err(Error::option("--max-spp must be at least 2"));
     }
     if let Some(t) = a.time {
         if !(t.is_finite() && t > 0.0) {
-            return Err("--time must be a positive number of seconds".into());
+            return Err(Error::option("--time must be a positive number of seconds"));
         }
     }
     if a.threads == Some(0) {
-        return Err("--threads must be at least 1".into());
+        return Err(Error::option("--threads must be at least 1"));
     }
     Ok(MeterOptions {
         stop,
-        max_samples: a.max_spp.unwrap_or(meter::DEFAULT_MAX_SAMPLES),
+        max_samples: a.max_spp.unwrap_or(DEFAULT_MAX_SAMPLES),
         time_budget: a.time,
         seed: a.seed,
         max_depth: a.max_depth,
         threads: a.threads,
-        integrator: a.integrator,
-        mis: a.mis,
+        integrator: a.integrator.with_mis(a.mis),
     })
 }

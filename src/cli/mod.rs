@@ -1,17 +1,20 @@
 //! The command line: `spectral-render STAGE [options]` renders; a first argument naming a
-//! subcommand runs that instead (DESIGN.md §1). Errors are printed as one line
-//! `error: FILE: PRIM: reason` with exit code 1; clap's usage errors exit with 2 (`meter`
-//! reports them as one line with exit code 1).
+//! subcommand runs that instead (docs/design.md §1). Every error, clap's usage errors
+//! included, is printed as one line `error: FILE: PRIM: reason` (or `error: reason` for an
+//! option) with exit code 1.
 
-pub mod lights;
-pub mod meter;
-pub mod render;
+mod common;
+mod lights;
+mod meter;
+mod progress;
+mod render;
 
+use crate::error::Result;
 use std::ffi::OsString;
 use std::process::ExitCode;
 
 /// The subcommands: (name, entry point taking the arguments after the program name).
-type Command = fn(Vec<OsString>) -> Result<(), String>;
+type Command = fn(Vec<OsString>) -> Result<()>;
 
 /// Subcommands by name (each lives in its own file of this module).
 const SUBCOMMANDS: &[(&str, Command)] = &[("lights", lights::main), ("meter", meter::main)];
@@ -33,8 +36,8 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
-            eprintln!("error: {msg}");
+        Err(e) => {
+            eprintln!("error: {e}");
             ExitCode::FAILURE
         }
     }

@@ -1,9 +1,13 @@
 //! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
 
+use super::common::{clap_message, named, print_summary, warn_dropped, warn_limits};
+use super::progress::Progress;
+use crate::error::{Error, Result};
 use crate::integrator::bidir::strategies::StrategyImage;
-use crate::integrator::{IntegratorKind, MisHeuristic};
+use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::{exr, png};
-use crate::render::{self, RenderOptions};
+use crate::session::image::xyz_to_rgb;
+use crate::session::{self, ImageSession, RenderOptions, RenderOutput};
 use crate::{scene, spectral};
 use clap::Parser;
 use std::ffi::OsString;
@@ -37,11 +41,11 @@ struct RenderArgs {
     /// Maximum number of scattering events (pbrt's maxdepth; Mitsuba's max_depth − 1).
     #[arg(long = "max-depth", default_value_t = 7)]
     max_depth: u32,
-    /// Light-transport algorithm: path, light (light tracing) or bdpt.
-    #[arg(long, default_value = "path", value_parser = parse_integrator)]
-    integrator: IntegratorKind,
-    /// MIS heuristic of BDPT: power (β = 2) or balance.
-    #[arg(long, default_value = "power", value_parser = parse_mis)]
+    /// Light-transport algorithm.
+    #[arg(long, default_value = "path", value_parser = named::<Integrator>("integrator"))]
+    integrator: Integrator,
+    /// MIS heuristic of the integrators that combine techniques (bdpt).
+    #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
     mis: MisHeuristic,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
@@ -63,7 +67,7 @@ struct RenderArgs {
     preview_exposure: f32,
 }
 
-fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or("expected WxH, e.g. 640x480")?;
@@ -75,66 +79,32 @@ fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-pub(super) fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
-    match s {
-        "path" => Ok(IntegratorKind::Path),
-        "light" => Ok(IntegratorKind::Light),
-        "bdpt" => Ok(IntegratorKind::Bdpt),
-        other => Err(format!(
-            "unknown integrator '{other}' (available: path, light, bdpt)"
-        )),
+/// Parses the arguments and renders. `--help` and `--version` print and exit; any option
+/// error, clap's included, is one line and exit code 1.
+pub fn main(argv: Vec<OsString>) -> Result<()> {
+    match RenderArgs::try_parse_from(argv) {
+        Ok(args) => run(&args),
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => Err(Error::option(clap_message(&e))),
     }
 }
 
-pub(super) fn parse_mis(s: &str) -> Result<MisHeuristic, String> {
-    match s {
-        "power" => Ok(MisHeuristic::Power),
-        "balance" => Ok(MisHeuristic::Balance),
-        other => Err(format!(
-            "unknown MIS heuristic '{other}' (available: power, balance)"
-        )),
-    }
-}
-
-/// Light tracing and BDPT treat partially opaque surfaces as opaque: say so.
-pub(super) fn warn_opacity(scene: &scene::Scene, integrator: IntegratorKind) {
-    if integrator != IntegratorKind::Path && !scene.all_opaque {
-        eprintln!(
-            "warning: --integrator {} treats partially opaque surfaces (UsdPreviewSurface opacity) as opaque; use --integrator path for cutouts",
-            integrator.name()
-        );
-    }
-}
-
-/// Parses the arguments (clap exits with its usage message on bad ones) and renders.
-pub fn main(argv: Vec<OsString>) -> Result<(), String> {
-    run(&RenderArgs::parse_from(argv))
-}
-
-fn run(args: &RenderArgs) -> Result<(), String> {
-    validate(args)?;
-    let scene = scene::load(&args.scene, args.resolution).map_err(|e| e.to_string())?;
+fn run(args: &RenderArgs) -> Result<()> {
+    let opts = options(args)?;
+    let scene = scene::load(&args.scene, args.resolution)?;
     print_summary(&scene);
-    warn_opacity(&scene, args.integrator);
-    let opts = RenderOptions {
-        spp: args.spp,
-        time_budget: args.time,
-        seed: args.seed,
-        threads: args.threads,
-        max_depth: args.max_depth,
-        integrator: args.integrator,
-        mis: args.mis,
-        strategies: args.strategies.is_some(),
-        progress: true,
-        filter_textures: !args.no_texture_filtering,
-    };
-    let out = render::render(&scene, &opts)?;
-    if out.dropped_samples > 0 {
-        eprintln!(
-            "warning: {} samples had a non-finite value and were dropped",
-            out.dropped_samples
-        );
-    }
+    warn_limits(&opts.integrator, &scene, true);
+    let mut session = ImageSession::new(&scene, &opts)?;
+    let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
+    let target = opts.spp.map(u64::from).or(match opts.time_budget {
+        Some(_) => None,
+        None => Some(u64::from(session::DEFAULT_SPP)),
+    });
+    let mut progress = Progress::image(pixels, target);
+    session::run(&mut session, &mut progress);
+    progress.finish();
+    let out = session.output();
+    warn_dropped(out.dropped_samples);
     let path = args
         .output
         .clone()
@@ -179,17 +149,17 @@ fn run(args: &RenderArgs) -> Result<(), String> {
 /// One EXR per strategy and kind: `DIR/d{depth}_s{s}_t{t}_{weighted,unweighted}.exr`.
 fn write_strategies(
     dir: &Path,
-    out: &render::RenderOutput,
+    out: &RenderOutput,
     images: &[StrategyImage],
     meta: &exr::ExrMetadata,
     white: [f32; 2],
-) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, format!("cannot create: {e}")))?;
     for img in images {
         let depth = img.s + img.t - 2;
         for (kind, xyz) in [("weighted", &img.weighted), ("unweighted", &img.unweighted)] {
             let name = format!("d{depth:02}_s{:02}_t{:02}_{kind}.exr", img.s, img.t);
-            let rgb: Vec<[f32; 3]> = xyz.iter().map(|p| render::xyz_to_rgb(*p)).collect();
+            let rgb: Vec<[f32; 3]> = xyz.iter().map(|p| xyz_to_rgb(*p)).collect();
             exr::write(
                 &dir.join(name),
                 out.width,
@@ -209,22 +179,39 @@ fn write_strategies(
     Ok(())
 }
 
-fn validate(args: &RenderArgs) -> Result<(), String> {
-    if args.strategies.is_some() && args.integrator != IntegratorKind::Bdpt {
-        return Err("--strategies needs --integrator bdpt".into());
+/// The render's options, checked before the stage is read.
+fn options(args: &RenderArgs) -> Result<RenderOptions> {
+    let integrator = args.integrator.with_mis(args.mis);
+    if args.strategies.is_some() {
+        if !integrator.capabilities().strategy_images {
+            return Err(Error::option(format!(
+                "--strategies needs --integrator {}",
+                Integrator::names_with(|c| c.strategy_images)
+            )));
+        }
+        integrator.check_strategies(args.max_depth)?;
     }
     if args.spp == Some(0) {
-        return Err("--spp must be at least 1".into());
+        return Err(Error::option("--spp must be at least 1"));
     }
     if let Some(t) = args.time {
         if !(t.is_finite() && t > 0.0) {
-            return Err("--time must be a positive number of seconds".into());
+            return Err(Error::option("--time must be a positive number of seconds"));
         }
     }
     if args.threads == Some(0) {
-        return Err("--threads must be at least 1".into());
+        return Err(Error::option("--threads must be at least 1"));
     }
-    Ok(())
+    Ok(RenderOptions {
+        spp: args.spp,
+        time_budget: args.time,
+        seed: args.seed,
+        threads: args.threads,
+        max_depth: args.max_depth,
+        integrator,
+        strategies: args.strategies.is_some(),
+        filter_textures: !args.no_texture_filtering,
+    })
 }
 
 /// `stage.usda` → `./stage.exr`.
@@ -234,25 +221,4 @@ fn default_output(scene: &Path) -> PathBuf {
         .map(|s| s.to_os_string())
         .unwrap_or_else(|| "render".into());
     PathBuf::from(stem).with_extension("exr")
-}
-
-/// The one-line summary every command that reads a scene prints.
-pub fn print_summary(scene: &scene::Scene) {
-    let s = &scene.summary;
-    eprintln!(
-        "loaded {}: {} meshes ({} triangles), {} materials, {} lights, camera {}, {}x{}{}",
-        scene.source.display(),
-        s.meshes,
-        s.triangles,
-        s.materials,
-        s.lights,
-        s.camera,
-        scene.camera.width,
-        scene.camera.height,
-        if s.warnings.is_empty() {
-            String::new()
-        } else {
-            format!("; ignored: {}", s.warnings.join("; "))
-        }
-    );
 }

@@ -115,7 +115,7 @@ pub fn spawn_ray_to_point(p_from: Vec3, err_from: Vec3, n_from: Vec3, p_to: Vec3
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::triangle::test_rng::Rng;
+    use crate::testing::rng::Rng;
     use crate::geometry::triangle::{hit_point_error, intersect, is_degenerate};
 
     #[test]

@@ -177,25 +177,15 @@ fn mask3(m: glam::BVec4A) -> u32 {
 
 /// Watertight ray–triangle test (Woop, Benthin, Wald 2013; PBR 4ed §6.5.3) that never reports a
 /// hit at t ≤ 0 (see the module docs). `t_max` is exclusive. Returns None for degenerate
-/// (zero-area) triangles and never a NaN.
+/// (zero-area) triangles and never a NaN. The BVH runs the same test on its packed
+/// triangles; this one-triangle form is the reference of the tests.
+#[cfg(any(test, feature = "testing"))]
 #[inline]
 pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3, t_max: f32) -> Option<TriangleHit> {
-    intersect_prepared(&WatertightRay::new(ray)?, p0, p1, p2, t_max)
-}
-
-/// [`intersect`] with the per-ray transform precomputed.
-#[inline]
-pub fn intersect_prepared(
-    ray: &WatertightRay,
-    p0: Vec3,
-    p1: Vec3,
-    p2: Vec3,
-    t_max: f32,
-) -> Option<TriangleHit> {
     if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
         return None;
     }
-    intersect_packed(ray, &PackedTriangle::new(p0, p1, p2), t_max)
+    intersect_packed(&WatertightRay::new(ray)?, &PackedTriangle::new(p0, p1, p2), t_max)
 }
 
 /// [`intersect_prepared`] for triangles already known not to be degenerate, packed (the BVH
@@ -375,56 +365,9 @@ pub fn hit_point_error(hit: &TriangleHit, p0: Vec3, p1: Vec3, p2: Vec3) -> Vec3 
     gamma(7) * abs_sum
 }
 
-/// A small deterministic generator for the geometry and BVH tests (SplitMix64, Steele et al. 2014).
-#[cfg(test)]
-pub(crate) mod test_rng {
-    use glam::Vec3;
-
-    pub struct Rng(u64);
-
-    impl Rng {
-        pub fn new(seed: u64) -> Rng {
-            Rng(seed)
-        }
-
-        pub fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        /// Uniform in [0, 1).
-        pub fn f32(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-        }
-
-        pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * self.f32()
-        }
-
-        pub fn below(&mut self, n: usize) -> usize {
-            (self.next_u64() % n as u64) as usize
-        }
-
-        pub fn vec3(&mut self, lo: f32, hi: f32) -> Vec3 {
-            Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-        }
-
-        /// Uniform on the unit sphere.
-        pub fn unit_vector(&mut self) -> Vec3 {
-            let z = self.range(-1.0, 1.0);
-            let phi = self.range(0.0, std::f32::consts::TAU);
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::test_rng::Rng;
+    use crate::testing::rng::Rng;
     use super::*;
 
     fn ray(o: Vec3, d: Vec3) -> Ray {

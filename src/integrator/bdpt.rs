@@ -8,23 +8,28 @@
 //! subpath is traced first, stored in the per-thread workspace, splatted (t = 1), then the
 //! camera subpath is traced and each of its vertices connected to the light and to every
 //! stored light vertex within the depth limit. The sensor is whatever the context names: the
-//! camera, or a light meter (`integrator::meter_bidir`), through the same loop.
+//! camera, or a light meter ([`BdptEstimator`]'s `meter_sample`: a sensor subpath from the
+//! meter, cosine-distributed for irradiance, the viewing ray for luminance), through the same
+//! loop.
 
 use super::bidir::connect::{connect, emitter_hit, escaped, next_event};
 use super::bidir::vertex::bsdf_at;
 use super::bidir::{
-    splat_light_subpath, trace_light_subpath, BidirContext, PathVertex, Walk, Workspace,
+    splat_light_subpath, trace_light_subpath, BidirContext, Mis, MisHeuristic, PathVertex, Walk,
+    Workspace,
 };
+use super::{Estimator, Settings};
 use crate::bxdf::TransportMode;
 use crate::light::LightHit;
 use crate::sampling::Sampler;
-use crate::scene::Hit;
-use crate::spectral::SampledWavelengths;
+use crate::scene::{Hit, Scene};
+use crate::sensor::meter::MeterSensor;
+use crate::sensor::Sensor;
+use crate::spectral::{SampledSpectrum, SampledWavelengths};
 
-#[derive(Clone, Copy, Debug)]
-pub struct BdptIntegrator {
-    pub max_depth: u32,
-}
+/// The integrator itself: its depth limit and MIS are the context's ([`BidirContext`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BdptIntegrator;
 
 impl BdptIntegrator {
     /// One BDPT sample for the sensor of `ctx`: the camera ray through raster point `film`
@@ -122,5 +127,50 @@ impl BdptIntegrator {
                 ws.record.add_camera(y.depth + 1, t, c);
             }
         }
+    }
+}
+
+/// BDPT as an [`Estimator`]: the render's context (camera as sensor) and the integrator.
+pub struct BdptEstimator<'a> {
+    ctx: BidirContext<'a>,
+    bdpt: BdptIntegrator,
+}
+
+impl<'a> BdptEstimator<'a> {
+    pub fn new(scene: &'a Scene, settings: Settings, mis: MisHeuristic) -> BdptEstimator<'a> {
+        let ctx = BidirContext::new(scene, Mis::bdpt(mis), settings.max_depth)
+            .with_filter(settings.filter);
+        BdptEstimator {
+            ctx,
+            bdpt: BdptIntegrator,
+        }
+    }
+}
+
+impl Estimator for BdptEstimator<'_> {
+    fn image_sample(
+        &self,
+        film: [f32; 2],
+        u_lens: [f32; 2],
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        ws: &mut Workspace,
+    ) {
+        self.bdpt
+            .sample(&self.ctx, film, u_lens, lambda, sampler, ws);
+    }
+
+    fn meter_sample(
+        &self,
+        meter: &MeterSensor,
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        ws: &mut Workspace,
+    ) -> SampledSpectrum {
+        let ctx = self.ctx.with_sensor(Sensor::Meter(*meter));
+        ws.record.clear();
+        let u = sampler.get_2d();
+        self.bdpt.sample(&ctx, [0.0; 2], u, lambda, sampler, ws);
+        ws.record.total()
     }
 }

@@ -11,10 +11,13 @@
 //!   alpha). Shadow rays are attenuated by (1 − opacity) of every translucent surface they
 //!   cross instead, the expected value of the same test.
 //! - **Dispersion.** At a material whose refraction depends on λ the secondary wavelengths
-//!   are terminated before the BSDF is built (DESIGN.md §5). `li` works on its own copy of the
+//!   are terminated before the BSDF is built (docs/design.md §5). `li` works on its own copy of the
 //!   wavelengths and re-expresses its estimate against the caller's pdfs on return, so the
 //!   caller's `sampled_to_xyz(l, lambda)` stays unbiased without seeing the termination.
 
+use super::bidir::Contribution;
+use super::meter::MeterIntegrator;
+use super::{Estimator, Settings, Workspace};
 use crate::bxdf::{Bsdf, TransportMode};
 use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
 use crate::geometry::Ray;
@@ -22,6 +25,7 @@ use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
 use crate::material::Material;
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{Hit, Scene, SurfaceHit};
+use crate::sensor::meter::{MeterKind, MeterSensor};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use crate::texture::TextureFilter;
 use glam::{Vec2, Vec3};
@@ -333,3 +337,53 @@ fn russian_roulette(
     }
     true
 }
+/// The path tracer as an [`Estimator`]: camera rays for images, the meter estimators of
+/// `meter.rs` for light meters.
+pub struct PathEstimator<'a> {
+    scene: &'a Scene,
+    pt: PathIntegrator,
+}
+
+impl<'a> PathEstimator<'a> {
+    pub fn new(scene: &'a Scene, settings: Settings) -> PathEstimator<'a> {
+        PathEstimator {
+            scene,
+            pt: PathIntegrator {
+                max_depth: settings.max_depth,
+                filter: settings.filter,
+            },
+        }
+    }
+}
+
+impl Estimator for PathEstimator<'_> {
+    fn image_sample(
+        &self,
+        film: [f32; 2],
+        u_lens: [f32; 2],
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        ws: &mut Workspace,
+    ) {
+        let (ray, t_max) = self.scene.camera.generate_ray(film, u_lens);
+        let l = self.pt.li(self.scene, ray, t_max, lambda, sampler);
+        ws.record.camera = Contribution::new(l, 1.0);
+    }
+
+    fn meter_sample(
+        &self,
+        m: &MeterSensor,
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        _ws: &mut Workspace,
+    ) -> SampledSpectrum {
+        let meter = MeterIntegrator { path: self.pt };
+        match m.kind {
+            MeterKind::Illuminance => {
+                meter.irradiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler)
+            }
+            MeterKind::Luminance => meter.radiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler),
+        }
+    }
+}
+

@@ -1,4 +1,4 @@
-//! From the UsdLux inputs of a light to its emitted spectral radiance (DESIGN.md §2, §3).
+//! From the UsdLux inputs of a light to its emitted spectral radiance (docs/design.md §2, §3).
 //!
 //! - The *shape* of the spectrum is the uplifted `inputs:color` (× the UsdLux colour
 //!   temperature tint when enabled) as an RGB illuminant (D65 × sigmoid, so colour (1,1,1)
@@ -10,7 +10,8 @@
 //!   (and from its ShapingAPI distribution: the scene builder integrates the shaping factor
 //!   over directions, `light::shaping`).
 
-use crate::scene::desc::{EmissionDesc, SpdDesc};
+use crate::error::Reason;
+use crate::desc::{EmissionDesc, SpdDesc};
 use crate::spectral::uplift::RgbIlluminantSpectrum;
 use crate::spectral::{blackbody, color, data, xyz, DenseSpectrum, Spectrum};
 use std::sync::Arc;
@@ -32,7 +33,7 @@ pub struct Photometric {
 }
 
 /// The emitted radiance, or an error message (the caller adds file and prim).
-pub fn radiance(e: &EmissionDesc, geometry: Photometric) -> Result<Spectrum, String> {
+pub fn radiance(e: &EmissionDesc, geometry: Photometric) -> Reason<Spectrum> {
     let shape = unit_shape(e)?;
     let luminance = luminance_nits(e, geometry)?;
     if !luminance.is_finite() || luminance < 0.0 {
@@ -44,7 +45,7 @@ pub fn radiance(e: &EmissionDesc, geometry: Photometric) -> Result<Spectrum, Str
 }
 
 /// The luminance in nits set by intensity/exposure/normalize or the photometric overrides.
-fn luminance_nits(e: &EmissionDesc, g: Photometric) -> Result<f32, String> {
+fn luminance_nits(e: &EmissionDesc, g: Photometric) -> Reason<f32> {
     if let Some(flux) = e.luminous_flux {
         let per = g
             .flux_per_nit
@@ -70,7 +71,7 @@ fn luminance_nits(e: &EmissionDesc, g: Photometric) -> Result<f32, String> {
 }
 
 /// The spectral shape with a luminance of 1 cd/m² for white (or the named SPD).
-pub fn unit_shape(e: &EmissionDesc) -> Result<Spectrum, String> {
+pub fn unit_shape(e: &EmissionDesc) -> Reason<Spectrum> {
     match &e.spd {
         Some(spd) => normalized_spd(spd),
         None => {
@@ -90,7 +91,7 @@ pub fn unit_shape(e: &EmissionDesc) -> Result<Spectrum, String> {
 }
 
 /// A named, blackbody or sampled SPD scaled to a luminance of 1 cd/m².
-fn normalized_spd(spd: &SpdDesc) -> Result<Spectrum, String> {
+fn normalized_spd(spd: &SpdDesc) -> Reason<Spectrum> {
     let dense = match spd {
         SpdDesc::Named(name) => data::illuminant(name).cloned().ok_or_else(|| {
             format!(

@@ -16,7 +16,6 @@ use crate::math::Frame;
 use crate::sampling::warp::{
     concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_sphere, uniform_triangle,
 };
-use crate::scene::Scene;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -29,21 +28,26 @@ pub struct SceneSphere {
 }
 
 impl SceneSphere {
-    /// The scene's bounding sphere grown to contain the analytic light shapes too.
-    pub fn of(scene: &Scene) -> SceneSphere {
-        let mut r = scene.radius;
-        for &i in &scene.shape_lights {
-            let (c, e) = match &scene.lights[i as usize] {
+    /// The sphere (`center`, `radius`) bounding the scene's triangles grown to contain the
+    /// analytic light shapes among `lights` too (1 % to spare).
+    pub fn enclosing<'a>(
+        center: Vec3,
+        radius: f32,
+        lights: impl IntoIterator<Item = &'a Light>,
+    ) -> SceneSphere {
+        let mut r = radius;
+        for light in lights {
+            let (c, e) = match light {
                 Light::Rect(l) => (l.corner, l.edge_u.length() + l.edge_v.length()),
                 Light::Disk(l) => (l.center, l.radius),
                 Light::Sphere(l) => (l.center, l.radius),
                 Light::Cylinder(l) => (l.center, l.radius + 0.5 * l.length),
                 _ => continue,
             };
-            r = r.max((c - scene.center).length() + e);
+            r = r.max((c - center).length() + e);
         }
         SceneSphere {
-            center: scene.center,
+            center,
             radius: r * 1.01,
         }
     }

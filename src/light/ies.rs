@@ -35,6 +35,7 @@
 //! 1000 700 0
 //! ```
 
+use crate::error::Reason;
 use std::f64::consts::PI as PI64;
 use std::path::Path;
 
@@ -75,7 +76,7 @@ impl<'a> Numbers<'a> {
     }
 
     /// The next number; `what` names it for the message when it is missing or malformed.
-    fn next(&mut self, what: &str) -> Result<(f64, usize), String> {
+    fn next(&mut self, what: &str) -> Reason<(f64, usize)> {
         let Some(t) = self.tokens.next() else {
             return Err(self.err(
                 self.last_line,
@@ -92,7 +93,7 @@ impl<'a> Numbers<'a> {
     }
 
     /// The next number as a positive count.
-    fn count(&mut self, what: &str) -> Result<(usize, usize), String> {
+    fn count(&mut self, what: &str) -> Reason<(usize, usize)> {
         let (v, line) = self.next(what)?;
         if v.fract() != 0.0 || !(1.0..=100_000.0).contains(&v) {
             return Err(self.err(line, format!("{what} must be a positive integer, not {v}")));
@@ -101,7 +102,7 @@ impl<'a> Numbers<'a> {
     }
 
     /// `n` numbers as angles in degrees, strictly increasing.
-    fn angles(&mut self, n: usize, what: &str) -> Result<Vec<(f64, usize)>, String> {
+    fn angles(&mut self, n: usize, what: &str) -> Reason<Vec<(f64, usize)>> {
         let mut out: Vec<(f64, usize)> = Vec::with_capacity(n);
         for i in 0..n {
             let (a, line) = self.next(&format!("{what} {} of {n}", i + 1))?;
@@ -121,7 +122,7 @@ impl<'a> Numbers<'a> {
 
 impl IesProfile {
     /// Reads and parses `path`.
-    pub fn read(path: &Path) -> Result<IesProfile, String> {
+    pub fn read(path: &Path) -> Reason<IesProfile> {
         let bytes = std::fs::read(path)
             .map_err(|e| format!("{}: cannot read the IES file: {e}", path.display()))?;
         // LM-63 files are ASCII; older ones are often Latin-1 in their keyword lines.
@@ -130,7 +131,7 @@ impl IesProfile {
     }
 
     /// Parses the text of an LM-63 file; `path` is only used in messages.
-    pub fn parse(text: &str, path: &Path) -> Result<IesProfile, String> {
+    pub fn parse(text: &str, path: &Path) -> Reason<IesProfile> {
         let mut numbers = numbers_after_tilt(text, path)?;
         let header = Header::read(&mut numbers)?;
         let vertical = numbers.angles(header.n_vertical, "vertical angle")?;
@@ -261,7 +262,7 @@ fn interval(xs: &[f32], x: f32) -> (usize, f32) {
 }
 
 /// The tokens after `TILT=NONE`, or an error naming the line.
-fn numbers_after_tilt<'a>(text: &'a str, path: &'a Path) -> Result<Numbers<'a>, String> {
+fn numbers_after_tilt<'a>(text: &'a str, path: &'a Path) -> Reason<Numbers<'a>> {
     let at = |line: usize, reason: &str| format!("{}:{line}: {reason}", path.display());
     let mut lines = text.lines().enumerate();
     let tilt_line = loop {
@@ -310,7 +311,7 @@ struct Header {
 }
 
 impl Header {
-    fn read(n: &mut Numbers) -> Result<Header, String> {
+    fn read(n: &mut Numbers) -> Reason<Header> {
         n.count("the number of lamps")?;
         n.next("lumens per lamp")?;
         let (candela_multiplier, line) = n.next("the candela multiplier")?;
@@ -364,7 +365,7 @@ impl Header {
 }
 
 /// Type C vertical angles start at 0 or 90 and end at 90 or 180 (LM-63-2002 §3.22).
-fn check_vertical_range(n: &Numbers, v: &[(f64, usize)]) -> Result<(), String> {
+fn check_vertical_range(n: &Numbers, v: &[(f64, usize)]) -> Reason<()> {
     let (first, last) = (v[0], v[v.len() - 1]);
     if first.0 != 0.0 && first.0 != 90.0 {
         return Err(n.err(
@@ -388,7 +389,7 @@ fn check_vertical_range(n: &Numbers, v: &[(f64, usize)]) -> Result<(), String> {
 }
 
 /// Type C horizontal angles: 0; 0–90; 0–180; 0–360; or 90–270 (LM-63-2002 §3.23).
-fn check_horizontal_range(n: &Numbers, h: &[(f64, usize)]) -> Result<(), String> {
+fn check_horizontal_range(n: &Numbers, h: &[(f64, usize)]) -> Reason<()> {
     let (first, last) = (h[0].0, h[h.len() - 1].0);
     let ok = match first {
         0.0 => matches!(last, 0.0 | 90.0 | 180.0 | 360.0),
@@ -452,7 +453,7 @@ fn expand_horizontal(h: &[f64], columns: Vec<Vec<f32>>) -> (Vec<f64>, Vec<Vec<f3
 mod tests {
     use super::*;
 
-    fn parse(text: &str) -> Result<IesProfile, String> {
+    fn parse(text: &str) -> Reason<IesProfile> {
         IesProfile::parse(text, Path::new("t.ies"))
     }
 

@@ -1,5 +1,5 @@
 //! Lights. Every light's emitted spectral radiance is in W·m⁻²·sr⁻¹·nm⁻¹, set from the UsdLux
-//! inputs exactly as DESIGN.md §2 says (see `emission.rs`). One kind per file, dispatched
+//! inputs exactly as docs/design.md §2 says (see `emission.rs`). One kind per file, dispatched
 //! through the closed [`Light`] enum.
 //!
 //! Area-like lights (rect, disk, sphere, cylinder) are analytic shapes: visible to camera and

@@ -24,8 +24,9 @@
 //! (1 − ff)·τ(λ) + ff. For photometry the tint counts by its luminance-weighted mean over the
 //! light's own spectrum, τ_v = ∫ L₀ τ ȳ / ∫ L₀ ȳ.
 
+use crate::error::Reason;
 use super::ies::IesProfile;
-use crate::scene::desc::ShapingDesc;
+use crate::desc::ShapingDesc;
 use crate::spectral::uplift::{self, Sigmoid};
 use crate::spectral::{data, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::{Mat3, Mat4, Vec3};
@@ -167,7 +168,7 @@ impl Shaping {
         to_world: &Mat4,
         base: &Spectrum,
         ies: Option<Arc<IesProfile>>,
-    ) -> Result<Shaping, String> {
+    ) -> Reason<Shaping> {
         if desc.focus_tint.iter().any(|c| !c.is_finite() || *c < 0.0) {
             return Err(format!(
                 "shaping:focusTint {:?} must be finite and non-negative",
@@ -440,7 +441,7 @@ fn sorted_within(v: Vec<f32>, lo: f32, hi: f32) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::desc::ShapingDesc;
+    use crate::desc::ShapingDesc;
 
     fn shaping(desc: ShapingDesc) -> Shaping {
         Shaping::new(&desc, &Mat4::IDENTITY, &Spectrum::Constant(1.0), None).unwrap()

@@ -24,7 +24,7 @@
 //!
 //! Roughness is squared (α = r²) as in the specification's reference implementation and in
 //! Burley 2012 (§5.4), where `roughness` is perceptually linear; `spectral:` materials take α
-//! directly (DESIGN.md §3). The plastic coat uses the exact dielectric Fresnel of `ior`
+//! directly (docs/design.md §3). The plastic coat uses the exact dielectric Fresnel of `ior`
 //! rather than the reference shader's Schlick fit of it; the spec's F0 of `specularColor`
 //! is Schlick by definition. Colours are uplifted with Jakob–Hanika 2019 and clamped to
 //! [0, 1]. The tangent frame of `normal` is ∂p/∂u (Gram–Schmidt against the shading normal)
@@ -39,7 +39,7 @@ use crate::bxdf::fresnel::diffuse_fresnel;
 use crate::bxdf::{
     Bsdf, Bxdf, CoatAlbedo, CoatFresnel, PlasticBxdf, PreviewBxdf, SpecularCoat, TrowbridgeReitz,
 };
-use crate::scene::desc::PreviewSurfaceDesc;
+use crate::desc::PreviewSurfaceDesc;
 use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
 use crate::texture::{TexCoord, TextureInput};
@@ -407,7 +407,7 @@ fn tangent_normal(n: [f32; 3]) -> Vec3 {
 mod tests {
     use super::*;
     use crate::bxdf::TransportMode;
-    use crate::scene::desc::{TextureChannel, Wrap};
+    use crate::desc::{TextureChannel, Wrap};
     use crate::spectral::uplift;
     use crate::texture::ImageTexture;
 

@@ -24,12 +24,12 @@ impl Frame {
     }
 
     #[inline]
-    pub fn to_local(&self, v: Vec3) -> Vec3 {
+    pub fn to_local(self, v: Vec3) -> Vec3 {
         Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 
     #[inline]
-    pub fn to_world(&self, v: Vec3) -> Vec3 {
+    pub fn to_world(self, v: Vec3) -> Vec3 {
         self.s * v.x + self.t * v.y + self.n * v.z
     }
 }

@@ -46,6 +46,7 @@ use exr::meta::header::LayerAttributes;
 use exr::meta::MetaData;
 
 use super::atomic::write_atomically;
+use crate::error::{Error, Reason, Result};
 
 /// Rec.709 / sRGB primaries (ITU-R BT.709-6, table 1 item 1.3) as CIE 1931 xy: red, green, blue.
 pub const REC709_PRIMARIES_XY: [[f32; 2]; 3] = [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]];
@@ -87,7 +88,7 @@ pub struct ExrImage {
 /// described in the module docs; `white_xy` is the white point of the `chromaticities`
 /// attribute (D65 for our RGB).
 ///
-/// The file is replaced atomically (see [`super::atomic`]). A NaN or infinite value is refused
+/// The file is replaced atomically (see `output::atomic`). A NaN or infinite value is refused
 /// with an error naming the first such pixel, and nothing is written.
 pub fn write(
     path: &Path,
@@ -97,8 +98,8 @@ pub fn write(
     xyz: &[[f32; 3]],
     white_xy: [f32; 2],
     meta: &ExrMetadata,
-) -> Result<(), String> {
-    let fail = |reason: String| format!("cannot write EXR {}: {reason}", path.display());
+) -> Result<()> {
+    let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
     check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
     check_finite(width, rgb, xyz).map_err(fail)?;
     if !white_xy.iter().all(|c| c.is_finite()) {
@@ -110,8 +111,8 @@ pub fn write(
 
 /// Reads an EXR file: all channels of its first layer by name, converted to f32, and all
 /// header attributes of its first part as strings.
-pub fn read(path: &Path) -> Result<ExrImage, String> {
-    let fail = |reason: String| format!("cannot read EXR {}: {reason}", path.display());
+pub fn read(path: &Path) -> Result<ExrImage> {
+    let fail = |reason: String| Error::io(path, format!("cannot read EXR: {reason}"));
     let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
     let attributes = read_attributes(&bytes).map_err(fail)?;
     let (width, height, channels) = read_channels(&bytes).map_err(fail)?;
@@ -126,7 +127,7 @@ pub fn read(path: &Path) -> Result<ExrImage, String> {
 type Channels = BTreeMap<String, Vec<f32>>;
 
 /// Every attribute of the first header, formatted as the module docs say.
-fn read_attributes(bytes: &[u8]) -> Result<BTreeMap<String, String>, String> {
+fn read_attributes(bytes: &[u8]) -> Reason<BTreeMap<String, String>> {
     let meta =
         MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| e.to_string())?;
     let header = meta.headers.first().ok_or("the file has no header")?;
@@ -137,7 +138,7 @@ fn read_attributes(bytes: &[u8]) -> Result<BTreeMap<String, String>, String> {
 }
 
 /// Width, height and the f32 samples of every channel of the first layer.
-fn read_channels(bytes: &[u8]) -> Result<(usize, usize, Channels), String> {
+fn read_channels(bytes: &[u8]) -> Reason<(usize, usize, Channels)> {
     let image = read_exr()
         .no_deep_data()
         .largest_resolution_level()
@@ -157,7 +158,7 @@ fn read_channels(bytes: &[u8]) -> Result<(usize, usize, Channels), String> {
     Ok((layer.size.width(), layer.size.height(), channels))
 }
 
-fn check_sizes(width: usize, height: usize, rgb: usize, xyz: usize) -> Result<(), String> {
+fn check_sizes(width: usize, height: usize, rgb: usize, xyz: usize) -> Reason<()> {
     if width == 0 || height == 0 {
         return Err(format!("the image is empty ({width}×{height} pixels)"));
     }
@@ -173,7 +174,7 @@ fn check_sizes(width: usize, height: usize, rgb: usize, xyz: usize) -> Result<()
 }
 
 /// Finds the first pixel (row-major; R, G, B, X, Y, Z within a pixel) with a NaN or Inf.
-fn check_finite(width: usize, rgb: &[[f32; 3]], xyz: &[[f32; 3]]) -> Result<(), String> {
+fn check_finite(width: usize, rgb: &[[f32; 3]], xyz: &[[f32; 3]]) -> Reason<()> {
     for (index, (rgb, xyz)) in rgb.iter().zip(xyz).enumerate() {
         let values = rgb.iter().chain(xyz);
         if let Some((name, value)) = CHANNEL_NAMES
@@ -404,7 +405,9 @@ mod tests {
         fs::write(&path, b"previous render").unwrap();
         let (mut rgb, mut xyz) = test_image();
         plant(&mut rgb, &mut xyz);
-        let error = write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap_err();
+        let error = write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta())
+            .unwrap_err()
+            .to_string();
         assert!(error.contains(&path.display().to_string()), "{error}");
         assert!(!error.contains('\n'), "{error}");
         assert_eq!(fs::read(&path).unwrap(), b"previous render");
@@ -458,7 +461,9 @@ mod tests {
         let dir = temp_dir("missing");
         let path = dir.join("no-such-dir").join("image.exr");
         let (rgb, xyz) = test_image();
-        let error = write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap_err();
+        let error = write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta())
+            .unwrap_err()
+            .to_string();
         assert!(error.contains(&path.display().to_string()), "{error}");
         assert!(!error.contains('\n'), "{error}");
         assert!(entries(&dir).is_empty());
@@ -470,7 +475,9 @@ mod tests {
         let dir = temp_dir("sizes");
         let path = dir.join("image.exr");
         let (rgb, xyz) = test_image();
-        let error = write(&path, 2, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap_err();
+        let error = write(&path, 2, 2, &rgb, &xyz, D65_XY, &test_meta())
+            .unwrap_err()
+            .to_string();
         assert!(error.contains("4 pixels") && error.contains(&path.display().to_string()));
         assert!(write(&path, 0, 6, &[], &[], D65_XY, &test_meta()).is_err());
         assert!(entries(&dir).is_empty());
@@ -483,10 +490,12 @@ mod tests {
         let path = dir.join("not-an.exr");
         assert!(read(&path)
             .unwrap_err()
+            .to_string()
             .contains(&path.display().to_string()));
         fs::write(&path, b"not an exr file").unwrap();
         assert!(read(&path)
             .unwrap_err()
+            .to_string()
             .contains(&path.display().to_string()));
         fs::remove_dir_all(&dir).unwrap();
     }

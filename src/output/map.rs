@@ -6,23 +6,26 @@
 //! Cell (i, j) is centred at origin + (i + ½)/NU · u + (j + ½)/NV · v (stage coordinates, as
 //! given on the command line). In the image u runs to the right and v upwards; between cell
 //! centres the colours are interpolated bilinearly and the isolines are traced by marching
-//! squares on the same lattice ([`contour`]). Each file is replaced atomically
-//! ([`super::atomic`]); PNG encoding goes through `crate::imageio`.
+//! squares on the same lattice (`map/contour.rs`). Each file is replaced atomically
+//! (`output::atomic`); PNG encoding goes through `crate::imageio`.
 //!
 //! ```text
 //! i,j,x,y,z,lux,ci95
 //! 0,0,0.25,0.0,0.25,312.4,1.9
 //! ```
 
-pub mod canvas;
-pub mod colormap;
-pub mod contour;
+pub(crate) mod canvas;
+pub(crate) mod colormap;
+pub(crate) mod contour;
 
 use super::atomic::write_atomically;
+use super::json;
+use crate::error::{Error, Result};
 use crate::imageio::encode_png_rgb8;
-use crate::sensor::meter::Reading;
+use crate::session::Reading;
 use canvas::{text_width, Canvas, GLYPH_H};
 use colormap::{is_light, viridis};
+use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -47,6 +50,49 @@ pub struct Summary {
     pub e_max: f64,
     /// E_min / E_avg (0 when E_avg is 0).
     pub u0: f64,
+}
+
+/// `BASE.json`: the grid, EN 12464-1's figures (at the top level and as `summary`), cells.
+#[derive(Serialize)]
+struct MapJson {
+    kind: &'static str,
+    unit: &'static str,
+    grid: GridJson,
+    #[serde(flatten)]
+    figures: Figures,
+    summary: Figures,
+    cells: Vec<CellJson>,
+}
+
+#[derive(Serialize)]
+struct GridJson {
+    origin: [f64; 3],
+    u: [f64; 3],
+    v: [f64; 3],
+    n: [usize; 2],
+    normal: [f64; 3],
+}
+
+#[derive(Clone, Copy, Serialize)]
+struct Figures {
+    #[serde(rename = "E_min")]
+    e_min: f64,
+    #[serde(rename = "E_avg")]
+    e_avg: f64,
+    #[serde(rename = "E_max")]
+    e_max: f64,
+    #[serde(rename = "U0")]
+    u0: f64,
+}
+
+#[derive(Serialize)]
+struct CellJson {
+    i: usize,
+    j: usize,
+    at: [f64; 3],
+    value: f64,
+    ci95: f64,
+    samples: u64,
 }
 
 impl IlluminanceMap {
@@ -104,53 +150,53 @@ impl IlluminanceMap {
     }
 
     /// The grid, the summary (also at top level, for simple consumers) and every cell.
-    pub fn json(&self) -> String {
+    pub fn json(&self) -> Result<String> {
         let sm = self.summary();
-        let figures = format!(
-            "\"E_min\": {}, \"E_avg\": {}, \"E_max\": {}, \"U0\": {}",
-            num(sm.e_min),
-            num(sm.e_avg),
-            num(sm.e_max),
-            num(sm.u0)
-        );
-        let mut s = String::from("{\n  \"kind\": \"illuminance_map\",\n  \"unit\": \"lx\",\n");
-        s += &format!(
-            "  \"grid\": {{\"origin\": {}, \"u\": {}, \"v\": {}, \"n\": [{}, {}], \"normal\": {}}},\n",
-            vec3(self.origin),
-            vec3(self.u),
-            vec3(self.v),
-            self.nu,
-            self.nv,
-            vec3(self.normal)
-        );
-        s += &format!("  {figures},\n  \"summary\": {{{figures}}},\n  \"cells\": [\n");
+        let figures = Figures {
+            e_min: sm.e_min,
+            e_avg: sm.e_avg,
+            e_max: sm.e_max,
+            u0: sm.u0,
+        };
         let mut cells = Vec::with_capacity(self.readings.len());
         for j in 0..self.nv {
             for i in 0..self.nu {
                 let r = &self.readings[j * self.nu + i];
-                cells.push(format!(
-                    "    {{\"i\": {i}, \"j\": {j}, \"at\": {}, \"value\": {}, \"ci95\": {}, \"samples\": {}}}",
-                    vec3(self.centre(i, j)),
-                    num(r.value),
-                    num(r.ci95),
-                    r.samples
-                ));
+                cells.push(CellJson {
+                    i,
+                    j,
+                    at: self.centre(i, j),
+                    value: r.value,
+                    ci95: r.ci95,
+                    samples: r.samples,
+                });
             }
         }
-        s += &cells.join(",\n");
-        s += "\n  ]\n}\n";
-        s
+        json::pretty(&MapJson {
+            kind: "illuminance_map",
+            unit: "lx",
+            grid: GridJson {
+                origin: self.origin,
+                u: self.u,
+                v: self.v,
+                n: [self.nu, self.nv],
+                normal: self.normal,
+            },
+            figures,
+            summary: figures,
+            cells,
+        })
     }
 
     /// Writes `BASE.csv`, `BASE.json` and `BASE.png`; returns their paths.
-    pub fn write(&self, base: &Path) -> Result<[PathBuf; 3], String> {
+    pub fn write(&self, base: &Path) -> Result<[PathBuf; 3]> {
         let paths = ["csv", "json", "png"].map(|ext| with_suffix(base, ext));
-        let fail = |p: &Path, e: std::io::Error| format!("cannot write {}: {e}", p.display());
+        let fail = |p: &Path, e: std::io::Error| Error::io(p, format!("cannot write: {e}"));
         let text = |p: &Path, s: String| {
             write_atomically(p, |f| f.write_all(s.as_bytes())).map_err(|e| fail(p, e))
         };
         text(&paths[0], self.csv())?;
-        text(&paths[1], self.json())?;
+        text(&paths[1], self.json()?)?;
         let img = self.image();
         let (w, h) = (img.width as u32, img.height as u32);
         write_atomically(&paths[2], |f| encode_png_rgb8(f, &img.bytes(), w, h))
@@ -455,9 +501,12 @@ mod tests {
             csv.lines().nth(2).unwrap(),
             "1,0,0.75,0.0,0.16666666666666666,110.0,1.1"
         );
-        let json = m.json();
-        assert!(json.contains("\"U0\": ") && json.contains("\"summary\": {\"E_min\": 100.0"));
-        assert_eq!(json.matches("\"samples\"").count(), 12);
+        let json: serde_json::Value = serde_json::from_str(&m.json().unwrap()).unwrap();
+        assert_eq!(json["summary"]["E_min"], 100.0);
+        assert_eq!(json["U0"], json["summary"]["U0"]);
+        assert_eq!(json["grid"]["n"], serde_json::json!([4, 3]));
+        assert_eq!(json["cells"].as_array().unwrap().len(), 12);
+        assert_eq!(json["cells"][1]["value"], 110.0);
     }
 
     #[test]

@@ -1,7 +1,7 @@
-//! Writing results: EXR images (only `exr.rs` names the exr crate), PNG previews and
-//! illuminance maps.
+//! Writing results: EXR images (only `exr.rs` names the exr crate), PNG previews,
+//! illuminance maps and JSON documents (only `json.rs` names serde_json).
 
-pub mod atomic;
+internal_modules!(atomic, json);
 pub mod exr;
 pub mod map;
 pub mod png;

@@ -9,18 +9,19 @@
 use std::path::Path;
 
 use super::atomic::write_atomically;
+use crate::error::{Error, Reason, Result};
 use crate::imageio::encode_png_rgb8;
 
 /// Writes `rgb` (linear, row-major, top row first, `width * height` pixels) scaled by
-/// `2^exposure` as an 8-bit sRGB PNG, replacing `path` atomically (see [`super::atomic`]).
+/// `2^exposure` as an 8-bit sRGB PNG, replacing `path` atomically (see `output::atomic`).
 pub fn write_preview(
     path: &Path,
     width: usize,
     height: usize,
     rgb: &[[f32; 3]],
     exposure: f32,
-) -> Result<(), String> {
-    let fail = |reason: String| format!("cannot write PNG {}: {reason}", path.display());
+) -> Result<()> {
+    let fail = |reason: String| Error::io(path, format!("cannot write PNG: {reason}"));
     let (w, h) = check_size(width, height, rgb.len()).map_err(fail)?;
     let bytes = encode_srgb8(rgb, exposure);
     write_atomically(path, |file| encode_png_rgb8(file, &bytes, w, h))
@@ -28,7 +29,7 @@ pub fn write_preview(
 }
 
 /// Checks that `pixels` matches a non-empty `width × height` that PNG can hold (u32 sides).
-fn check_size(width: usize, height: usize, pixels: usize) -> Result<(u32, u32), String> {
+fn check_size(width: usize, height: usize, pixels: usize) -> Reason<(u32, u32)> {
     if width == 0 || height == 0 {
         return Err(format!("the image is empty ({width}×{height} pixels)"));
     }
@@ -162,10 +163,14 @@ mod tests {
     fn errors_name_the_path_and_leave_nothing_behind() {
         let dir = temp_dir("errors");
         let missing = dir.join("no-such-dir").join("preview.png");
-        let error = write_preview(&missing, 1, 1, &[[0.0; 3]], 0.0).unwrap_err();
+        let error = write_preview(&missing, 1, 1, &[[0.0; 3]], 0.0)
+            .unwrap_err()
+            .to_string();
         assert!(error.contains(&missing.display().to_string()), "{error}");
         let path = dir.join("preview.png");
-        let error = write_preview(&path, 2, 2, &[[0.0; 3]], 0.0).unwrap_err();
+        let error = write_preview(&path, 2, 2, &[[0.0; 3]], 0.0)
+            .unwrap_err()
+            .to_string();
         assert!(
             error.contains(&path.display().to_string()) && !error.contains('\n'),
             "{error}"

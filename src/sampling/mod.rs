@@ -1,6 +1,5 @@
 //! Random numbers and the warps from the unit square to directions and shapes.
 
-pub mod chi2;
 pub mod distribution;
 pub mod rng;
 pub mod warp;

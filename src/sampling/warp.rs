@@ -1,6 +1,6 @@
 //! Warps from [0,1)² to shapes and directions, with their pdfs.
 
-use crate::math::{safe_sqrt, INV_2PI, INV_4PI, INV_PI};
+use crate::math::{safe_sqrt, INV_4PI, INV_PI};
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
@@ -43,7 +43,9 @@ pub fn uniform_sphere(u: [f32; 2]) -> Vec3 {
 
 pub const UNIFORM_SPHERE_PDF: f32 = INV_4PI;
 
-/// Uniform direction in the cone of half-angle θmax around +Z (PBR 4ed §A.5.4).
+/// Uniform direction in the cone of half-angle θmax around +Z (PBR 4ed §A.5.4); the lights
+/// use [`uniform_cone_gap`], this form is for the χ² tests.
+#[cfg(any(test, feature = "testing"))]
 #[inline]
 pub fn uniform_cone(u: [f32; 2], cos_theta_max: f32) -> Vec3 {
     // 1 − cos θmax is exact in f32 for cos θmax ≥ 1/2 (Sterbenz).
@@ -67,9 +69,10 @@ pub fn uniform_cone_gap(u: [f32; 2], one_minus_cos_max: f32) -> Vec3 {
 }
 
 /// pdf of [`uniform_cone`]: 1 / (2π (1 − cos θmax)).
+#[cfg(any(test, feature = "testing"))]
 #[inline]
 pub fn uniform_cone_pdf(cos_theta_max: f32) -> f32 {
-    INV_2PI / (1.0 - cos_theta_max)
+    crate::math::INV_2PI / (1.0 - cos_theta_max)
 }
 
 /// Uniform barycentrics on a triangle (PBR 4ed §A.5.5, the square-root parameterisation of

@@ -1,7 +1,8 @@
 //! From the plain [`SceneDescription`] to the render [`Scene`]: spectra resolved and
 //! validated, lights built in absolute units, triangles put behind the BVH, a camera chosen.
 
-use super::desc::*;
+use crate::error::Reason;
+use crate::desc::*;
 use super::render_scene::{Mesh, Scene, Summary, TriRef};
 use crate::accel::bvh::Bvh;
 use crate::bxdf::TrowbridgeReitz;
@@ -25,7 +26,7 @@ use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
 use crate::spectral::{data, DenseSpectrum, Spectrum};
 use crate::texture::{TextureCache, TextureInput};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -114,7 +115,7 @@ fn indices_where(lights: &[Light], f: impl Fn(&Light) -> bool) -> Vec<u32> {
 }
 
 /// A reflectance spectrum from its description, validated to lie in [0, 1].
-pub fn reflectance(s: &SpectrumDesc) -> std::result::Result<Spectrum, String> {
+pub fn reflectance(s: &SpectrumDesc) -> Reason<Spectrum> {
     let dense = match s {
         SpectrumDesc::Rgb(rgb) => {
             if rgb.iter().any(|c| !c.is_finite()) {
@@ -142,7 +143,7 @@ fn material(
     m: &MaterialDesc,
     textures: &mut TextureCache,
     warnings: &mut Vec<String>,
-) -> std::result::Result<Material, String> {
+) -> Reason<Material> {
     let path = &m.prim_path;
     let texture = |name: &str, cache: &mut TextureCache| {
         m.texture(name).map(|t| texture_input(cache, t)).transpose()
@@ -204,7 +205,7 @@ fn material(
 fn color_input(
     r: &SpectrumDesc,
     texture: Option<TextureInput>,
-) -> std::result::Result<ColorInput, String> {
+) -> Reason<ColorInput> {
     Ok(match texture {
         Some(t) => ColorInput::Texture(t),
         None => ColorInput::Constant(reflectance(r)?),
@@ -227,7 +228,7 @@ fn dielectric(
     roughness: (f32, Option<TextureInput>),
     thin: bool,
     warnings: &mut Vec<String>,
-) -> std::result::Result<Material, String> {
+) -> Reason<Material> {
     let ior = ior(i)?;
     let alpha = non_negative("roughness", roughness.0)?;
     if !thin {
@@ -272,7 +273,7 @@ fn preview_surface(
     ps: &PreviewSurfaceDesc,
     textures: &mut TextureCache,
     warnings: &mut Vec<String>,
-) -> std::result::Result<Material, String> {
+) -> Reason<Material> {
     let n = Vec3::from_array(ps.normal);
     if n.try_normalize().is_none_or(|n| n.z <= 0.0) {
         warnings.push(format!(
@@ -317,7 +318,7 @@ fn decoded_as_srgb(tex: &TextureDesc) -> bool {
 fn texture_input(
     cache: &mut TextureCache,
     tex: &TextureDesc,
-) -> std::result::Result<TextureInput, String> {
+) -> Reason<TextureInput> {
     cache
         .input(tex)
         .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))
@@ -346,7 +347,7 @@ fn emissive_textures(
 }
 
 /// A roughness (α or σ) that must be ≥ 0.
-fn non_negative(name: &str, v: f32) -> std::result::Result<f32, String> {
+fn non_negative(name: &str, v: f32) -> Reason<f32> {
     if v.is_finite() && v >= 0.0 {
         Ok(v)
     } else {
@@ -362,7 +363,7 @@ fn conductor_spectrum(
     s: &SpectrumDesc,
     what: &str,
     k_part: bool,
-) -> std::result::Result<Spectrum, String> {
+) -> Reason<Spectrum> {
     let dense = match s {
         SpectrumDesc::Named(token) => match (data::metal(token), data::named(token)) {
             (Some((n, k)), _) => if k_part { k } else { n }.clone(),
@@ -397,7 +398,7 @@ fn conductor_spectrum(
 }
 
 /// A dielectric's IOR as Sellmeier coefficients (a constant is the one-term form B₁ = n² − 1).
-fn ior(i: &IorDesc) -> std::result::Result<Sellmeier, String> {
+fn ior(i: &IorDesc) -> Reason<Sellmeier> {
     let s = match i {
         IorDesc::Constant(n) if n.is_finite() && *n > 0.0 => Sellmeier::constant(*n),
         IorDesc::Constant(n) => return Err(format!("inputs:ior must be positive, got {n}")),
@@ -435,7 +436,7 @@ fn mesh(
     emissive: &[Option<Arc<TextureInput>>],
     default_material: u32,
     lights: &mut Vec<Light>,
-) -> std::result::Result<Mesh, String> {
+) -> Reason<Mesh> {
     let n = m.positions.len();
     if let Some(bad) = m.indices.iter().flatten().find(|&&i| i as usize >= n) {
         return Err(format!(
@@ -506,7 +507,7 @@ fn corner_uvs(m: &MeshDesc, k: usize) -> [Vec2; 3] {
 fn mesh_emission(
     desc: &SceneDescription,
     m: &MeshDesc,
-) -> std::result::Result<Option<(Spectrum, bool)>, String> {
+) -> Reason<Option<(Spectrum, bool)>> {
     let area: f32 = m
         .indices
         .iter()
@@ -594,7 +595,7 @@ fn uniform_scale(m: &Mat4) -> f32 {
 }
 
 /// A UsdLux light in absolute units, with its shaping.
-fn light(l: &LightDesc) -> std::result::Result<Light, String> {
+fn light(l: &LightDesc) -> Reason<Light> {
     Ok(match &l.kind {
         LightKind::Rect { width, height } => rect(l, *width, *height)?,
         LightKind::Disk { radius } => disk(l, *radius)?,
@@ -607,7 +608,7 @@ fn light(l: &LightDesc) -> std::result::Result<Light, String> {
 
 /// RectLight: the rectangle's corner and edges in world space, emitting along world −Z of
 /// the light (−(edge_u × edge_v)).
-fn rect(l: &LightDesc, width: f32, height: f32) -> std::result::Result<Light, String> {
+fn rect(l: &LightDesc, width: f32, height: f32) -> Reason<Light> {
     let m = &l.to_world;
     let corner = m.transform_point3(Vec3::new(-0.5 * width, -0.5 * height, 0.0));
     let eu = m.transform_vector3(Vec3::new(width, 0.0, 0.0));
@@ -627,7 +628,7 @@ fn rect(l: &LightDesc, width: f32, height: f32) -> std::result::Result<Light, St
 }
 
 /// DiskLight: radius scaled by the transform's uniform scale, emitting along local −Z.
-fn disk(l: &LightDesc, radius: f32) -> std::result::Result<Light, String> {
+fn disk(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
     let r = radius * uniform_scale(m);
     let area = PI * r * r;
@@ -649,7 +650,7 @@ fn disk(l: &LightDesc, radius: f32) -> std::result::Result<Light, String> {
 }
 
 /// SphereLight: Φ = π · 4πr² · L, projected area πr² in every direction.
-fn sphere(l: &LightDesc, radius: f32) -> std::result::Result<Light, String> {
+fn sphere(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
     let r = (radius * uniform_scale(m)).max(1e-6);
     let area = 4.0 * PI * r * r;
@@ -671,7 +672,7 @@ fn sphere(l: &LightDesc, radius: f32) -> std::result::Result<Light, String> {
 /// CylinderLight along local X: the length scales with the X axis, the radius with the
 /// geometric mean of the Y and Z scales (exact for transforms that keep the cross-section
 /// round). Φ = π · 2πrℓ · L; projected area 2rℓ sin β at angle β from the axis.
-fn cylinder(l: &LightDesc, radius: f32, length: f32) -> std::result::Result<Light, String> {
+fn cylinder(l: &LightDesc, radius: f32, length: f32) -> Reason<Light> {
     let m = &l.to_world;
     let axis = m.transform_vector3(Vec3::X);
     let ry = m.transform_vector3(Vec3::Y).length();
@@ -707,7 +708,7 @@ fn shaped(
     l: &LightDesc,
     unshaped: Photometric,
     projected_area: impl Fn(Vec3) -> f32,
-) -> std::result::Result<(Option<Shaping>, Photometric), String> {
+) -> Reason<(Option<Shaping>, Photometric)> {
     let Some(desc) = &l.shaping else {
         return Ok((None, unshaped));
     };
@@ -735,7 +736,7 @@ fn shaped(
 
 /// DistantLight with the UsdLux sizeFactor: normalize divides by π sin²θmax (θmax ≤ π/2) or
 /// (2 − sin²θmax) π beyond; θmax = 0 is a delta light whose luminance is the illuminance.
-fn distant(l: &LightDesc, angle_deg: f32) -> std::result::Result<Light, String> {
+fn distant(l: &LightDesc, angle_deg: f32) -> Reason<Light> {
     let theta_max = (0.5 * angle_deg).to_radians().clamp(0.0, PI);
     let s2 = theta_max.sin().powi(2);
     let size = if theta_max == 0.0 {
@@ -761,7 +762,7 @@ fn distant(l: &LightDesc, angle_deg: f32) -> std::result::Result<Light, String> 
     }))
 }
 
-fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> std::result::Result<Light, String> {
+fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> Reason<Light> {
     let world_to_local = Mat3::from_mat4(l.to_world).inverse();
     let g = Photometric {
         area: None,
@@ -780,7 +781,7 @@ fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> std::result::Result
     if e.spd.is_some() {
         return Err("spectral:emission cannot be combined with a dome texture".into());
     }
-    let img = imageio::read_rgb_linear(path)?;
+    let img = imageio::read_rgb_linear(path).map_err(|e| e.to_string())?;
     let tint = e.color;
     let texels: Vec<RgbIlluminantSpectrum> = img
         .pixels
@@ -855,7 +856,7 @@ fn camera(
         )
     });
     if w == 0 || h == 0 {
-        return Err(Error::file(
+        return Err(Error::scene(
             &desc.source,
             format!("resolution {w}x{h} must be positive"),
         ));

@@ -19,7 +19,7 @@
 
 use crate::geometry::Ray;
 use crate::sampling::warp::concentric_disk;
-use crate::scene::desc::CameraDesc;
+use crate::desc::CameraDesc;
 use glam::{Mat4, Quat, Vec3};
 use std::f32::consts::PI;
 

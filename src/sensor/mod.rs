@@ -1,8 +1,11 @@
-//! Sensors: the camera and the film it exposes, and the light meters (no film).
+//! Sensors: the camera and the film it exposes, the light meters (no film), and the sensor
+//! end of a path (`endpoint.rs`: the camera or a meter, as the bidirectional integrators see
+//! either).
 
 pub mod camera;
+pub mod endpoint;
 pub mod film;
 pub mod meter;
 
 pub use camera::Camera;
-pub use film::Film;
+pub use endpoint::{Sensor, SensorRay, SensorSample};

@@ -3,7 +3,7 @@
 //! The matrices are derived from the Rec.709 primaries (ITU-R BT.709-6) and the white point
 //! *of our own D65 table integrated against our own CIE 1931 tables*, not from the rounded
 //! (0.3127, 0.3290). So D65 white of luminance Y maps to RGB (Y, Y, Y) exactly, and
-//! the reflectance round trip of DESIGN.md §2 is not spoiled by a 1e-4 white-point mismatch
+//! the reflectance round trip of docs/design.md §2 is not spoiled by a 1e-4 white-point mismatch
 //! (the method of SMPTE RP 177-1993).
 
 use super::{data, xyz};

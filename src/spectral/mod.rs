@@ -1,7 +1,7 @@
 //! Spectral quantities: sampled wavelengths and spectra, tabulated data, CIE observer,
 //! RGB uplift and photometry.
 //!
-//! Conventions: wavelengths in nm over [`LAMBDA_MIN`, `LAMBDA_MAX`] (DESIGN.md §2); radiance
+//! Conventions: wavelengths in nm over [`LAMBDA_MIN`, `LAMBDA_MAX`] (docs/design.md §2); radiance
 //! spectra in W·m⁻²·sr⁻¹·nm⁻¹, so that luminance = K_m ∫ L(λ) ȳ(λ) dλ in cd/m².
 
 pub mod blackbody;
@@ -21,9 +21,9 @@ pub use sampled::SampledSpectrum;
 pub use spectrum::Spectrum;
 pub use wavelengths::SampledWavelengths;
 
-/// Shortest wavelength simulated, nm (DESIGN.md §2).
+/// Shortest wavelength simulated, nm (docs/design.md §2).
 pub const LAMBDA_MIN: f32 = 360.0;
-/// Longest wavelength simulated, nm (DESIGN.md §2).
+/// Longest wavelength simulated, nm (docs/design.md §2).
 pub const LAMBDA_MAX: f32 = 830.0;
 /// Wavelengths carried per path: a hero plus three rotations.
 pub const N_LAMBDA: usize = 4;

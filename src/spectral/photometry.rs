@@ -2,7 +2,7 @@
 //! chromaticity and correlated colour temperature (CCT) — the spectral half of the
 //! `spectral-render lights` report (the geometric half is `light::report`).
 //!
-//! Conventions (DESIGN.md §2): spectra on the 1 nm grid over 360–830 nm, integrals by the
+//! Conventions (docs/design.md §2): spectra on the 1 nm grid over 360–830 nm, integrals by the
 //! trapezoidal rule on that grid (what `numpy.trapezoid` does in colour-science), K_m = 683 lm/W.
 //!
 //! | quantity | formula | colour-science 0.4.7 equivalent |

@@ -12,7 +12,7 @@
 //! coefficients are interpolated trilinearly, as in the paper's runtime code and pbrt-v4.
 //!
 //! That lookup alone reproduces the RGB under D65 only to ~5e-3 (interpolation between nodes);
-//! DESIGN.md §2 asks for 1e-3. So [`reflectance`] finishes it with a few Newton steps on the
+//! docs/design.md §2 asks for 1e-3. So [`reflectance`] finishes it with a few Newton steps on the
 //! renderer's own colorimetry (the same 1 nm CIE tables, D65 and Rec.709 matrix that
 //! `xyz::dense_to_xyz` and `color::xyz_to_rgb` use), which leaves ~1e-5, the precision of f32
 //! coefficients. Greys are exact.
@@ -20,7 +20,7 @@
 //! Illuminants follow pbrt-v4's `RGBIlluminantSpectrum`: scale · s(λ) · D65(λ) with
 //! scale = 2·max(rgb) and s the reflectance of rgb / scale, so the sigmoid never saturates;
 //! here D65 is normalised to 1 cd/m² ([`d65_normalized`]) so that the colour (1, 1, 1) is D65
-//! white of luminance 1 cd/m² (DESIGN.md §2).
+//! white of luminance 1 cd/m² (docs/design.md §2).
 
 use super::dense::DenseSpectrum;
 use super::{color, data, xyz, K_M};
@@ -119,7 +119,7 @@ fn decode(bytes: &[u8]) -> Table {
 /// table (which alone round-trips only to ~5e-3: see `spectra/rgb2spec/srgb_64.md`) is polished
 /// by Newton's method on the renderer's own colorimetry (`xyz::dense_to_xyz`,
 /// `color::xyz_to_rgb`), so that the reflectance seen under D65 reproduces `rgb` to ~1e-5
-/// (the f32 coefficients' precision) — DESIGN.md §2 asks for 1e-3. Costs ~10 µs (up to ~0.1 ms
+/// (the f32 coefficients' precision) — docs/design.md §2 asks for 1e-3. Costs ~10 µs (up to ~0.1 ms
 /// within a few percent of white): call it when building a scene, not per sample.
 pub fn reflectance(rgb: [f32; 3]) -> Sigmoid {
     let rgb = clamp_rgb(rgb);

@@ -48,8 +48,9 @@ mod mip;
 
 pub use coord::{TexCoord, TextureFilter};
 
+use crate::error::Reason;
 use crate::imageio;
-use crate::scene::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
+use crate::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
 use glam::{Affine2, Vec2};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -87,8 +88,8 @@ impl ImageTexture {
     }
 
     /// Reads `path` and decodes it per `color_space` (auto: sRGB for 8/16-bit, raw for float).
-    pub fn load(path: &Path, color_space: ColorSpace) -> Result<Self, String> {
-        let img = imageio::read_rgba_raw(path)?;
+    pub fn load(path: &Path, color_space: ColorSpace) -> Reason<Self> {
+        let img = imageio::read_rgba_raw(path).map_err(|e| e.to_string())?;
         let srgb = match color_space {
             ColorSpace::Srgb => true,
             ColorSpace::Raw => false,
@@ -270,7 +271,7 @@ pub struct TextureCache {
 
 impl TextureCache {
     /// The [`TextureInput`] of `desc`, loading its image on first use.
-    pub fn input(&mut self, desc: &TextureDesc) -> Result<TextureInput, String> {
+    pub fn input(&mut self, desc: &TextureDesc) -> Reason<TextureInput> {
         let key = (desc.file.clone(), desc.color_space);
         let image = match self.images.get(&key) {
             Some(image) => image.clone(),
@@ -292,10 +293,12 @@ impl TextureCache {
     }
 
     /// How many distinct images are loaded.
+    #[cfg(any(test, feature = "testing"))]
     pub fn len(&self) -> usize {
         self.images.len()
     }
 
+    #[cfg(any(test, feature = "testing"))]
     pub fn is_empty(&self) -> bool {
         self.images.is_empty()
     }

@@ -2,8 +2,15 @@
 //! directory, rendered through the library, and simple statistics on the result.
 #![allow(dead_code)]
 
-use spectral_render::render::{self, RenderOptions, RenderOutput};
+pub mod cli;
+pub mod stages;
+#[allow(unused_imports)]
+pub use cli::*;
+#[allow(unused_imports)]
+pub use stages::*;
+
 use spectral_render::scene;
+use spectral_render::session::{self, RenderOptions, RenderOutput};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -44,7 +51,7 @@ pub fn render_file(
         max_depth,
         ..Default::default()
     };
-    let out = render::render(&scene, &opts).unwrap();
+    let out = session::render(&scene, &opts).unwrap();
     assert_finite(&out);
     out
 }

@@ -19,6 +19,7 @@ use crate::bxdf::TransportMode;
 use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
 use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
 use crate::sampling::Sampler;
+use crate::sensor::SensorSample;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
 
@@ -69,9 +70,7 @@ pub fn vertex_to_sensor(
     }
     let value = y.beta * f * (y.cos_shading(ss.wi) * ss.we_over_pdf);
     if value.is_black()
-        || ctx
-            .sensor
-            .occluded(ctx.scene, y.p, y.p_error, y.ng, &ss, None)
+        || sensor_occluded(ctx, y.p, y.p_error, y.ng, &ss, None)
     {
         return None;
     }
@@ -122,9 +121,7 @@ pub fn origin_to_sensor(
     let value = le * (cos * ss.we_over_pdf / pos_a);
     let skip = Some(o.light);
     if value.is_black()
-        || ctx
-            .sensor
-            .occluded(ctx.scene, o.p, o.p_error, o.n, &ss, skip)
+        || sensor_occluded(ctx, o.p, o.p_error, o.n, &ss, skip)
     {
         return None;
     }
@@ -377,4 +374,18 @@ pub fn escaped_weight(ctx: &BidirContext, walk: &Walk, light: u32, d: Vec3) -> f
     let direct_w = direct_pdf_w(ctx.scene, light, &walk.prev, d, &far);
     ctx.mis
         .emitter_hit(&walk.mis, direct_w, pmf * pdf.pos_a * pdf.dir_w)
+}
+
+/// True when something blocks the segment from `p` (error `p_error`, geometric normal `n`) to
+/// the sensor sample `ss`; `skip` names a light shape that does not count (the one `p` lies on).
+fn sensor_occluded(
+    ctx: &BidirContext,
+    p: Vec3,
+    p_error: Vec3,
+    n: Vec3,
+    ss: &SensorSample,
+    skip: Option<u32>,
+) -> bool {
+    let (ray, t) = ctx.sensor.shadow_ray(p, p_error, n, ss);
+    ctx.scene.occluded(&ray, t, skip)
 }

@@ -7,7 +7,6 @@
 //! | `vertex.rs` | [`PathVertex`] (y_i, z_i) and [`LightOrigin`] (y_0); shading-normal correction |
 //! | `subpath.rs` | [`Walk`] (loop-carried state), [`trace_light_subpath`], [`BidirContext`] |
 //! | `connect.rs` | the techniques: s = 0, t = 1, s = 1 and general connections |
-//! | `sensor.rs` | the sensor vertex z_0: the camera or a light meter |
 //! | `splat.rs` | t = 1: the light subpath connected to the sensor |
 //! | `record.rs` | a sample's contributions → tile sums and splats |
 //! | `strategies.rs` | the per-(s, t) decomposition written by `--strategies` |
@@ -24,19 +23,17 @@
 pub mod connect;
 pub mod mis;
 pub mod record;
-pub mod sensor;
 pub mod splat;
 pub mod strategies;
 pub mod subpath;
 pub mod vertex;
 
 pub use connect::Contribution;
-pub use mis::{Mis, MisHeuristic, SubpathMis};
+pub use mis::{Mis, MisHeuristic};
 pub use record::{SampleRecord, TileAccumulator};
-pub use sensor::{Sensor, SensorRay};
 pub use splat::splat_light_subpath;
 pub use subpath::{trace_light_subpath, BidirContext, LightSubpath, Walk};
-pub use vertex::{LightOrigin, PathVertex};
+pub use vertex::PathVertex;
 
 /// Per-thread buffers of a bidirectional integrator, reused for every sample.
 #[derive(Clone, Debug, Default)]

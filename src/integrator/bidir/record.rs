@@ -3,7 +3,7 @@
 //! A sample's contributions stay spectral ([`SampleRecord`]) until the sample is finished, and
 //! are converted to XYZ with the sample's *final* wavelengths: a secondary-wavelength
 //! termination at a dispersive event on either subpath then applies to everything the path
-//! contributed, camera-side and splatted alike (DESIGN.md §5). A sample with any non-finite
+//! contributed, camera-side and splatted alike (docs/design.md §5). A sample with any non-finite
 //! value is dropped whole and counted. [`TileAccumulator`] keeps a tile's sums and its splat
 //! list, which the render loop merges in tile order (deterministic for any thread count).
 
@@ -77,13 +77,18 @@ impl SampleRecord {
     }
 }
 
-/// The sums of one tile: per-pixel XYZ, splats in sample order, dropped samples, and the
-/// per-strategy decomposition when asked for.
+/// The sums of one tile: per-pixel XYZ, splats in sample order, dropped samples, the odd
+/// samples' luminance apart (for the film's variance estimate), and the per-strategy
+/// decomposition when asked for.
 #[derive(Clone, Debug, Default)]
 pub struct TileAccumulator {
     pub sums: Vec<[f64; 3]>,
     pub splats: Vec<Splat>,
     pub dropped: u64,
+    /// Per pixel, the summed Y of the odd-numbered samples' own-pixel values.
+    pub odd_y: Vec<f64>,
+    /// (pixel, Y) of the odd-numbered samples' splats.
+    pub odd_splats: Vec<(u32, f32)>,
     pub strategies: Option<StrategyTile>,
 }
 
@@ -106,11 +111,20 @@ pub struct StrategySplat {
 }
 
 impl TileAccumulator {
+    #[cfg(any(test, feature = "testing"))]
     pub fn new(pixels: usize, strategy_count: usize) -> TileAccumulator {
+        TileAccumulator::continuing(vec![[0.0; 3]; pixels], strategy_count)
+    }
+
+    /// A tile whose per-pixel sums continue `sums` (the film's open chunk).
+    pub fn continuing(sums: Vec<[f64; 3]>, strategy_count: usize) -> TileAccumulator {
+        let pixels = sums.len();
         TileAccumulator {
-            sums: vec![[0.0; 3]; pixels],
+            sums,
             splats: Vec::new(),
             dropped: 0,
+            odd_y: vec![0.0; pixels],
+            odd_splats: Vec::new(),
             strategies: (strategy_count > 0).then(|| StrategyTile {
                 pixels,
                 weighted: vec![[0.0; 3]; pixels * strategy_count],
@@ -120,8 +134,9 @@ impl TileAccumulator {
         }
     }
 
-    /// Adds the finished sample of tile pixel `k` (see the module docs).
-    pub fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths) {
+    /// Adds the finished sample of tile pixel `k` (see the module docs); `odd` when its
+    /// sample index is odd.
+    pub fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths, odd: bool) {
         let xyz = |s| sampled_to_xyz(s, lambda);
         let own = xyz(rec.camera.weighted);
         let mut ok = finite(&own);
@@ -147,6 +162,11 @@ impl TileAccumulator {
             return;
         }
         add3(&mut self.sums[k], own);
+        if odd {
+            self.odd_y[k] += f64::from(own[1]);
+            let new = &self.splats[first_splat..];
+            self.odd_splats.extend(new.iter().map(|s| (s.pixel, s.xyz[1])));
+        }
         if let Some(st) = &mut self.strategies {
             st.add(k, rec, lambda);
         }
@@ -202,7 +222,7 @@ mod tests {
         let mut lambda = SampledWavelengths::sample_visible(0.37);
         lambda.terminate_secondary();
         let mut acc = TileAccumulator::new(1, 0);
-        acc.add(0, &rec, &lambda);
+        acc.add(0, &rec, &lambda, false);
         let hero = sampled_to_xyz(SampledSpectrum([1.0, 0.0, 0.0, 0.0]), &lambda);
         assert_eq!(acc.splats[0].xyz, hero);
         assert_eq!(acc.sums[0], hero.map(f64::from));
@@ -219,10 +239,11 @@ mod tests {
             Contribution::new(SampledSpectrum::splat(f32::NAN), 1.0),
         );
         let mut acc = TileAccumulator::new(1, 0);
-        acc.add(0, &rec, &SampledWavelengths::sample_visible(0.5));
+        acc.add(0, &rec, &SampledWavelengths::sample_visible(0.5), true);
         assert_eq!(
             (acc.dropped, acc.splats.len(), acc.sums[0]),
             (1, 0, [0.0; 3])
         );
+        assert!(acc.odd_splats.is_empty() && acc.odd_y[0] == 0.0);
     }
 }

@@ -50,7 +50,6 @@ pub struct StrategyImage {
 #[derive(Clone, Debug)]
 pub struct StrategyFilms {
     width: usize,
-    height: usize,
     weighted: Vec<Vec<[f64; 3]>>,
     unweighted: Vec<Vec<[f64; 3]>>,
     samples_per_pixel: u64,
@@ -61,7 +60,6 @@ impl StrategyFilms {
         let n = count(max_depth);
         StrategyFilms {
             width,
-            height,
             weighted: vec![vec![[0.0; 3]; width * height]; n],
             unweighted: vec![vec![[0.0; 3]; width * height]; n],
             samples_per_pixel: 0,
@@ -123,10 +121,6 @@ impl StrategyFilms {
                 }
             })
             .collect()
-    }
-
-    pub fn size(&self) -> (usize, usize) {
-        (self.width, self.height)
     }
 }
 

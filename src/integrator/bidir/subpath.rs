@@ -8,7 +8,6 @@
 //! y_{max_depth} and camera subpaths at z_{max_depth+1}.
 
 use super::mis::{Mis, SubpathMis};
-use super::sensor::{Sensor, SensorRay};
 use super::vertex::{bsdf_at, shading_correction, LightOrigin, PathVertex};
 use crate::bxdf::{BsdfSample, TransportMode};
 use crate::geometry::offset::spawn_ray;
@@ -17,6 +16,7 @@ use crate::light::emit::{LightLeSample, SceneSphere};
 use crate::light::{LightHit, LightSampleContext};
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene};
+use crate::sensor::{Sensor, SensorRay};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use crate::texture::TextureFilter;
 use glam::Vec3;
@@ -39,7 +39,7 @@ impl<'a> BidirContext<'a> {
         BidirContext {
             scene,
             sensor: Sensor::Camera(&scene.camera),
-            sphere: SceneSphere::of(scene),
+            sphere: scene.emission_sphere(),
             mis,
             max_depth,
             filter: TextureFilter::Finest,

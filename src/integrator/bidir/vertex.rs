@@ -1,4 +1,4 @@
-//! Subpath vertices: plain `Copy` records that refer to the scene by id (DESIGN.md §4) and
+//! Subpath vertices: plain `Copy` records that refer to the scene by id (docs/design.md §4) and
 //! carry what connections and, later, merges need: position, normals, BSDF, throughput and
 //! the partial MIS quantities.
 
@@ -157,7 +157,9 @@ pub fn bsdf_at(
 }
 
 /// Area density at `p_to` (geometric normal `n_to`) of a direction density `pdf_w` at
-/// `p_from`: pdf_w · |cos θ_to| / d² (PBR 4ed eq. 4.9 inverted).
+/// `p_from`: pdf_w · |cos θ_to| / d² (PBR 4ed eq. 4.9 inverted). The walks convert
+/// incrementally (`mis.rs`); this closed form checks them.
+#[cfg(test)]
 #[inline]
 pub fn solid_angle_to_area(pdf_w: f32, p_from: Vec3, p_to: Vec3, n_to: Vec3) -> f32 {
     let d = p_to - p_from;

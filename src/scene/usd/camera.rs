@@ -4,8 +4,8 @@ use glam::{DMat4, DVec3};
 use openusd::{sdf, usd};
 
 use super::values::{self, Ctx};
-use crate::scene::desc::{CameraDesc, RenderSettingsDesc};
-use crate::Result;
+use crate::desc::{CameraDesc, RenderSettingsDesc};
+use crate::error::Result;
 
 /// Reads a camera. `local_to_world` is in stage space (units, up axis).
 pub(super) fn read_camera(
@@ -150,7 +150,7 @@ fn chosen_settings(ctx: &mut Ctx, settings: &[sdf::Path]) -> Result<Option<sdf::
         .stage
         .stage_metadata("renderSettingsPrimPath")
         .map_err(|e| {
-            crate::Error::file(&ctx.file, format!("reading renderSettingsPrimPath: {e:#}"))
+            crate::error::Error::usd(&ctx.file, format!("reading renderSettingsPrimPath: {e:#}"))
         })?;
     if let Some(named) = named
         .as_ref()
@@ -159,7 +159,7 @@ fn chosen_settings(ctx: &mut Ctx, settings: &[sdf::Path]) -> Result<Option<sdf::
     {
         return match settings.iter().find(|p| p.as_str() == named) {
             Some(p) => Ok(Some(p.clone())),
-            None => Err(crate::Error::file(
+            None => Err(crate::error::Error::usd(
                 &ctx.file,
                 format!("renderSettingsPrimPath <{named}> is not a RenderSettings prim"),
             )),

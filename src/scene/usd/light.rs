@@ -18,8 +18,8 @@ use openusd::usd;
 
 use super::values::Ctx;
 use super::vocab;
-use crate::scene::desc::{EmissionDesc, IesDesc, LightDesc, LightKind, ShapingDesc, SpdDesc};
-use crate::Result;
+use crate::desc::{EmissionDesc, IesDesc, LightDesc, LightKind, ShapingDesc, SpdDesc};
+use crate::error::Result;
 
 /// The concrete UsdLux light types that become a [`LightDesc`].
 const LIGHT_TYPES: [&str; 7] = [

@@ -1,15 +1,15 @@
 //! UsdShade: material binding resolution and surface shaders (`UsdPreviewSurface` and the
-//! `spectral:*` vocabulary of DESIGN.md §3).
+//! `spectral:*` vocabulary of docs/design.md §3).
 
 use openusd::{sdf, usd};
 
 use super::values::{self, Ctx};
 use super::vocab;
-use crate::scene::desc::{
+use crate::desc::{
     ColorSpace, IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc,
     TextureChannel, TextureDesc, Wrap,
 };
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use glam::{Affine2, Vec2};
 
 /// How many connection hops (through NodeGraph / Material interfaces) are followed.

@@ -10,8 +10,8 @@ use openusd::usd;
 
 use super::shapes::Shape;
 use super::values::Ctx;
-use crate::scene::desc::MeshDesc;
-use crate::Result;
+use crate::desc::MeshDesc;
+use crate::error::Result;
 
 /// A validated polygon mesh triangulated in world space, before it is split by GeomSubset.
 pub(super) struct MeshGeometry {

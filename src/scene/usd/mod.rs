@@ -1,7 +1,7 @@
 //! The USD reader: a `.usda` / `.usdc` / `.usdz` stage to a plain [`SceneDescription`].
 //!
 //! This is the only module of the crate that names `openusd`. Everything it produces is in
-//! the renderer's conventions (DESIGN.md §2): metres, Y up, world space, front faces wound
+//! the renderer's conventions (docs/design.md §2): metres, Y up, world space, front faces wound
 //! counter-clockwise. Unsupported standard prims and attributes become `warnings`; malformed
 //! input and unknown `spectral:` vocabulary become an [`Error`](crate::Error) naming the file,
 //! the prim and the reason.
@@ -28,8 +28,8 @@ use openusd::{sdf, usd};
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::scene::desc::{MeshDesc, SceneDescription};
-use crate::Result;
+use crate::desc::{MeshDesc, SceneDescription};
+use crate::error::Result;
 use values::Ctx;
 
 /// Prim types that carry nothing to render themselves (grouping, shading networks read
@@ -145,7 +145,7 @@ impl<'s> Reader<'s> {
                 paths.push(p.clone())
             })
             .map_err(|e| {
-                crate::Error::file(&self.ctx.file, format!("traversing the stage: {e:#}"))
+                crate::error::Error::usd(&self.ctx.file, format!("traversing the stage: {e:#}"))
             })?;
         paths.iter().try_for_each(|path| self.read_prim(path))
     }

@@ -6,7 +6,7 @@ use openusd::usd;
 use std::f64::consts::TAU;
 
 use super::values::Ctx;
-use crate::Result;
+use crate::error::Result;
 
 /// Segments around the axis of round shapes.
 const SEGMENTS: u32 = 64;

@@ -5,7 +5,7 @@ use openusd::{usd, usda};
 use std::path::Path;
 
 use super::values;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// `metersPerUnit` when the stage does not author it (USD's fallback: centimetres).
 const DEFAULT_METERS_PER_UNIT: f64 = 0.01;
@@ -13,16 +13,16 @@ const DEFAULT_METERS_PER_UNIT: f64 = 0.01;
 /// Opens the stage at `path`, turning every failure into a one-line [`Error::file`].
 pub(super) fn open(path: &Path) -> Result<usd::Stage> {
     if !path.exists() {
-        return Err(Error::file(path, "no such file"));
+        return Err(Error::io(path, "no such file"));
     }
     if !path.is_file() {
-        return Err(Error::file(path, "not a file"));
+        return Err(Error::io(path, "not a file"));
     }
-    let absolute = std::fs::canonicalize(path).map_err(|e| Error::file(path, e.to_string()))?;
+    let absolute = std::fs::canonicalize(path).map_err(|e| Error::io(path, e.to_string()))?;
     let Some(name) = absolute.to_str() else {
-        return Err(Error::file(path, "the path is not valid UTF-8"));
+        return Err(Error::usd(path, "the path is not valid UTF-8"));
     };
-    usd::Stage::open(name).map_err(|e| Error::file(path, open_failure(&absolute, &e)))
+    usd::Stage::open(name).map_err(|e| Error::usd(path, open_failure(&absolute, &e)))
 }
 
 /// Describes why opening failed; for a text layer the parser is re-run to locate the line.
@@ -55,7 +55,7 @@ fn parse_error_location(path: &Path) -> Option<String> {
 /// so the first one is an error.
 pub(super) fn check_composition(path: &Path, stage: &usd::Stage) -> Result<()> {
     match stage.composition_errors().first() {
-        Some(e) => Err(Error::file(path, format!("composition error: {e}"))),
+        Some(e) => Err(Error::usd(path, format!("composition error: {e}"))),
         None => Ok(()),
     }
 }
@@ -64,13 +64,13 @@ pub(super) fn check_composition(path: &Path, stage: &usd::Stage) -> Result<()> {
 pub(super) fn meters_per_unit(path: &Path, stage: &usd::Stage) -> Result<f64> {
     let value = stage
         .stage_metadata("metersPerUnit")
-        .map_err(|e| Error::file(path, format!("reading metersPerUnit: {e:#}")))?;
+        .map_err(|e| Error::usd(path, format!("reading metersPerUnit: {e:#}")))?;
     let Some(value) = value else {
         return Ok(DEFAULT_METERS_PER_UNIT);
     };
     match values::to_f64(&value) {
         Some(m) if m.is_finite() && m > 0.0 => Ok(m),
-        _ => Err(Error::file(
+        _ => Err(Error::usd(
             path,
             format!("metersPerUnit must be a positive number, got {value:?}"),
         )),
@@ -81,12 +81,12 @@ pub(super) fn meters_per_unit(path: &Path, stage: &usd::Stage) -> Result<f64> {
 pub(super) fn z_up(path: &Path, stage: &usd::Stage) -> Result<bool> {
     let value = stage
         .stage_metadata("upAxis")
-        .map_err(|e| Error::file(path, format!("reading upAxis: {e:#}")))?;
+        .map_err(|e| Error::usd(path, format!("reading upAxis: {e:#}")))?;
     match value.as_ref().and_then(values::to_token).as_deref() {
         None if value.is_none() => Ok(false),
         Some("Y") => Ok(false),
         Some("Z") => Ok(true),
-        _ => Err(Error::file(
+        _ => Err(Error::usd(
             path,
             format!("upAxis must be \"Y\" or \"Z\", got {value:?}"),
         )),

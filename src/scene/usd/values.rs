@@ -10,7 +10,7 @@ use openusd::ar::{self, Resolver};
 use openusd::{sdf, usd};
 use std::path::{Path, PathBuf};
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// What every reader function needs: the stage, the time to read at, the unit conversion and
 /// the list of warnings being collected.
@@ -43,7 +43,10 @@ impl Ctx<'_> {
 
     /// Maps an openusd error about `prim` into ours.
     pub fn usd_err(&self, prim: &usd::Prim, what: &str, e: impl std::fmt::Display) -> Error {
-        self.err(prim, format!("{what}: {e:#}"))
+        Error {
+            kind: crate::error::ErrorKind::Usd,
+            ..self.err(prim, format!("{what}: {e:#}"))
+        }
     }
 
     /// The prim's type name, "" when typeless.

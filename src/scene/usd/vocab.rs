@@ -1,11 +1,11 @@
-//! The `spectral:` attribute vocabulary (DESIGN.md §3) and its enforcement: any attribute in
+//! The `spectral:` attribute vocabulary (docs/design.md §3) and its enforcement: any attribute in
 //! the `spectral:` namespace that the vocabulary does not define for that kind of prim is an
 //! error naming the prim and the attribute.
 
 use openusd::usd;
 
 use super::values::Ctx;
-use crate::Result;
+use crate::error::Result;
 
 /// `token spectral:emission`: a named SPD, or `"blackbody"`.
 pub(super) const EMISSION: &str = "spectral:emission";

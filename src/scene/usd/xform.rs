@@ -9,7 +9,7 @@ use glam::{DMat4, DQuat, DVec3};
 use openusd::{sdf, usd};
 
 use super::values::{self, Ctx};
-use crate::Result;
+use crate::error::Result;
 
 const INVERT_PREFIX: &str = "!invert!";
 const RESET_XFORM_STACK: &str = "!resetXformStack!";

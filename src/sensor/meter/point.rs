@@ -1,6 +1,6 @@
 //! A light meter as the sensor end z_0 of bidirectional paths (light tracing, BDPT): its
 //! importance, the rays it generates with their densities, and the rays that connect it to
-//! light vertices. `integrator::bidir::sensor` dispatches to it as it does to the camera.
+//! light vertices. `sensor::endpoint` dispatches to it as it does to the camera.
 //!
 //! Conventions as the camera's (PBR 4ed §5.4.1): a measurement is
 //! I = ∫ W(ω) L(p, −ω) |cos θ| dω at the sensor point p, the cosine against the sensor's

@@ -5,7 +5,7 @@
 //! (3.240479, ...). The renderer instead integrates the 1 nm tables of `spectra/` with the
 //! trapezoid rule and derives its Rec.709 matrix from the primaries and *its* D65 white
 //! (`src/spectral/color.rs`). The two differ by up to ~1e-3 in linear RGB, which is the size of
-//! the round-trip tolerance of DESIGN.md §2. So every node is refined here by Newton's method
+//! the round-trip tolerance of docs/design.md §2. So every node is refined here by Newton's method
 //! on the exact quantity the renderer computes:
 //!
 //! ```text

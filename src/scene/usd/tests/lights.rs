@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::*;
-use crate::scene::desc::{EmissionDesc, LightDesc, LightKind, SpdDesc};
+use crate::desc::{EmissionDesc, LightDesc, LightKind, SpdDesc};
 
 /// The light with `prim_path`.
 fn light<'a>(desc: &'a SceneDescription, prim_path: &str) -> &'a LightDesc {

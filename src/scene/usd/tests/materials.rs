@@ -1,7 +1,7 @@
 //! Material bindings, UsdPreviewSurface and the `spectral:*` shaders.
 
 use super::*;
-use crate::scene::desc::{IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc};
+use crate::desc::{IorDesc, MaterialDesc, MaterialKind, PreviewSurfaceDesc, SpectrumDesc};
 
 /// A Material `name` whose surface is a Shader with `id` and the `inputs` lines.
 fn material(name: &str, id: &str, inputs: &str) -> String {
@@ -220,14 +220,14 @@ fn texture_inputs_are_read_and_interface_inputs_resolve() {
     let tex = p.texture("diffuseColor").expect("a diffuseColor texture");
     assert_eq!(tex.file, dir.join("wood.png"));
     assert_eq!(tex.shader_path, "/Looks/Wood/Tex");
-    assert_eq!(tex.wrap_s, crate::scene::desc::Wrap::Mirror);
-    assert_eq!(tex.wrap_t, crate::scene::desc::Wrap::Repeat);
-    assert_eq!(tex.color_space, crate::scene::desc::ColorSpace::Raw);
+    assert_eq!(tex.wrap_s, crate::desc::Wrap::Mirror);
+    assert_eq!(tex.wrap_t, crate::desc::Wrap::Repeat);
+    assert_eq!(tex.color_space, crate::desc::ColorSpace::Raw);
     assert_eq!(tex.st_primvar, "uv");
     assert_eq!(tex.scale, [2.0, 2.0, 2.0, 1.0]);
     assert_eq!(tex.bias, [0.0, 0.1, 0.0, 0.0]);
     let opacity = p.texture("opacity").expect("an opacity texture");
-    assert_eq!(opacity.channel, crate::scene::desc::TextureChannel::A);
+    assert_eq!(opacity.channel, crate::desc::TextureChannel::A);
     assert!(
         desc.warnings.iter().all(|w| !w.contains("not supported")),
         "{:?}",
@@ -279,10 +279,10 @@ fn spectral_shaders_read_textures_on_reflectance_and_roughness() {
     };
     assert_eq!(*ior, 1.4);
     let reflectance = wood.texture("reflectance").expect("textured reflectance");
-    assert_eq!(reflectance.channel, crate::scene::desc::TextureChannel::Rgb);
+    assert_eq!(reflectance.channel, crate::desc::TextureChannel::Rgb);
     assert_eq!(reflectance.shader_path, "/Looks/Wood/Tex");
     let roughness = wood.texture("roughness").expect("textured roughness");
-    assert_eq!(roughness.channel, crate::scene::desc::TextureChannel::R);
+    assert_eq!(roughness.channel, crate::desc::TextureChannel::R);
     assert_eq!(wood.all_textures().count(), 2);
     // A texture on an input that only takes a value is an error naming the input.
     let bad = spectral_wood("float inputs:ior.connect = </Looks/Wood/Tex.outputs:r>");

@@ -10,8 +10,8 @@ mod stage;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::scene::desc::{MeshDesc, SceneDescription};
-use crate::Error;
+use crate::desc::{MeshDesc, SceneDescription};
+use crate::error::Error;
 
 /// Layer metadata for a Y-up stage in metres.
 const METRES_Y_UP: &str = "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n";

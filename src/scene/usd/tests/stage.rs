@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::*;
-use crate::scene::desc::MaterialKind;
+use crate::desc::MaterialKind;
 
 #[test]
 fn cbox_loads() {
@@ -108,7 +108,7 @@ def Camera "C" {
     // Sizes stay as authored; the unit scale lives in `to_world`.
     assert_eq!(
         light.kind,
-        crate::scene::desc::LightKind::Rect {
+        crate::desc::LightKind::Rect {
             width: 50.0,
             height: 1.0
         }
@@ -379,7 +379,7 @@ fn usdz_package_with_references_and_texture() {
         .iter()
         .find(|l| l.prim_path == "/World/A/Sky")
         .expect("dome");
-    let crate::scene::desc::LightKind::Dome {
+    let crate::desc::LightKind::Dome {
         texture: Some(texture),
     } = &dome.kind
     else {

@@ -1,6 +1,6 @@
 //! Plain scene description: what the USD reader produces and the scene builder consumes.
 //!
-//! Everything here is already resolved to the renderer's conventions (DESIGN.md §2):
+//! Everything here is already resolved to the renderer's conventions (docs/design.md §2):
 //! positions in metres, Y up, world space; triangles counter-clockwise when seen from the
 //! side their geometric normal points to; every entity carries its USD prim path so that
 //! errors and reports can name it.
@@ -265,7 +265,7 @@ pub enum SpdDesc {
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmissionDesc {
     pub color: [f32; 3],
-    /// Luminance in nits (DESIGN.md §2).
+    /// Luminance in nits (docs/design.md §2).
     pub intensity: f32,
     pub exposure: f32,
     pub normalize: bool,

@@ -3,11 +3,11 @@
 //! For tests and statistical harnesses (`tests/materials.rs`, the χ² tests): iterate over
 //! [`examples`] and call `f`, `sample_f` and `pdf` on each [`Bxdf`].
 
-use super::*;
+use crate::bxdf::*;
+use crate::desc::PreviewSurfaceDesc;
 use crate::material::{Material, PlasticMaterial, PreviewMaterial};
-use crate::scene::desc::PreviewSurfaceDesc;
 use crate::spectral::sellmeier::Sellmeier;
-use crate::spectral::{data, SampledWavelengths, Spectrum};
+use crate::spectral::{data, SampledSpectrum, SampledWavelengths, Spectrum};
 use std::sync::Arc;
 
 /// The wavelengths the examples are evaluated at (nm).

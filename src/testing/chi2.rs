@@ -36,7 +36,7 @@
 //! and the pdf closure excludes them, so they land in the rest cell with the other failures.
 //!
 //! ```
-//! use spectral_render::sampling::chi2::{Chi2Test, SphericalDomain};
+//! use spectral_render::testing::chi2::{Chi2Test, SphericalDomain};
 //! use spectral_render::sampling::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 //!
 //! let outcome = Chi2Test::new("cosine hemisphere", SphericalDomain::sphere())

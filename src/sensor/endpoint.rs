@@ -1,17 +1,17 @@
 //! The sensor end of a path ("camera vertex" z_0): the camera, or a light meter
-//! (`sensor::meter::point`). Light tracing and BDPT reach either through the same techniques;
+//! (`sensor::meter::point`). Light tracing and BDPT (`integrator::bidir`) reach either
+//! through the same techniques;
 //! `bin` names the pixel for the camera and is 0 for a meter (one reading per sample).
 //!
 //! MIS treats both alike (Georgiev 2012 tech. rep. (31)–(33)): the sensor point is a delta in
 //! position, its rays have a density per solid angle (the camera's 1/(A cos³θ), an irradiance
 //! meter's cos θ/π), except for a luminance meter, whose direction is a delta as well, so that
-//! no technique with t ≤ 1 can produce its paths (see [`super::mis::SubpathMis::delta_sensor_start`]).
+//! no technique with t ≤ 1 can produce its paths (see `integrator::bidir::mis::SubpathMis::delta_sensor_start`).
 
 use crate::geometry::offset::spawn_ray_to_point;
 use crate::geometry::Ray;
-use crate::scene::Scene;
-use crate::sensor::meter::MeterSensor;
-use crate::sensor::Camera;
+use super::meter::MeterSensor;
+use super::Camera;
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug)]
@@ -144,22 +144,13 @@ impl Sensor<'_> {
         }
     }
 
-    /// True when something blocks the segment from surface point `p` (error `p_error`,
-    /// geometric normal `n`) to the sensor sample `ss`; `skip` names a light shape that does
-    /// not count (the one `p` lies on).
-    pub fn occluded(
-        &self,
-        scene: &Scene,
-        p: Vec3,
-        p_error: Vec3,
-        n: Vec3,
-        ss: &SensorSample,
-        skip: Option<u32>,
-    ) -> bool {
+    /// The shadow ray from surface point `p` (error `p_error`, geometric normal `n`) to the
+    /// sensor sample `ss`, and the distance up to which occluders count.
+    pub fn shadow_ray(&self, p: Vec3, p_error: Vec3, n: Vec3, ss: &SensorSample) -> (Ray, f32) {
         let (ray, t) = match self {
             Sensor::Camera(_) => spawn_ray_to_point(p, p_error, n, ss.p),
             Sensor::Meter(m) => m.ray_to(p, p_error, n),
         };
-        scene.occluded(&ray, t * ss.visible_fraction, skip)
+        (ray, t * ss.visible_fraction)
     }
 }

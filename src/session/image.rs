@@ -1,0 +1,337 @@
+//! The image driver: tiles over the session's thread pool, samples in passes until the sample
+//! count or the time budget is reached, and the film turned into images.
+//!
+//! **Passes.** Under `--spp` the first pass takes one chunk and later ones about
+//! [`PASS_SECONDS`] of work each, so that observers (the progress bar) hear often; under a
+//! time budget passes grow (1, 1, 2, 4, … 64 samples per pixel), each cut to what the
+//! measured rate says still fits in the budget, and the session stops after the pass in which
+//! the budget ran out (equal-time comparisons rely on it ending close to the budget).
+//!
+//! **Chunks.** Light tracing and BDPT splat: each tile returns its splat list, merged in tile
+//! order, so images stay bit-identical for any thread count. Splat lists are bounded by
+//! working in chunks of [`SPLAT_CHUNK_SAMPLES`] samples over the image, aligned at multiples
+//! of the chunk size from sample 0; under `--spp` their passes are whole chunks, so the
+//! splats of a chunk are merged in the same order however the passes fall. The path tracer
+//! has one chunk for the whole render. Per-thread buffers (`Workspace`) live as long as a
+//! rayon job and are reused by every sample of it.
+
+use super::{pool, PassStats, Progressive};
+use crate::error::Result;
+use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
+use crate::integrator::bidir::TileAccumulator;
+use crate::integrator::{Estimator, Integrator, Settings, Workspace};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use crate::sensor::film::{Film, Tile};
+use crate::spectral::{color, SampledWavelengths};
+use crate::texture::TextureFilter;
+use rayon::prelude::*;
+use std::time::Instant;
+
+const TILE_SIZE: usize = 16;
+/// Samples per chunk of a splatting integrator (bounds the splat lists held at once: at most
+/// max-depth + 1 splats of 16 bytes per sample).
+pub const SPLAT_CHUNK_SAMPLES: u64 = 1 << 18;
+/// Samples per pixel when neither a count nor a time budget is given.
+pub const DEFAULT_SPP: u32 = 64;
+/// Aimed-at duration of a pass under a sample count.
+pub const PASS_SECONDS: f64 = 1.0;
+
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub spp: Option<u32>,
+    /// Render until this many seconds have passed (then finish the current pass).
+    pub time_budget: Option<f64>,
+    pub seed: u64,
+    pub threads: Option<usize>,
+    pub max_depth: u32,
+    /// The light-transport algorithm and its settings.
+    pub integrator: Integrator,
+    /// Record the per-(s, t) decomposition (`Capabilities::strategy_images`).
+    pub strategies: bool,
+    /// Filter textures over the camera's pixel footprint (MIP-mapped, trilinear); false
+    /// looks every texture up bilinearly at its finest level (pbrt-v4's
+    /// `--disable-texture-filtering`; Mitsuba 3's bitmaps).
+    pub filter_textures: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            spp: None,
+            time_budget: None,
+            seed: 0,
+            threads: None,
+            max_depth: 7,
+            integrator: Integrator::Path,
+            strategies: false,
+            filter_textures: true,
+        }
+    }
+}
+
+/// The rendered image: absolute XYZ (Y in cd/m²) and linear Rec.709 RGB, camera exposure applied.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    pub width: usize,
+    pub height: usize,
+    pub xyz: Vec<[f32; 3]>,
+    pub rgb: Vec<[f32; 3]>,
+    pub spp: u64,
+    pub wall_time_s: f64,
+    /// Samples whose estimate was NaN or infinite and were dropped (should be 0).
+    pub dropped_samples: u64,
+    /// Per-(s, t) images when `RenderOptions::strategies` was set.
+    pub strategies: Option<Vec<StrategyImage>>,
+}
+
+/// Renders `scene` to the end (sample count or time budget) without an observer.
+pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<RenderOutput> {
+    let mut session = ImageSession::new(scene, opts)?;
+    super::run(&mut session, &mut super::quiet);
+    Ok(session.output())
+}
+
+/// An image rendered progressively.
+pub struct ImageSession<'a> {
+    scene: &'a Scene,
+    opts: RenderOptions,
+    pool: rayon::ThreadPool,
+    estimator: Box<dyn Estimator + 'a>,
+    splats: bool,
+    film: Film,
+    tiles: Vec<Tile>,
+    strategy_count: usize,
+    strategy_films: Option<StrategyFilms>,
+    /// Samples per pixel per chunk.
+    chunk: u64,
+    target: u64,
+    done: u64,
+    dropped: u64,
+    passes: u32,
+    start: Instant,
+}
+
+impl<'a> ImageSession<'a> {
+    pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageSession<'a>> {
+        let strategy_count = if opts.strategies {
+            opts.integrator.check_strategies(opts.max_depth)?
+        } else {
+            0
+        };
+        let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+        let film = Film::new(w, h);
+        let settings = Settings {
+            max_depth: opts.max_depth,
+            filter: texture_filter(opts),
+        };
+        let splats = opts.integrator.capabilities().splats;
+        Ok(ImageSession {
+            scene,
+            pool: pool::new(opts.threads)?,
+            estimator: opts.integrator.estimator(scene, settings),
+            splats,
+            tiles: film.tiles(TILE_SIZE),
+            film,
+            strategy_count,
+            strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, opts.max_depth)),
+            chunk: if splats {
+                (SPLAT_CHUNK_SAMPLES / (w * h) as u64).max(1)
+            } else {
+                u64::MAX
+            },
+            target: match (opts.spp, opts.time_budget) {
+                (Some(n), _) => u64::from(n),
+                (None, Some(_)) => u64::MAX,
+                (None, None) => u64::from(DEFAULT_SPP),
+            },
+            done: 0,
+            dropped: 0,
+            passes: 0,
+            start: Instant::now(),
+            opts: opts.clone(),
+        })
+    }
+
+    /// The image so far.
+    pub fn output(&self) -> RenderOutput {
+        let exposure = self.exposure();
+        let xyz = self.film.xyz(exposure);
+        let rgb = xyz.iter().map(|p| xyz_to_rgb(*p)).collect();
+        RenderOutput {
+            width: self.film.width,
+            height: self.film.height,
+            xyz,
+            rgb,
+            spp: self.done,
+            wall_time_s: self.start.elapsed().as_secs_f64(),
+            dropped_samples: self.dropped,
+            strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
+        }
+    }
+
+    fn exposure(&self) -> f64 {
+        self.scene.camera.exposure_scale as f64
+    }
+
+    fn finished(&self) -> bool {
+        let elapsed = self.start.elapsed().as_secs_f64();
+        self.done >= self.target
+            || (self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t))
+    }
+
+    /// Samples per pixel of the next pass (see the module docs).
+    fn pass_size(&self) -> u64 {
+        let remaining = self.target - self.done;
+        let elapsed = self.start.elapsed().as_secs_f64();
+        let per_sample = elapsed / self.done.max(1) as f64;
+        let n = match self.opts.time_budget {
+            Some(budget) => {
+                let mut n = self.done.clamp(1, 64);
+                if self.done > 0 && elapsed > 0.0 {
+                    n = n.min(((budget - elapsed) / per_sample).max(1.0) as u64);
+                }
+                n
+            }
+            None => {
+                let quantum = if self.splats {
+                    self.chunk.min(remaining)
+                } else {
+                    1
+                };
+                let wanted = if self.done == 0 || per_sample <= 0.0 {
+                    1
+                } else {
+                    (PASS_SECONDS / per_sample).min(u32::MAX as f64) as u64
+                };
+                wanted.max(1).div_ceil(quantum).saturating_mul(quantum)
+            }
+        };
+        n.min(remaining)
+    }
+
+    /// Samples [first, first + count) of every pixel, all within one chunk.
+    fn render_segment(&mut self, first: u64, count: u64) {
+        let task = Segment {
+            first,
+            count,
+            seed: self.opts.seed,
+            width: self.film.width as u64,
+            strategy_count: self.strategy_count,
+        };
+        let (film, estimator) = (&self.film, &*self.estimator);
+        let max_depth = self.opts.max_depth;
+        let results: Vec<TileAccumulator> = self.pool.install(|| {
+            self.tiles
+                .par_iter()
+                .map_init(
+                    || Workspace::new(max_depth, task.strategy_count),
+                    |ws, tile| {
+                        let acc =
+                            TileAccumulator::continuing(film.open_sums(tile), task.strategy_count);
+                        render_tile(estimator, tile, &task, acc, ws)
+                    },
+                )
+                .collect()
+        });
+        for (tile, r) in self.tiles.iter().zip(results) {
+            self.film.store_tile(tile, &r.sums, &r.odd_y, count);
+            self.film.add_splats(&r.splats, &r.odd_splats);
+            if let (Some(sf), Some(st)) = (&mut self.strategy_films, &r.strategies) {
+                sf.merge_tile(tile, st);
+            }
+            self.dropped += r.dropped;
+        }
+        if self.splats {
+            self.film
+                .add_light_paths((self.film.width * self.film.height) as u64 * count);
+        }
+        if let Some(sf) = &mut self.strategy_films {
+            sf.add_samples(count);
+        }
+        self.done += count;
+        if self.done.is_multiple_of(self.chunk) {
+            self.film.close_chunk();
+        }
+    }
+}
+
+impl Progressive for ImageSession<'_> {
+    fn step(&mut self) -> Option<PassStats> {
+        if self.finished() {
+            return None;
+        }
+        let end = self.done + self.pass_size();
+        while self.done < end {
+            let chunk_end = (self.done / self.chunk + 1).saturating_mul(self.chunk);
+            self.render_segment(self.done, chunk_end.min(end) - self.done);
+        }
+        self.passes += 1;
+        Some(PassStats {
+            pass: self.passes,
+            samples: self.done,
+            target: (self.target != u64::MAX).then_some(self.target),
+            wall_time_s: self.start.elapsed().as_secs_f64(),
+            dropped: self.dropped,
+            variance: self.film.variance_y(self.exposure()),
+        })
+    }
+}
+
+/// The camera's texture footprint for the render's sample count (unknown under a time
+/// budget: `TextureFilter::camera`).
+fn texture_filter(opts: &RenderOptions) -> TextureFilter {
+    if !opts.filter_textures {
+        return TextureFilter::Finest;
+    }
+    let spp = match (opts.spp, opts.time_budget) {
+        (Some(n), _) => Some(u64::from(n)),
+        (None, Some(_)) => None,
+        (None, None) => Some(u64::from(DEFAULT_SPP)),
+    };
+    TextureFilter::camera(spp)
+}
+
+/// Linear Rec.709 RGB of an XYZ pixel.
+pub fn xyz_to_rgb(p: [f32; 3]) -> [f32; 3] {
+    color::xyz_to_rgb(p.map(f64::from)).map(|c| c as f32)
+}
+
+/// Samples [first, first + count) of every pixel of a tile.
+#[derive(Clone, Copy)]
+struct Segment {
+    first: u64,
+    count: u64,
+    seed: u64,
+    width: u64,
+    strategy_count: usize,
+}
+
+/// Renders a tile's samples into `acc`: per-pixel XYZ sums, splats and the number of
+/// non-finite samples dropped.
+fn render_tile(
+    estimator: &dyn Estimator,
+    tile: &Tile,
+    task: &Segment,
+    mut acc: TileAccumulator,
+    ws: &mut Workspace,
+) -> TileAccumulator {
+    let mut k = 0;
+    for y in tile.y0..tile.y1 {
+        for x in tile.x0..tile.x1 {
+            let pixel = y as u64 * task.width + x as u64;
+            for s in task.first..task.first + task.count {
+                let mut sampler = Sampler::new(task.seed, pixel, s);
+                let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+                let [jx, jy] = sampler.get_2d();
+                let u_lens = sampler.get_2d();
+                let film = [x as f32 + jx, y as f32 + jy];
+                ws.record.clear();
+                estimator.image_sample(film, u_lens, &mut lambda, &mut sampler, ws);
+                acc.add(k, &ws.record, &lambda, s % 2 == 1);
+            }
+            k += 1;
+        }
+    }
+    acc
+}

@@ -1,0 +1,430 @@
+//! The light-meter driver: illuminance (lx) on a virtual surface and luminance (cd/m²) along
+//! a ray, with a 95% confidence interval. Meters are sensors (`sensor::meter`), like
+//! Mitsuba 3's `irradiancemeter` and `radiancemeter`; any integrator estimates them through
+//! `Estimator::meter_sample` ([`MeterOptions::integrator`]: the path tracer's estimators of
+//! `integrator::meter` by default, light tracing or BDPT with the meter as their sensor), and
+//! nothing but the rays they need is traced — there is no film. Light tracing cannot estimate
+//! luminance (`Integrator::check_meter`).
+//!
+//! A reading is the mean of independent per-sample estimates of the photometric quantity
+//! (K_m ∫ E(λ) ȳ(λ) dλ from one set of hero wavelengths, `spectral::xyz::sampled_to_xyz`).
+//! Sample `s` of meter `i` draws its random numbers from `Sampler::new(seed, i, s)`, and
+//! samples are accumulated in blocks of [`BLOCK`] merged in sample order (`Stats`), so
+//! readings are bit-identical for any number of threads (a `time_budget` aside, which stops
+//! at a wall-clock moment).
+//!
+//! **Confidence interval.** ci95 = 1.96·s/√n, the normal approximation of the sample mean.
+//! With [`Stop::RelError`] readings are refined in rounds (one per [`Progressive::step`]) until ci95/value is below the target
+//! or a cap (samples per reading, wall time) is hit; every reading takes at least
+//! [`MIN_SAMPLES_REL`] samples first so that s is not judged on a handful of samples. The
+//! interval is checked for coverage on heavy-tailed cases in `tests/meters.rs`.
+//!
+//! ```
+//! use spectral_render::desc::*;
+//! use spectral_render::scene::build;
+//! use spectral_render::sensor::meter::Meter;
+//! use spectral_render::session::{measure, MeterOptions, Stop};
+//! use glam::{Mat4, Vec3};
+//!
+//! // A normalized distant light of 1000 lx shining straight down.
+//! let mut desc = SceneDescription::default();
+//! desc.lights.push(LightDesc {
+//!     prim_path: "/Sun".into(),
+//!     kind: LightKind::Distant { angle_deg: 0.0 },
+//!     to_world: Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+//!     emission: EmissionDesc { intensity: 1000.0, normalize: true, ..Default::default() },
+//!     shaping: None,
+//! });
+//! let scene = build(&desc, Some((1, 1))).unwrap();
+//! let meter = Meter::illuminance(Vec3::ZERO, Vec3::Y).unwrap();
+//! let opts = MeterOptions { stop: Stop::Samples(256), ..Default::default() };
+//! let reading = measure(&scene, &[meter], &opts).unwrap().readings[0];
+//! assert!((reading.value / 1000.0 - 1.0).abs() < 0.02);
+//! ```
+
+use super::{pool, PassStats, Progressive};
+use crate::error::Result;
+use crate::integrator::{Estimator, Integrator, Settings, Workspace};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use crate::sensor::meter::{Meter, MeterSensor, Stats};
+use crate::spectral::{xyz::sampled_to_xyz, SampledWavelengths};
+use crate::texture::TextureFilter;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Samples per block of work (the unit of parallelism and of merging).
+pub const BLOCK: u64 = 256;
+/// Samples every reading takes before its interval is trusted under [`Stop::RelError`].
+pub const MIN_SAMPLES_REL: u64 = 1024;
+/// Samples per reading when neither a count nor a relative error is asked for.
+pub const DEFAULT_SAMPLES: u64 = 4096;
+/// Default cap on the samples of one reading under [`Stop::RelError`].
+pub const DEFAULT_MAX_SAMPLES: u64 = 1 << 24;
+
+/// When to stop sampling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stop {
+    /// This many samples per reading.
+    Samples(u64),
+    /// Until ci95/value < the target for every reading (or a cap).
+    RelError(f64),
+}
+
+#[derive(Clone, Debug)]
+pub struct MeterOptions {
+    pub stop: Stop,
+    /// Cap on the samples of one reading under [`Stop::RelError`].
+    pub max_samples: u64,
+    /// Wall-clock cap in seconds (rounds stop once it is spent).
+    pub time_budget: Option<f64>,
+    pub seed: u64,
+    pub max_depth: u32,
+    pub threads: Option<usize>,
+    /// The estimator: path tracing (default), light tracing or BDPT, with its settings.
+    pub integrator: Integrator,
+}
+
+impl Default for MeterOptions {
+    fn default() -> Self {
+        MeterOptions {
+            stop: Stop::Samples(DEFAULT_SAMPLES),
+            max_samples: DEFAULT_MAX_SAMPLES,
+            time_budget: None,
+            seed: 0,
+            max_depth: 7,
+            threads: None,
+            integrator: Integrator::Path,
+        }
+    }
+}
+
+/// What stopped a reading before its target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cap {
+    /// `max_samples` under [`Stop::RelError`].
+    Samples,
+    /// The time budget.
+    Time,
+}
+
+/// One meter's answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reading {
+    /// Mean of the samples, in the kind's unit.
+    pub value: f64,
+    /// Half-width of the 95% confidence interval (infinite with fewer than two samples).
+    pub ci95: f64,
+    /// Samples averaged (finite ones; see `MeterRun::dropped`).
+    pub samples: u64,
+    /// Set when a cap stopped the reading short of its sample count or relative error.
+    pub capped: Option<Cap>,
+}
+
+/// The readings of a run, in the order of the meters.
+#[derive(Clone, Debug)]
+pub struct MeterRun {
+    pub readings: Vec<Reading>,
+    /// Samples whose estimate was NaN or infinite and were dropped (should be 0).
+    pub dropped: u64,
+    pub wall_time_s: f64,
+}
+
+/// Measures every meter to the end (sample count, relative error or time budget).
+pub fn measure(scene: &Scene, meters: &[Meter], opts: &MeterOptions) -> Result<MeterRun> {
+    let mut session = MeterSession::new(scene, meters, opts)?;
+    super::run(&mut session, &mut super::quiet);
+    Ok(session.readings())
+}
+
+/// Where one reading stands.
+#[derive(Clone, Copy, Debug, Default)]
+struct State {
+    stats: Stats,
+    /// Sample indices used so far (finite or not).
+    taken: u64,
+    finished: bool,
+    capped: Option<Cap>,
+}
+
+/// Samples [first, end) of one meter.
+#[derive(Clone, Copy, Debug)]
+struct Block {
+    meter: usize,
+    first: u64,
+    end: u64,
+}
+
+/// Light-meter readings refined progressively: one round of blocks per step.
+pub struct MeterSession<'a> {
+    opts: MeterOptions,
+    pool: rayon::ThreadPool,
+    estimator: Box<dyn Estimator + 'a>,
+    sensors: Vec<MeterSensor>,
+    states: Vec<State>,
+    dropped: u64,
+    passes: u32,
+    start: Instant,
+}
+
+impl<'a> MeterSession<'a> {
+    /// Refuses meters the integrator cannot estimate (`Integrator::check_meter`).
+    pub fn new(
+        scene: &'a Scene,
+        meters: &[Meter],
+        opts: &MeterOptions,
+    ) -> Result<MeterSession<'a>> {
+        for m in meters {
+            opts.integrator.check_meter(m.kind)?;
+        }
+        let settings = Settings {
+            max_depth: opts.max_depth,
+            filter: TextureFilter::Finest,
+        };
+        Ok(MeterSession {
+            pool: pool::new(opts.threads)?,
+            estimator: opts.integrator.estimator(scene, settings),
+            sensors: meters
+                .iter()
+                .map(|m| MeterSensor::new(m, scene.point_error(m.p)))
+                .collect(),
+            states: vec![State::default(); meters.len()],
+            dropped: 0,
+            passes: 0,
+            start: Instant::now(),
+            opts: opts.clone(),
+        })
+    }
+
+    /// The readings so far, in the order of the meters.
+    pub fn readings(&self) -> MeterRun {
+        MeterRun {
+            readings: self.states.iter().map(reading).collect(),
+            dropped: self.dropped,
+            wall_time_s: self.start.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+impl Progressive for MeterSession<'_> {
+    fn step(&mut self) -> Option<PassStats> {
+        let opts = &self.opts;
+        let mut targets: Vec<u64> = self
+            .states
+            .iter_mut()
+            .map(|s| next_target(s, opts))
+            .collect();
+        if !fit_time_budget(&mut self.states, &mut targets, opts, self.start) {
+            return None;
+        }
+        let blocks = blocks(&self.states, &targets);
+        if blocks.is_empty() {
+            return None;
+        }
+        let (estimator, sensors, seed) = (&*self.estimator, &self.sensors, opts.seed);
+        let max_depth = opts.max_depth;
+        let results: Vec<(Stats, u64)> = self.pool.install(|| {
+            blocks
+                .par_iter()
+                .map_init(
+                    || Workspace::new(max_depth, 0),
+                    |ws, b| sample_block(estimator, &sensors[b.meter], b, seed, ws),
+                )
+                .collect()
+        });
+        for (b, (stats, bad)) in blocks.iter().zip(results) {
+            let st = &mut self.states[b.meter];
+            st.stats.merge(&stats);
+            st.taken = b.end;
+            self.dropped += bad;
+        }
+        self.passes += 1;
+        Some(PassStats {
+            pass: self.passes,
+            samples: self.states.iter().map(|s| s.taken).sum(),
+            target: None,
+            wall_time_s: self.start.elapsed().as_secs_f64(),
+            dropped: self.dropped,
+            variance: self
+                .states
+                .iter()
+                .map(|s| s.stats.variance() / s.stats.n as f64)
+                .collect(),
+        })
+    }
+}
+
+fn reading(s: &State) -> Reading {
+    Reading {
+        value: s.stats.mean,
+        ci95: s.stats.ci95(),
+        samples: s.stats.n,
+        capped: s.capped,
+    }
+}
+
+/// The sample count a reading should reach in the next round (its current count when it is
+/// finished). Under a relative-error target the count needed is extrapolated from
+/// ci95 ∝ 1/√n with 20% to spare, at most ×4 per round (the variance estimate of a
+/// heavy-tailed estimator can be far off early), rounded to whole blocks.
+fn next_target(s: &mut State, opts: &MeterOptions) -> u64 {
+    if s.finished {
+        return s.taken;
+    }
+    let timed = opts.time_budget.is_some();
+    let target = match opts.stop {
+        Stop::Samples(n) if s.taken >= n => None,
+        // Under a time budget, growing rounds so that the budget is checked often.
+        Stop::Samples(n) if timed => Some(n.min(round_up((2 * s.taken).max(BLOCK)))),
+        Stop::Samples(n) => Some(n),
+        Stop::RelError(_) if s.taken < MIN_SAMPLES_REL.min(opts.max_samples) => {
+            Some(MIN_SAMPLES_REL.min(opts.max_samples))
+        }
+        Stop::RelError(r) if s.stats.relative_ci95() < r => None,
+        Stop::RelError(_) if s.taken >= opts.max_samples => {
+            s.capped = Some(Cap::Samples);
+            None
+        }
+        Stop::RelError(r) => {
+            let rel = s.stats.relative_ci95();
+            let need = s.taken as f64 * (rel / r).powi(2) * 1.2;
+            // max/min rather than clamp: no panic on NaN or crossed bounds.
+            let grow = need.max((s.taken + BLOCK) as f64).min(4.0 * s.taken as f64);
+            Some(round_up(grow.min(u64::MAX as f64 / 2.0) as u64).min(opts.max_samples))
+        }
+    };
+    match target {
+        Some(t) => t,
+        None => {
+            s.finished = true;
+            s.taken
+        }
+    }
+}
+
+fn round_up(n: u64) -> u64 {
+    n.div_ceil(BLOCK) * BLOCK
+}
+
+/// Shrinks the next round so that it should end within the time budget, judging by the
+/// sampling rate so far; when the budget is spent, marks the unfinished readings as capped
+/// and returns false.
+fn fit_time_budget(
+    states: &mut [State],
+    targets: &mut [u64],
+    opts: &MeterOptions,
+    start: Instant,
+) -> bool {
+    let Some(budget) = opts.time_budget else {
+        return true;
+    };
+    let elapsed = start.elapsed().as_secs_f64();
+    let taken: u64 = states.iter().map(|s| s.taken).sum();
+    let wanted: u64 = states.iter().zip(&*targets).map(|(s, t)| t - s.taken).sum();
+    if wanted == 0 {
+        return true;
+    }
+    if elapsed >= budget {
+        for s in states.iter_mut().filter(|s| !s.finished) {
+            s.finished = true;
+            s.capped = Some(Cap::Time);
+        }
+        return false;
+    }
+    if taken == 0 {
+        return true;
+    }
+    let affordable = (budget - elapsed) * taken as f64 / elapsed.max(1e-9);
+    if (wanted as f64) <= affordable {
+        return true;
+    }
+    let scale = affordable / wanted as f64;
+    for (s, t) in states.iter().zip(targets.iter_mut()) {
+        if *t > s.taken {
+            let more = round_up((((*t - s.taken) as f64) * scale) as u64).max(BLOCK);
+            *t = (*t).min(s.taken + more);
+        }
+    }
+    true
+}
+
+/// The round's work: for each reading, the blocks from its current count to its target.
+fn blocks(states: &[State], targets: &[u64]) -> Vec<Block> {
+    let mut out = Vec::new();
+    for (meter, (s, &target)) in states.iter().zip(targets).enumerate() {
+        let mut first = s.taken;
+        while first < target {
+            let end = (first / BLOCK + 1).saturating_mul(BLOCK).min(target);
+            out.push(Block { meter, first, end });
+            first = end;
+        }
+    }
+    out
+}
+
+/// The statistics of one block of samples and the number of non-finite ones dropped. Each
+/// sample's photometric Y (lx or cd/m²) uses the final wavelengths, so a termination applies
+/// to the whole estimate.
+fn sample_block(
+    estimator: &dyn Estimator,
+    m: &MeterSensor,
+    b: &Block,
+    seed: u64,
+    ws: &mut Workspace,
+) -> (Stats, u64) {
+    let mut stats = Stats::default();
+    let mut dropped = 0;
+    for s in b.first..b.end {
+        let mut sampler = Sampler::new(seed, b.meter as u64, s);
+        let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+        let l = estimator.meter_sample(m, &mut lambda, &mut sampler, ws);
+        let y = sampled_to_xyz(l, &lambda)[1];
+        if y.is_finite() {
+            stats.push(f64::from(y));
+        } else {
+            dropped += 1;
+        }
+    }
+    (stats, dropped)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_follow_fixed_boundaries() {
+        let states = [
+            State {
+                taken: 300,
+                ..Default::default()
+            },
+            State::default(),
+        ];
+        let b = blocks(&states, &[700, 100]);
+        let spans: Vec<(usize, u64, u64)> = b.iter().map(|b| (b.meter, b.first, b.end)).collect();
+        assert_eq!(spans, [(0, 300, 512), (0, 512, 700), (1, 0, 100)]);
+    }
+
+    #[test]
+    fn relative_error_rounds_grow_and_stop() {
+        let opts = MeterOptions {
+            stop: Stop::RelError(0.01),
+            max_samples: 1 << 20,
+            ..Default::default()
+        };
+        let mut s = State::default();
+        assert_eq!(next_target(&mut s, &opts), MIN_SAMPLES_REL);
+        // 1024 samples with a relative ci of 4%: needs ~16× more, grows by at most 4×.
+        s.taken = 1024;
+        s.stats = Stats {
+            n: 1024,
+            mean: 1.0,
+            m2: (0.04 / 1.96 * 32.0f64).powi(2) * 1023.0,
+        };
+        assert_eq!(next_target(&mut s, &opts), 4096);
+        s.stats.m2 = 0.0;
+        assert_eq!(next_target(&mut s, &opts), 1024);
+        assert!(s.finished && s.capped.is_none());
+    }
+}

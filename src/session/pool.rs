@@ -1,0 +1,14 @@
+//! The worker threads of a session (a rayon pool of the requested size, all cores by default).
+
+use crate::error::{Error, Result};
+
+/// A thread pool of `threads` workers (at least 1), or one per core.
+pub(super) fn new(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        builder = builder.num_threads(n.max(1));
+    }
+    builder
+        .build()
+        .map_err(|e| Error::resource(format!("cannot start worker threads: {e}")))
+}
