@@ -23,7 +23,6 @@ use spectral_render::integrator::bidir::connect::{
 };
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
-use spectral_render::testing::chi2::ln_gamma;
 use spectral_render::texture::TextureFilter;
 
 /// The bidirectional context's default (`BidirContext::new`): textures unfiltered.
@@ -45,76 +44,46 @@ use std::path::Path;
 // Stages
 // ---------------------------------------------------------------------------------------------
 
-/// A camera at `pos` looking down −Z with a square field of half-tangent `half_tan`.
-fn camera_at(pos: [f32; 3], half_tan: f32, extra: &str) -> String {
-    let focal = 10.0 / half_tan;
-    format!(
-        "def Camera \"Cam\"\n{{\n    float focalLength = {focal}\n    float horizontalAperture = 20\n    float verticalAperture = 20\n    float2 clippingRange = (0.01, 1000)\n{extra}    double3 xformOp:translate = ({}, {}, {})\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n\n",
-        pos[0], pos[1], pos[2]
-    )
-}
-
-/// A polygon mesh (one face) with optional per-vertex normals and extra lines.
-fn polygon(name: &str, points: &[[f32; 3]], normals: Option<&[[f32; 3]]>, extra: &str) -> String {
-    let list = |v: &[[f32; 3]]| {
-        v.iter()
-            .map(|p| format!("({}, {}, {})", p[0], p[1], p[2]))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let idx: Vec<String> = (0..points.len()).map(|i| i.to_string()).collect();
-    let normals = normals
-        .map(|n| format!("    normal3f[] normals = [{}]\n", list(n)))
-        .unwrap_or_default();
-    format!(
-        "def Mesh \"{name}\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{{\n    int[] faceVertexCounts = [{}]\n    int[] faceVertexIndices = [{}]\n    point3f[] points = [{}]\n{normals}{extra}}}\n\n",
-        points.len(),
-        idx.join(", "),
-        list(points)
-    )
-}
-
 fn mesh_light(name: &str, points: &[[f32; 3]], intensity: f32, two_sided: bool) -> String {
     let extra = format!(
         "    float inputs:intensity = {intensity}\n    uniform bool doubleSided = {}\n{}",
         two_sided as u8,
         binding("Grey")
     );
-    polygon(name, points, None, &extra).replace(
-        "[\"MaterialBindingAPI\"]",
-        "[\"MeshLightAPI\", \"MaterialBindingAPI\"]",
+    mesh(
+        name,
+        MESH_LIGHT_API,
+        points,
+        &one_face(points.len()),
+        &extra,
     )
 }
 
 fn looks() -> String {
-    let flat = |r: f32| {
-        format!("        float2[] inputs:reflectance:samples = [(360, {r}), (830, {r})]\n")
-    };
-    let mut s = "def Scope \"Looks\"\n{\n".to_string();
-    s += &material("Grey", "spectral:diffuse", &flat(0.6));
-    s += &material(
-        "Red",
-        "spectral:diffuse",
-        "        float2[] inputs:reflectance:samples = [(360, 0.05), (560, 0.1), (620, 0.7), (830, 0.8)]\n",
-    );
-    s += &material("White", "spectral:diffuse", &flat(0.8));
-    s += &material(
-        "Gold",
-        "spectral:conductor",
-        "        uniform token inputs:metal = \"Au\"\n        float inputs:roughness = 0.2\n",
-    );
-    s += &material(
-        "Mirror",
-        "spectral:conductor",
-        "        uniform token inputs:metal = \"Ag\"\n        float inputs:roughness = 0\n",
-    );
-    s += &material(
-        "Glass",
-        "spectral:dielectric",
-        "        float inputs:ior = 1.5\n        float inputs:roughness = 0\n",
-    );
-    s += "}\n\n";
-    s
+    looks_scope(
+        &(flat_diffuse("Grey", 0.6)
+            + &material(
+                "Red",
+                "spectral:diffuse",
+                "        float2[] inputs:reflectance:samples = [(360, 0.05), (560, 0.1), (620, 0.7), (830, 0.8)]\n",
+            )
+            + &flat_diffuse("White", 0.8)
+            + &material(
+                "Gold",
+                "spectral:conductor",
+                "        uniform token inputs:metal = \"Au\"\n        float inputs:roughness = 0.2\n",
+            )
+            + &material(
+                "Mirror",
+                "spectral:conductor",
+                "        uniform token inputs:metal = \"Ag\"\n        float inputs:roughness = 0\n",
+            )
+            + &material(
+                "Glass",
+                "spectral:dielectric",
+                "        float inputs:ior = 1.5\n        float inputs:roughness = 0\n",
+            )),
+    )
 }
 
 /// A UsdLux light with a transform.
@@ -342,12 +311,6 @@ fn small_light_stage_with(panel_look: &str) -> String {
     s
 }
 
-fn load_text(name: &str, text: &str, res: (u32, u32)) -> Scene {
-    let dir = temp_dir(name);
-    let path = write(&dir, &format!("{name}.usda"), text);
-    scene::load(&path, Some(res)).unwrap_or_else(|e| panic!("{e}"))
-}
-
 fn render_with(
     scene: &Scene,
     integrator: Integrator,
@@ -370,50 +333,6 @@ fn render_with(
 // ---------------------------------------------------------------------------------------------
 // Statistics
 // ---------------------------------------------------------------------------------------------
-
-/// Regularised incomplete beta I_x(a, b) by its continued fraction (modified Lentz).
-fn inc_beta(a: f64, b: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x >= 1.0 {
-        return 1.0;
-    }
-    if x > (a + 1.0) / (a + b + 2.0) {
-        return 1.0 - inc_beta(b, a, 1.0 - x);
-    }
-    let front =
-        (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln()).exp() / a;
-    let tiny = 1e-300;
-    let (mut c, mut d) = (1.0, 1.0 - (a + b) * x / (a + 1.0));
-    d = 1.0 / if d.abs() < tiny { tiny } else { d };
-    let mut f = d;
-    for m in 1..400 {
-        let m = m as f64;
-        for num in [
-            m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m)),
-            -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0)),
-        ] {
-            d = 1.0 + num * d;
-            d = 1.0 / if d.abs() < tiny { tiny } else { d };
-            c = 1.0 + num / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            f *= c * d;
-        }
-        if (c * d - 1.0).abs() < 1e-14 {
-            break;
-        }
-    }
-    front * f
-}
-
-/// Two-sided p-value of a statistic z under Student's t with `df` degrees of freedom
-/// (the normal distribution as df → ∞).
-fn two_sided_p(z: f64, df: f64) -> f64 {
-    inc_beta(0.5 * df, 0.5, df / (df + z * z))
-}
 
 #[test]
 fn p_values_match_tables() {
@@ -447,19 +366,15 @@ fn batches(
     let mut var_mean = vec![[0.0; 3]; n];
     for p in 0..n {
         for c in 0..3 {
-            let v: Vec<f64> = outs.iter().map(|o| o[p][c] as f64).collect();
-            let m = v.iter().sum::<f64>() / k as f64;
-            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64;
+            let (m, var) = mean_and_var(outs.iter().map(|o| o[p][c] as f64));
             mean[p][c] = m;
             var_mean[p][c] = var / k as f64;
         }
     }
-    let image: Vec<f64> = outs
-        .iter()
-        .map(|o| o.iter().map(|p| p[1] as f64).sum::<f64>() / n as f64)
-        .collect();
-    let m = image.iter().sum::<f64>() / k as f64;
-    let var = image.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64;
+    let (m, var) = mean_and_var(
+        outs.iter()
+            .map(|o| o.iter().map(|p| p[1] as f64).sum::<f64>() / n as f64),
+    );
     Batches {
         k,
         mean,
@@ -1416,8 +1331,7 @@ fn white_furnace_with_bdpt_and_light_tracing() {
 #[test]
 fn plane_under_a_uniform_dome_reads_albedo_times_radiance() {
     let l = 50.0f32;
-    let flat = "        float2[] inputs:reflectance:samples = [(360, 0.5), (830, 0.5)]\n";
-    let s = dome_plane_stage("spectral:diffuse", flat, l);
+    let s = dome_plane_stage(l, &looks_scope(&flat_diffuse("Paint", 0.5)), "");
     let scene = load_text("dome-plane", &s, (12, 12));
     let expected = 0.5 * l as f64;
     // Light tracing reaches the small visible part of the plane rarely: more paths.

@@ -1,4 +1,4 @@
-//! χ² goodness-of-fit tests of every sampling routine (DESIGN.md §7, issue 3), all through the
+//! χ² goodness-of-fit tests of every sampling routine (docs/design.md §7, issue 3), all through the
 //! one harness `spectral_render::sampling::chi2`: BSDF samplers, light sampling, wavelength
 //! sampling, the warps and the piecewise-constant distributions.
 //!

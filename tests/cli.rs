@@ -19,7 +19,7 @@ fn small_stage() -> String {
 fn renders_an_exr_with_calibrated_channels_and_a_preview() {
     let dir = temp_dir("cli-render");
     write(&dir, "small.usda", &small_stage());
-    let o = run_cli(
+    let o = spectral_render(
         &[
             "small.usda",
             "--spp",
@@ -54,8 +54,8 @@ fn renders_an_exr_with_calibrated_channels_and_a_preview() {
 #[test]
 fn renders_the_peers_cornell_box() {
     let dir = temp_dir("cli-cbox");
-    let cbox = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/cbox.usda");
-    let o = run_cli(
+    let cbox = cbox_path();
+    let o = spectral_render(
         &[
             cbox.to_str().unwrap(),
             "-o",
@@ -82,7 +82,7 @@ fn assert_clean_error(name: &str, text: Option<&str>, must_mention: &[&str]) {
     if let Some(t) = text {
         write(&dir, name, t);
     }
-    let o = run_cli(&[name, "--spp", "1"], &dir);
+    let o = spectral_render(&[name, "--spp", "1"], &dir);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{name}: {err}");
     assert!(!err.contains("panicked"), "{name}: {err}");
@@ -102,11 +102,7 @@ fn missing_file() {
 
 #[test]
 fn malformed_usda() {
-    assert_clean_error(
-        "broken.usda",
-        Some("#usda 1.0\ndef Xform \"A\"\n{\n    float x = (1, \n"),
-        &["broken.usda"],
-    );
+    assert_clean_error("broken.usda", Some(MALFORMED_USDA), &["broken.usda"]);
 }
 
 #[test]
@@ -164,7 +160,7 @@ fn bad_options_are_rejected() {
         ["small.usda", "--resolution", "0x5"],
         ["small.usda", "--integrator", "magic"],
     ] {
-        let o = run_cli(&args, &dir);
+        let o = spectral_render(&args, &dir);
         assert!(!o.status.success(), "{args:?} accepted");
         assert!(!stderr(&o).contains("panicked"));
     }

@@ -5,7 +5,6 @@
 mod common;
 use common::*;
 use std::path::Path;
-use std::process::Command;
 
 /// colour-science's patch order, row by row from the top left (scenes/colorchecker.usda).
 const PATCHES: [&str; 24] = [
@@ -62,11 +61,7 @@ fn patch_xyz(xyz: &[[f32; 3]], i: usize) -> [f64; 3] {
 #[test]
 fn colorchecker_matches_colour_science_within_delta_e_1() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let status = Command::new("bash")
-        .arg(root.join("tools/venv.sh"))
-        .status()
-        .expect("run tools/venv.sh");
-    assert!(status.success(), "tools/venv.sh failed");
+    colour_science_venv();
 
     let out = render_file(
         &root.join("scenes/colorchecker.usda"),
@@ -90,20 +85,7 @@ fn colorchecker_matches_colour_science_within_delta_e_1() {
     let dir = temp_dir("colorchecker");
     let json_path = write(&dir, "patches.json", &json);
 
-    let python = root.join(".venv/bin/python");
-    let check = Command::new(python)
-        .arg(root.join("tools/check_colorchecker.py"))
-        .arg(&json_path)
-        .output()
-        .expect("run check_colorchecker.py");
-    let report = format!(
-        "{}{}",
-        String::from_utf8_lossy(&check.stdout),
-        String::from_utf8_lossy(&check.stderr)
-    );
+    let (passed, report) = colour_science_check("check_colorchecker.py", &json_path);
     println!("{report}");
-    assert!(
-        check.status.success(),
-        "ColorChecker check failed:\n{report}"
-    );
+    assert!(passed, "ColorChecker check failed:\n{report}");
 }

@@ -530,8 +530,8 @@ fn compare(a: &RenderOutput, b: &RenderOutput) -> (f64, f64, f64) {
                     })
                     .collect()
             };
-            let (ma, sa) = mean_and_sem(pix(a).into_iter());
-            let (mb, sb) = mean_and_sem(pix(b).into_iter());
+            let (ma, sa) = mean_and_sem(pix(a));
+            let (mb, sb) = mean_and_sem(pix(b));
             let z = (ma - mb) / (sa * sa + sb * sb).sqrt().max(1e-3 * ma.max(mb)).max(1e-9);
             max_z = max_z.max(z.abs());
         }

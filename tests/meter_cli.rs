@@ -1,14 +1,11 @@
-//! `spectral-render meter` on the command line: readings in stage units as JSON, the
-//! `--integrator` flag, illuminance grids (CSV, JSON, PNG and their summary), one-line errors
-//! with exit code 1, and the warnings of readings a cap stopped. The estimators themselves are
-//! checked against closed forms in `tests/meters.rs`.
+//! The `spectral-render meter` command line: JSON readings in stage units, the
+//! `--integrator` flag, grid outputs (CSV, JSON, PNG) and their summary, one-line errors,
+//! and readings stopped by a cap. The library-level meter checks are in `tests/meters.rs`.
 
 mod common;
+use common::meters::{lambert, TOL};
 use common::*;
 use glam::DVec3;
-
-/// The analytic cases' accuracy bound (as in `tests/meters.rs`).
-const TOL: f64 = 0.005;
 
 /// The raw JSON text of `"key":` in `entry` (a number, string, bool or flat array).
 fn field<'a>(entry: &'a str, key: &str) -> &'a str {
@@ -43,7 +40,7 @@ fn numbers(entry: &str, key: &str) -> Vec<f64> {
 /// A Z-up stage in centimetres: a normalized 100 × 50 cm RectLight of 1000 "nits" (so
 /// L = 1000 / 0.5 m² = 2000 cd/m² in world units) 250 cm up, facing down (its local −Z).
 fn cm_stage() -> String {
-    "#usda 1.0\n(\n    metersPerUnit = 0.01\n    upAxis = \"Z\"\n)\n\n".to_string()
+    stage_header(0.01, "Z")
         + &prim(
             "RectLight",
             "Panel",
@@ -63,7 +60,7 @@ fn cm_stage_exact(at: DVec3, n: DVec3) -> f64 {
 fn cli_json_readings_in_stage_units() {
     let dir = temp_dir("cli-meter");
     write(&dir, "room.usda", &cm_stage());
-    let o = run_cli(
+    let o = spectral_render(
         &[
             "meter",
             "room.usda",
@@ -118,7 +115,7 @@ fn cli_json_readings_in_stage_units() {
         assert!((value / exact - 1.0).abs() < TOL, "{value} vs {exact}");
     }
     // A luminance meter looking up at the panel reads its luminance; one looking down, 0.
-    let o = run_cli(
+    let o = spectral_render(
         &[
             "meter",
             "room.usda",
@@ -185,7 +182,7 @@ fn cli_integrator_flag_selects_light_tracing_or_bdpt() {
             "4",
             "--json",
         ];
-        let o = run_cli(&[&base[..], extra].concat(), &dir);
+        let o = spectral_render(&[&base[..], extra].concat(), &dir);
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
         let out = stdout(&o);
         assert!(out.trim_start().starts_with("{\"meters\":[") && out.trim_end().ends_with("]}"));
@@ -209,11 +206,11 @@ fn cli_integrator_flag_selects_light_tracing_or_bdpt() {
         "2048",
         "--json",
     ];
-    let o = run_cli(&[&lum[..], &["--integrator", "bdpt"]].concat(), &dir);
+    let o = spectral_render(&[&lum[..], &["--integrator", "bdpt"]].concat(), &dir);
     assert!(o.status.success(), "{}", stderr(&o));
     let (l, ci) = (number(&stdout(&o), "value"), number(&stdout(&o), "ci95"));
     assert!((l - 2000.0).abs() < 4.0 * ci / 1.96 + 1e-9, "{l} ± {ci}");
-    let o = run_cli(&[&lum[..], &["--integrator", "light"]].concat(), &dir);
+    let o = spectral_render(&[&lum[..], &["--integrator", "light"]].concat(), &dir);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -239,7 +236,7 @@ fn cli_grid_writes_csv_json_and_png_with_a_consistent_summary() {
     let dir = temp_dir("cli-grid");
     write(&dir, "room.usda", &cm_stage());
     std::fs::create_dir_all(dir.join("out")).unwrap();
-    let o = run_cli(
+    let o = spectral_render(
         &[
             "meter",
             "room.usda",
@@ -309,11 +306,7 @@ fn cli_grid_writes_csv_json_and_png_with_a_consistent_summary() {
 fn cli_errors_are_one_line_with_exit_code_1() {
     let dir = temp_dir("cli-meter-errors");
     write(&dir, "room.usda", &cm_stage());
-    write(
-        &dir,
-        "broken.usda",
-        "#usda 1.0\ndef Xform \"A\"\n{\n    float x = (1, \n",
-    );
+    write(&dir, "broken.usda", MALFORMED_USDA);
     let cases: &[(&[&str], &str)] = &[
         (
             &[
@@ -481,7 +474,7 @@ fn cli_errors_are_one_line_with_exit_code_1() {
     for (args, must) in cases {
         let mut all = vec!["meter"];
         all.extend_from_slice(args);
-        let o = run_cli(&all, &dir);
+        let o = spectral_render(&all, &dir);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
@@ -515,7 +508,7 @@ fn cli_reports_readings_stopped_by_a_cap() {
         (["--time", "0.3"], "time cap"),
     ] {
         let t = std::time::Instant::now();
-        let o = run_cli(&[&base[..], &extra[..]].concat(), &dir);
+        let o = spectral_render(&[&base[..], &extra[..]].concat(), &dir);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(
             t.elapsed().as_secs_f64() < 20.0,

@@ -1,15 +1,16 @@
 //! Light meters against closed-form answers (all references computed here): point-like,
 //! rectangle (Lambert's polygon formula), disk, sphere, dome and distant lights; flux
 //! conservation in a closed black box; an integrating sphere; a white furnace; coverage of the
-//! 95% interval; stage units (the command line: `tests/meter_cli.rs`). The analytic cases are
-//! checked with the path tracer, light tracing and BDPT (`--integrator`), which must also agree
-//! with each other in the Cornell box.
+//! 95% interval. The analytic cases are checked with the path tracer, light tracing and BDPT,
+//! which must also agree with each other in the Cornell box. Stage units and the CLI's JSON,
+//! `--integrator`, grid outputs and errors are in `tests/meter_cli.rs`.
 //!
 //! Accuracy: every analytic case must be within 0.5 %, and each reading is sampled until
 //! ci95/value < 0.2 % (σ ≤ 0.1 %), so 0.5 % is at least 4.9 σ of the estimator. Measured
 //! errors are printed (`cargo test --release --test meters -- --nocapture`).
 
 mod common;
+use common::meters::{lambert, TOL};
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
 use spectral_render::integrator::{Settings, Workspace};
@@ -22,15 +23,12 @@ use spectral_render::texture::TextureFilter;
 use spectral_render::{Integrator, Meter, MisHeuristic};
 use std::f64::consts::PI;
 
-/// The accuracy bound for analytic cases.
-const TOL: f64 = 0.005;
 /// Sampling target of accuracy tests: ci95/value below this (σ ≤ TOL / 4.9).
 const REL: f64 = 0.002;
 
+/// Meters need no image: the stage is loaded with a 1 × 1 film.
 fn load(name: &str, text: &str) -> Scene {
-    let dir = temp_dir(name);
-    let path = write(&dir, &format!("{name}.usda"), text);
-    scene::load(&path, Some((1, 1))).unwrap_or_else(|e| panic!("{e}"))
+    load_text(name, text, (1, 1))
 }
 
 /// The integrators that estimate illuminance (light tracing cannot estimate luminance).
@@ -103,35 +101,11 @@ fn assert_exact(label: &str, r: &Reading, exact: f64) -> f64 {
 // Stage text
 // ---------------------------------------------------------------------------------------
 
-/// A Lambertian material of flat reflectance `rho` under /Looks.
-fn looks(name: &str, rho: f64) -> String {
-    let inputs =
-        format!("        float2[] inputs:reflectance:samples = [(360, {rho}), (830, {rho})]\n");
-    format!(
-        "def Scope \"Looks\"\n{{\n{}}}\n\n",
-        material(name, "spectral:diffuse", &inputs)
-    )
-}
-
-/// A polygon mesh with the given faces, bound to /Looks/`look`.
-fn mesh(name: &str, points: &[DVec3], faces: &[Vec<usize>], look: &str) -> String {
-    let pts: Vec<String> = points
-        .iter()
-        .map(|p| format!("({}, {}, {})", p.x, p.y, p.z))
-        .collect();
-    let counts: Vec<String> = faces.iter().map(|f| f.len().to_string()).collect();
-    let idx: Vec<String> = faces.iter().flatten().map(|i| i.to_string()).collect();
-    format!(
-        "def Mesh \"{name}\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{{\n    int[] faceVertexCounts = [{}]\n    int[] faceVertexIndices = [{}]\n    point3f[] points = [{}]\n{}}}\n\n",
-        counts.join(", "),
-        idx.join(", "),
-        pts.join(", "),
-        binding(look)
-    )
-}
-
-fn quad(name: &str, corners: [DVec3; 4], look: &str) -> String {
-    mesh(name, &corners, &[vec![0, 1, 2, 3]], look)
+/// The floor y = 0 over x ∈ [x0, x1], z ∈ [z0, z1], facing up, bound to /Looks/`look`.
+fn floor_quad(x: [f64; 2], z: [f64; 2], look: &str) -> String {
+    let p = |x, z| DVec3::new(x, 0.0, z);
+    let corners = [p(x[0], z[0]), p(x[0], z[1]), p(x[1], z[1]), p(x[1], z[0])];
+    polygon("Floor", &corners, None, &binding(look))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -199,8 +173,8 @@ fn integrating_sphere(rho: f64) -> IntegratingSphere {
     let (flux, lamp) = (1000.0, 0.02);
     let (n_lon, n_lat) = (32, 16);
     let (pts, faces) = uv_sphere(1.0, n_lon, n_lat);
-    let mut s = header() + &looks("Wall", rho);
-    s += &mesh("Sphere", &pts, &faces, "Wall");
+    let mut s = header() + &looks_scope(&flat_diffuse("Wall", rho));
+    s += &mesh("Sphere", BINDING_API, &pts, &faces, &binding("Wall"));
     let inputs =
         format!("    float inputs:radius = {lamp}\n    float spectral:luminousFlux = {flux}\n");
     s += &prim("SphereLight", "Lamp", &inputs);
@@ -330,27 +304,19 @@ fn rect_light_matches_lamberts_polygon_formula_on_a_floor_and_a_wall() {
     let l = 2000.0;
     let (light, corners) = rect_light(1.2, 0.6, l, DVec3::new(0.3, 2.5, -0.2), 30.0);
     // Black floor (y = 0) and wall (x = −0.5, facing +x) that the meters lie on.
-    let mut s = header() + &looks("Black", 0.0) + &light;
+    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0)) + &light;
     let p = |x, y, z| DVec3::new(x, y, z);
-    s += &quad(
-        "Floor",
-        [
-            p(-0.5, 0.0, -12.0),
-            p(-0.5, 0.0, 12.0),
-            p(25.0, 0.0, 12.0),
-            p(25.0, 0.0, -12.0),
-        ],
-        "Black",
-    );
-    s += &quad(
+    s += &floor_quad([-0.5, 25.0], [-12.0, 12.0], "Black");
+    s += &polygon(
         "Wall",
-        [
+        &[
             p(-0.5, 0.0, -8.0),
             p(-0.5, 2.49, -8.0),
             p(-0.5, 2.49, 8.0),
             p(-0.5, 0.0, 8.0),
         ],
-        "Black",
+        None,
+        &binding("Black"),
     );
     let scene = load("rect", &s);
     let floor = [
@@ -493,23 +459,14 @@ fn point_like_source_follows_the_inverse_square_cosine_law() {
 #[test]
 fn uniform_dome_gives_pi_l() {
     let l = 300.0;
-    let mut s = header() + &looks("Black", 0.0);
+    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0));
     s += &prim(
         "DomeLight",
         "Sky",
         &format!("    float inputs:intensity = {l}\n"),
     );
+    s += &floor_quad([-1e3, 1e3], [-1e3, 1e3], "Black");
     let p = |x, y, z| DVec3::new(x, y, z);
-    s += &quad(
-        "Floor",
-        [
-            p(-1e3, 0.0, -1e3),
-            p(-1e3, 0.0, 1e3),
-            p(1e3, 0.0, 1e3),
-            p(1e3, 0.0, -1e3),
-        ],
-        "Black",
-    );
     let scene = load("dome", &s);
     // Upward meters see the whole sky: E = πL. A tilted one (angle β to the vertical) also
     // sees the black floor: E = πL (1 + cos β)/2, the sky view factor; a vertical one just
@@ -575,7 +532,7 @@ fn flux_through_the_walls_of_a_closed_black_box_is_the_sources_flux() {
     let n = 16;
     // The cube [−1, 1]³ with black walls; an isotropic 10 000 lm lamp off centre.
     let p = |x, y, z| DVec3::new(x, y, z);
-    let mut s = header() + &looks("Black", 0.0);
+    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0));
     // Each wall: corner, the two edge vectors, inward normal.
     let walls = [
         (
@@ -616,7 +573,12 @@ fn flux_through_the_walls_of_a_closed_black_box_is_the_sources_flux() {
         ),
     ];
     for (k, &(o, u, v, _)) in walls.iter().enumerate() {
-        s += &quad(&format!("Wall{k}"), [o, o + u, o + u + v, o + v], "Black");
+        s += &polygon(
+            &format!("Wall{k}"),
+            &[o, o + u, o + u + v, o + v],
+            None,
+            &binding("Black"),
+        );
     }
     let body =
         format!("    float inputs:radius = 0.05\n    float spectral:luminousFlux = {flux}\n")
@@ -664,7 +626,10 @@ fn furnace_meters_read_le_over_one_minus_rho_with_every_integrator() {
     // ρ = 0.5 keeps paths short (this is about the estimators, not about long paths, which
     // the integrating sphere covers).
     let (le, rho) = (2.0, 0.5);
-    let scene = load("furnace", &furnace_stage(le as f32, rho as f32));
+    let scene = load(
+        &format!("furnace-{rho}"),
+        &furnace_stage(le as f32, rho as f32),
+    );
     let l = le / (1.0 - rho);
     let at = Vec3::new(0.2, -0.3, 0.1);
     let e_meter = [Meter::illuminance(at, Vec3::new(0.3, 1.0, -0.2)).unwrap()];
@@ -769,12 +734,6 @@ fn path_light_and_bdpt_meters_agree_in_the_cornell_box() {
 #[test]
 fn shaped_lights_agree_with_path_light_and_bdpt() {
     let ies = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ies/downlight.ies");
-    let floor = [
-        DVec3::new(-3.0, 0.0, -3.0),
-        DVec3::new(-3.0, 0.0, 3.0),
-        DVec3::new(3.0, 0.0, 3.0),
-        DVec3::new(3.0, 0.0, -3.0),
-    ];
     let wall = [
         DVec3::new(-3.0, 0.0, -1.0),
         DVec3::new(3.0, 0.0, -1.0),
@@ -810,9 +769,9 @@ fn shaped_lights_agree_with_path_light_and_bdpt() {
         ),
     );
     let body = header()
-        + &looks("Grey", 0.5)
-        + &quad("Floor", floor, "Grey")
-        + &quad("Wall", wall, "Grey")
+        + &looks_scope(&flat_diffuse("Grey", 0.5))
+        + &floor_quad([-3.0, 3.0], [-3.0, 3.0], "Grey")
+        + &polygon("Wall", &wall, None, &binding("Grey"))
         + &downlight
         + &spotlight;
     let scene = load("shaped", &body);
@@ -857,7 +816,7 @@ fn shaped_lights_agree_with_path_light_and_bdpt() {
 /// contributions on both subpaths before and after it).
 #[test]
 fn meters_agree_through_dispersive_glass() {
-    let (pts, faces) = cube_mesh(1.0);
+    let (pts, faces) = cube(1.0);
     let slab: Vec<DVec3> = pts
         .iter()
         .map(|p| DVec3::new(p.x, 1.1 + 0.1 * p.y, p.z))
@@ -867,19 +826,9 @@ fn meters_agree_through_dispersive_glass() {
         "spectral:dielectric",
         "        uniform token inputs:glass = \"BK7\"\n",
     );
-    let mut s = header() + &looks("White", 0.8).replace("}\n\n", &format!("{glass}}}\n\n"));
-    s += &mesh("Slab", &slab, &faces, "Glass");
-    let p = |x, y, z| DVec3::new(x, y, z);
-    s += &quad(
-        "Floor",
-        [
-            p(-3.0, 0.0, -3.0),
-            p(-3.0, 0.0, 3.0),
-            p(3.0, 0.0, 3.0),
-            p(3.0, 0.0, -3.0),
-        ],
-        "White",
-    );
+    let mut s = header() + &looks_scope(&(flat_diffuse("White", 0.8) + &glass));
+    s += &mesh("Slab", BINDING_API, &slab, &faces, &binding("Glass"));
+    s += &floor_quad([-3.0, 3.0], [-3.0, 3.0], "White");
     let body = "    float inputs:radius = 0.5\n    float inputs:intensity = 2000\n".to_string()
         + &xform(&[("translate", "(0, 3, 0)".into()), ("rotateX", "-90".into())]);
     s += &prim("DiskLight", "Disk", &body);

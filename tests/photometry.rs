@@ -17,7 +17,6 @@ use spectral_render::spectral::{blackbody, data, photometry, xyz};
 use spectral_render::spectral::{DenseSpectrum, SampledWavelengths};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -51,11 +50,7 @@ fn illuminant_stage() -> (String, Vec<(String, &'static str)>) {
 
 #[test]
 fn photometry_matches_colour_science() {
-    let status = Command::new("bash")
-        .arg(root().join("tools/venv.sh"))
-        .status()
-        .expect("run tools/venv.sh");
-    assert!(status.success(), "tools/venv.sh failed");
+    colour_science_venv();
     let dir = temp_dir("photometry-colour");
 
     let illuminants: Vec<String> = data::illuminant_names()
@@ -86,7 +81,7 @@ fn photometry_matches_colour_science() {
 
     let (stage, prims) = illuminant_stage();
     write(&dir, "illuminants.usda", &stage);
-    let out = run_cli(&["lights", "illuminants.usda", "--json"], &dir);
+    let out = spectral_render(&["lights", "illuminants.usda", "--json"], &dir);
     assert!(
         out.status.success(),
         "{}",
@@ -106,18 +101,9 @@ fn photometry_matches_colour_science() {
         emission.join(", ")
     );
     let json_path = write(&dir, "photometry.json", &json);
-    let check = Command::new(root().join(".venv/bin/python"))
-        .arg(root().join("tools/check_lights.py"))
-        .arg(&json_path)
-        .output()
-        .expect("run check_lights.py");
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&check.stdout),
-        String::from_utf8_lossy(&check.stderr)
-    );
+    let (passed, text) = colour_science_check("check_lights.py", &json_path);
     println!("{text}");
-    assert!(check.status.success(), "photometry check failed:\n{text}");
+    assert!(passed, "photometry check failed:\n{text}");
 
     // The report's own numbers for the same lights: luminance as authored, Φ = π A L.
     let scene = scene::load(&dir.join("illuminants.usda"), None).unwrap();
@@ -393,7 +379,7 @@ fn report_follows_geometry_and_photometric_overrides() {
     assert!((a - 2856.0).abs() < 2.0, "{a}");
 
     // The CLI prints the same report; JSON nulls where a quantity is not defined.
-    let out = run_cli(&["lights", "lights.usda", "--json"], &dir);
+    let out = spectral_render(&["lights", "lights.usda", "--json"], &dir);
     assert!(
         out.status.success(),
         "{}",
@@ -403,7 +389,7 @@ fn report_follows_geometry_and_photometric_overrides() {
     assert!(json.contains("\"prim\": \"/Sky\""), "{json}");
     assert!(json.contains("\"luminous_flux_lm\": null"));
     assert!(String::from_utf8_lossy(&out.stderr).starts_with("loaded "));
-    let table_out = run_cli(&["lights", "lights.usda"], &dir);
+    let table_out = spectral_render(&["lights", "lights.usda"], &dir);
     let text = String::from_utf8_lossy(&table_out.stdout);
     assert!(
         text.contains("/Tube") && text.contains("CylinderLight"),
@@ -580,9 +566,7 @@ fn ies_intensity_read_back_from_renders_matches_the_candela_table() {
                 intensity_from_image(&out.xyz, res, half_tan, dist)
             })
             .collect();
-        let mean = values.iter().sum::<f64>() / seeds as f64;
-        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
-        let sem = (var / seeds as f64).sqrt();
+        let (mean, sem) = mean_and_sem(values);
         // The light subtends ±0.11°: averaging the bilinear table over that disk moves it by
         // less than 3e-4 (its kinks at the nodes); the seeds share random numbers across
         // directions, so their errors are correlated.
@@ -640,7 +624,7 @@ fn malformed_ies_file_is_an_error_with_path_and_line() {
     assert!(e.contains("/Down"), "{e}");
     assert!(e.contains(&format!("{}:8:", bad.display())), "{e}");
     assert!(e.contains("'abc'") && !e.contains('\n'), "{e}");
-    let out = run_cli(&["lights", "bad.usda"], &dir);
+    let out = spectral_render(&["lights", "bad.usda"], &dir);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(

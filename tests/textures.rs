@@ -116,10 +116,7 @@ fn textured_stage_st(
     surface_inputs: &str,
     st: &str,
 ) -> String {
-    let mut s = header();
-    s += &camera(1.0, 0.2, 0.0);
-    s += &format!("def DomeLight \"Sky\"\n{{\n    float inputs:intensity = {l}\n}}\n\n");
-    s += &format!(
+    let looks = format!(
         r#"def Scope "Looks"
 {{
     def Material "Paint"
@@ -150,14 +147,7 @@ fn textured_stage_st(
 
 "#
     );
-    s += &quad(
-        "Plane",
-        0.0,
-        1.0,
-        &format!("{st}{}", binding("Paint")),
-        "\"MaterialBindingAPI\"",
-    );
-    s
+    dome_plane_stage(l, &looks, st)
 }
 
 /// Mean and SEM of channel `ch` over the pixels of a 32×32 image in quadrant `q`
@@ -180,11 +170,18 @@ const CHECKER: [[u8; 4]; 4] = [
     [128, 128, 128, 255],
 ];
 
-/// Renders `stage` (a textured plane under a uniform dome of radiance `l`, textured with
-/// [`CHECKER`]) and checks that each quadrant reads L·texel within 6e-3·L + 5 SEM.
-fn assert_round_trip(dir: &Path, stage: &str, l: f32) {
-    let out = render_file(&write(dir, "tex.usda", stage), (32, 32), 64, 7, None);
-    for (k, texel) in CHECKER.iter().enumerate() {
+/// UsdUVTexture input: texels are raw values.
+const RAW: &str = "            token inputs:sourceColorSpace = \"raw\"\n";
+/// UsdPreviewSurface input: diffuseColor from the texture.
+const DIFFUSE_CONNECTED: &str =
+    "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
+
+/// Renders `stage` (a textured plane filling the view under a uniform dome of radiance `l`,
+/// textured with `q` by quadrant) at `spp` and checks that each quadrant reads L·texel within
+/// 6e-3·L + 5 SEM.
+fn assert_quadrants(dir: &Path, stage: &str, l: f32, q: [[u8; 4]; 4], spp: u32) {
+    let out = render_file(&write(dir, "quadrants.usda", stage), (32, 32), spp, 7, None);
+    for (k, texel) in q.iter().enumerate() {
         for (ch, &byte) in texel[..3].iter().enumerate() {
             let (mean, sem) = quadrant(&out, k, ch);
             let expected = f64::from(l) * f64::from(byte) / 255.0;
@@ -202,13 +199,8 @@ fn textured_diffuse_colour_round_trips_under_a_uniform_dome() {
     let l = 50.0f32;
     let dir = temp_dir("tex-render");
     quadrant_png(&dir.join("checker.png"), CHECKER);
-    let stage = textured_stage(
-        l,
-        "checker.png",
-        "            token inputs:sourceColorSpace = \"raw\"\n",
-        "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n",
-    );
-    assert_round_trip(&dir, &stage, l);
+    let stage = textured_stage(l, "checker.png", RAW, DIFFUSE_CONNECTED);
+    assert_quadrants(&dir, &stage, l, CHECKER, 64);
 }
 
 #[test]
@@ -610,14 +602,21 @@ fn the_tangent_frame_follows_st() {
     }
 }
 
+/// `stage` with its mesh replaced by one bound to the same material whose st is one point
+/// for the whole mesh and which has a zero-area triangle.
+fn with_degenerate_mesh(stage: &str) -> String {
+    let mut s = stage[..stage.find("def Mesh").unwrap()].to_string();
+    s += "def Mesh \"Bad\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{\n    int[] faceVertexCounts = [3, 3, 3]\n    int[] faceVertexIndices = [0, 1, 2, 0, 2, 3, 1, 1, 1]\n    point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]\n    texCoord2f[] primvars:st = [(0.5, 0.5)] (\n        interpolation = \"constant\"\n    )\n    rel material:binding = </Looks/Paint>\n}\n";
+    s
+}
+
 #[test]
 fn degenerate_st_and_zero_area_triangles_give_no_nan() {
     let dir = temp_dir("nmap-degenerate");
     texel_exr(&dir, "steep.exr", [1.0, 0.25, 0.5]);
     let stage = textured_stage_st(5.0, "steep.exr", NORMAL_TEX, NORMAL_CONNECTED, "");
     // The same material on a mesh whose st is one point and which has a zero-area triangle.
-    let mut s = stage[..stage.find("def Mesh").unwrap()].to_string();
-    s += "def Mesh \"Bad\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{\n    int[] faceVertexCounts = [3, 3, 3]\n    int[] faceVertexIndices = [0, 1, 2, 0, 2, 3, 1, 1, 1]\n    point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]\n    texCoord2f[] primvars:st = [(0.5, 0.5)] (\n        interpolation = \"constant\"\n    )\n    rel material:binding = </Looks/Paint>\n}\n";
+    let s = with_degenerate_mesh(&stage);
     let path = write(&dir, "bad.usda", &s);
     let scene = spectral_render::scene::load(&path, Some((16, 16))).unwrap();
     for (x, y) in POINTS {
@@ -649,11 +648,11 @@ fn textured_spectral_diffuse_reflectance_round_trips_under_a_uniform_dome() {
     let stage = spectral_stage(
         l,
         "checker.png",
-        "            token inputs:sourceColorSpace = \"raw\"\n",
+        RAW,
         "spectral:diffuse",
         "            color3f inputs:reflectance.connect = </Looks/Paint/Tex.outputs:rgb>\n",
     );
-    assert_round_trip(&dir, &stage, l);
+    assert_quadrants(&dir, &stage, l, CHECKER, 64);
 }
 
 #[test]
@@ -734,27 +733,6 @@ fn a_texture_on_a_spectral_input_that_takes_only_a_value_is_an_error() {
 
 // ---- Texture-coordinate primvars and UsdTransform2d ---------------------------------------
 
-/// Renders `stage` (a quad filling the view, textured with `q` by quadrant) under a dome of
-/// `l` nits and checks every quadrant's colour.
-fn assert_quadrants(dir: &Path, stage: &str, l: f32, q: [[u8; 4]; 4]) {
-    let out = render_file(&write(dir, "quadrants.usda", stage), (32, 32), 32, 7, None);
-    for (k, texel) in q.iter().enumerate() {
-        for (ch, &byte) in texel[..3].iter().enumerate() {
-            let (mean, sem) = quadrant(&out, k, ch);
-            let expected = f64::from(l) * f64::from(byte) / 255.0;
-            let tol = 6e-3 * f64::from(l) + 5.0 * sem;
-            assert!(
-                (mean - expected).abs() < tol,
-                "quadrant {k} channel {ch}: {mean} vs {expected} (sem {sem})"
-            );
-        }
-    }
-}
-
-const RAW: &str = "            token inputs:sourceColorSpace = \"raw\"\n";
-const DIFFUSE_CONNECTED: &str =
-    "            color3f inputs:diffuseColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
-
 #[test]
 fn a_texture_reads_the_primvar_its_reader_names() {
     let dir = temp_dir("tex-st1");
@@ -765,7 +743,7 @@ fn a_texture_reads_the_primvar_its_reader_names() {
         "token inputs:varname = \"st\"",
         "token inputs:varname = \"st1\"",
     );
-    assert_quadrants(&dir, &stage, 20.0, CHECKER);
+    assert_quadrants(&dir, &stage, 20.0, CHECKER, 32);
 }
 
 #[test]
@@ -807,7 +785,7 @@ fn usd_transform2d_nodes_transform_st_in_the_spec_order() {
             &format!("{nodes}        def Shader \"Tex\"\n"),
         );
     assert!(stage.contains("T2.outputs:result") && stage.contains("def Shader \"T1\""));
-    assert_quadrants(&dir, &stage, 20.0, CHECKER);
+    assert_quadrants(&dir, &stage, 20.0, CHECKER, 32);
 }
 
 #[test]
@@ -878,9 +856,8 @@ fn per_pixel_stats(
     let mut means = Vec::new();
     let mut var = 0.0;
     for &i in pixels {
-        let v: Vec<f64> = images.iter().map(|o| f64::from(o.rgb[i][1])).collect();
-        let m = v.iter().sum::<f64>() / v.len() as f64;
-        var += v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
+        let (m, v) = mean_and_var(images.iter().map(|o| o.rgb[i][1]));
+        var += v;
         means.push(m);
     }
     (means, var / pixels.len() as f64)
@@ -986,8 +963,7 @@ fn footprints_are_finite_and_follow_distance() {
     // Degenerate st (one point for the whole mesh) and a zero-area triangle: zero
     // derivatives, no NaN, and a filtered render stays finite.
     let stage = textured_stage_st(5.0, "checks.png", RAW, DIFFUSE_CONNECTED, "");
-    let mut s = stage[..stage.find("def Mesh").unwrap()].to_string();
-    s += "def Mesh \"Bad\" (\n    prepend apiSchemas = [\"MaterialBindingAPI\"]\n)\n{\n    int[] faceVertexCounts = [3, 3, 3]\n    int[] faceVertexIndices = [0, 1, 2, 0, 2, 3, 1, 1, 1]\n    point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]\n    texCoord2f[] primvars:st = [(0.5, 0.5)] (\n        interpolation = \"constant\"\n    )\n    rel material:binding = </Looks/Paint>\n}\n";
+    let s = with_degenerate_mesh(&stage);
     let path = write(&dir, "bad.usda", &s);
     let bad = spectral_render::scene::load(&path, Some((16, 16))).unwrap();
     assert!(bad.materials[0].is_textured());

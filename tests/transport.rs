@@ -39,7 +39,11 @@ fn preview_surface_colour_round_trips_under_d65() {
         let path = write(
             &dir,
             "plane.usda",
-            &dome_plane_stage("UsdPreviewSurface", &inputs, l),
+            &dome_plane_stage(
+                l,
+                &looks_scope(&material("Paint", "UsdPreviewSurface", &inputs)),
+                "",
+            ),
         );
         let out = render_file(&path, (24, 24), 64, 7, None);
         for ch in 0..3 {
@@ -56,8 +60,7 @@ fn preview_surface_colour_round_trips_under_d65() {
 
 #[test]
 fn one_and_two_threads_give_bit_identical_images() {
-    let cbox = cbox_path();
-    let scene = spectral_render::scene::load(&cbox, Some((32, 32))).unwrap();
+    let scene = spectral_render::scene::load(&cbox_path(), Some((32, 32))).unwrap();
     let run = |threads| {
         let opts = spectral_render::session::RenderOptions {
             spp: Some(8),

@@ -1,14 +1,56 @@
-//! USD stage text shared by the integration tests: transforms, prims, the white furnace, the
-//! committed Cornell box, and the closed forms they are checked against.
+//! USD text of the stages the tests write: headers, cameras, materials, meshes, and the
+//! fixtures several test files share (the white furnace, the cube, a plane under a dome).
 
-use super::{binding, camera, header, material, quad};
 use glam::DVec3;
-use std::path::{Path, PathBuf};
 
-/// The Cornell box committed with the tests (the same scene as Mitsuba 3's
-/// `mi.cornell_box()`, in USD).
-pub fn cbox_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/cbox.usda")
+/// A stage that does not parse (an unterminated tuple).
+pub const MALFORMED_USDA: &str = "#usda 1.0\ndef Xform \"A\"\n{\n    float x = (1, \n";
+
+/// The API schema list of a mesh bound to a material.
+pub const BINDING_API: &str = "\"MaterialBindingAPI\"";
+/// The API schema list of an emissive mesh bound to a material.
+pub const MESH_LIGHT_API: &str = "\"MeshLightAPI\", \"MaterialBindingAPI\"";
+
+/// A USD stage header with the given `metersPerUnit` and `upAxis`.
+pub fn stage_header(meters_per_unit: f64, up_axis: &str) -> String {
+    format!(
+        "#usda 1.0\n(\n    metersPerUnit = {meters_per_unit}\n    upAxis = \"{up_axis}\"\n)\n\n"
+    )
+}
+
+/// A USD stage header in metres, Y up.
+pub fn header() -> String {
+    stage_header(1.0, "Y")
+}
+
+/// A camera at `pos` looking down −Z with a square 2·half_tan field at distance 1, near clip
+/// `near` and `extra` lines before its transform.
+fn camera_prim(pos: [f32; 3], half_tan: f32, near: f32, extra: &str) -> String {
+    let focal = 10.0 / half_tan;
+    format!(
+        "def Camera \"Cam\"\n{{\n    float focalLength = {focal}\n    float horizontalAperture = 20\n    float verticalAperture = 20\n    float2 clippingRange = ({near}, 1000)\n{extra}    double3 xformOp:translate = ({}, {}, {})\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n\n",
+        pos[0], pos[1], pos[2]
+    )
+}
+
+/// A camera at `z` on +Z looking down −Z with a square 2·half_tan field at distance 1.
+pub fn camera(z: f32, half_tan: f32, exposure: f32) -> String {
+    camera_prim(
+        [0.0, 0.0, z],
+        half_tan,
+        0.001,
+        &format!("    float exposure = {exposure}\n"),
+    )
+}
+
+/// A camera at `pos` looking down −Z with a square field of half-tangent `half_tan`.
+pub fn camera_at(pos: [f32; 3], half_tan: f32, extra: &str) -> String {
+    camera_prim(pos, half_tan, 0.01, extra)
+}
+
+/// `def <ty> "<name>"` with `body` lines.
+pub fn prim(ty: &str, name: &str, body: &str) -> String {
+    format!("def {ty} \"{name}\"\n{{\n{body}}}\n\n")
 }
 
 /// `xformOp`s in order (outermost first): ("translate", "(x, y, z)") or ("rotateX", "deg").
@@ -30,74 +72,109 @@ pub fn xform(ops: &[(&str, String)]) -> String {
     )
 }
 
-/// `def TY "NAME" { BODY }`.
-pub fn prim(ty: &str, name: &str, body: &str) -> String {
-    format!("def {ty} \"{name}\"\n{{\n{body}}}\n\n")
+/// A material with one shader; `inputs` are the shader's input lines.
+pub fn material(name: &str, id: &str, inputs: &str) -> String {
+    format!(
+        "def Material \"{name}\"\n{{\n    token outputs:surface.connect = </Looks/{name}/S.outputs:surface>\n    def Shader \"S\"\n    {{\n        uniform token info:id = \"{id}\"\n{inputs}        token outputs:surface\n    }}\n}}\n"
+    )
 }
 
-/// The six faces of the cube [−h, h]³, facing inwards.
-pub fn cube_faces(h: f32) -> [[[f32; 3]; 4]; 6] {
-    let (a, b) = (-h, h);
-    [
-        [[a, a, a], [a, b, a], [b, b, a], [b, a, a]],
-        [[a, a, b], [b, a, b], [b, b, b], [a, b, b]],
-        [[a, a, a], [a, a, b], [a, b, b], [a, b, a]],
-        [[b, a, a], [b, b, a], [b, b, b], [b, a, b]],
-        [[a, a, a], [b, a, a], [b, a, b], [a, a, b]],
-        [[a, b, a], [a, b, b], [b, b, b], [b, b, a]],
-    ]
+/// The shader input line of a spectrally flat reflectance `rho`.
+pub fn flat_reflectance(rho: impl std::fmt::Display) -> String {
+    format!("        float2[] inputs:reflectance:samples = [(360, {rho}), (830, {rho})]\n")
 }
 
-/// The white furnace: the closed cube [−1, 1]³ whose six walls emit `le` nits on both sides
-/// (double-sided, so winding does not matter) and reflect a spectrally flat `rho`; a camera
-/// sits inside. Every point sees L = Le / (1 − ρ) in every direction (the Neumann series of a
-/// closed, uniformly emitting and reflecting enclosure).
-pub fn furnace_stage(le: f32, rho: f32) -> String {
-    let flat =
-        format!("        float2[] inputs:reflectance:samples = [(360, {rho}), (830, {rho})]\n");
-    let light = format!("    float inputs:intensity = {le}\n{}", binding("Wall"));
-    let mut s = header();
-    s += &camera(0.5, 0.8, 0.0);
-    s += "def Scope \"Looks\"\n{\n";
-    s += &material("Wall", "spectral:diffuse", &flat);
-    s += "}\n\n";
-    for (i, face) in cube_faces(1.0).iter().enumerate() {
-        let points: Vec<String> = face
-            .iter()
-            .map(|p| format!("({}, {}, {})", p[0], p[1], p[2]))
-            .collect();
-        s += &format!(
-            "def Mesh \"Face{i}\" (\n    prepend apiSchemas = [\"MeshLightAPI\", \"MaterialBindingAPI\"]\n)\n{{\n    uniform bool doubleSided = 1\n    int[] faceVertexCounts = [4]\n    int[] faceVertexIndices = [0, 1, 2, 3]\n    point3f[] points = [{}]\n{light}}}\n\n",
-            points.join(", ")
-        );
+/// A Lambertian (`spectral:diffuse`) material of spectrally flat reflectance `rho`.
+pub fn flat_diffuse(name: &str, rho: impl std::fmt::Display) -> String {
+    material(name, "spectral:diffuse", &flat_reflectance(rho))
+}
+
+/// The `/Looks` scope holding `materials`.
+pub fn looks_scope(materials: &str) -> String {
+    format!("def Scope \"Looks\"\n{{\n{materials}}}\n\n")
+}
+
+pub fn binding(name: &str) -> String {
+    format!("    rel material:binding = </Looks/{name}>\n")
+}
+
+/// A point as USD writes it, `(x, y, z)`, in the precision of its type.
+pub trait UsdPoint {
+    fn usd(&self) -> String;
+}
+
+impl UsdPoint for [f32; 3] {
+    fn usd(&self) -> String {
+        format!("({}, {}, {})", self[0], self[1], self[2])
     }
-    s
 }
 
-/// Lambert's polygon formula (Lambert 1760; e.g. Arvo 1995, "Applications of irradiance
-/// tensors", eq. 3): the illuminance from a uniform polygon of luminance L at `p` on a
-/// surface of normal `n` is E = (L/2) Σᵢ βᵢ n·(rᵢ × rᵢ₊₁)/|rᵢ × rᵢ₊₁|, rᵢ the unit vectors to
-/// the vertices and βᵢ the angle between rᵢ and rᵢ₊₁. Valid when the whole polygon is in
-/// front of the surface (checked). Returns E/L.
-pub fn lambert(p: DVec3, n: DVec3, verts: &[DVec3]) -> f64 {
-    assert!(
-        verts.iter().all(|v| n.dot(*v - p) > 0.0),
-        "polygon not above the horizon"
-    );
-    let r: Vec<DVec3> = verts.iter().map(|v| (*v - p).normalize()).collect();
-    let sum: f64 = (0..r.len())
-        .map(|i| {
-            let (a, b) = (r[i], r[(i + 1) % r.len()]);
-            let c = a.cross(b);
-            c.length().atan2(a.dot(b)) * n.dot(c.normalize())
-        })
-        .sum();
-    0.5 * sum.abs()
+impl UsdPoint for DVec3 {
+    fn usd(&self) -> String {
+        format!("({}, {}, {})", self.x, self.y, self.z)
+    }
 }
 
-/// The cube [−h, h]³ as an indexed mesh: its 8 corners (bit k of the index picks +h on axis
-/// k) and 6 quads sharing them, so a closed solid (a glass slab) is watertight by index.
-pub fn cube_mesh(h: f64) -> (Vec<DVec3>, Vec<Vec<usize>>) {
+fn usd_list(points: &[impl UsdPoint]) -> String {
+    points
+        .iter()
+        .map(UsdPoint::usd)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A Mesh prim with API schemas `apis` (e.g. [`BINDING_API`], or "" for none): polygons
+/// `faces` (vertex indices) over `points`, then `extra` lines.
+pub fn mesh(
+    name: &str,
+    apis: &str,
+    points: &[impl UsdPoint],
+    faces: &[Vec<usize>],
+    extra: &str,
+) -> String {
+    let counts: Vec<String> = faces.iter().map(|f| f.len().to_string()).collect();
+    let idx: Vec<String> = faces.iter().flatten().map(|i| i.to_string()).collect();
+    format!(
+        "def Mesh \"{name}\" (\n    prepend apiSchemas = [{apis}]\n)\n{{\n    int[] faceVertexCounts = [{}]\n    int[] faceVertexIndices = [{}]\n    point3f[] points = [{}]\n{extra}}}\n\n",
+        counts.join(", "),
+        idx.join(", "),
+        usd_list(points)
+    )
+}
+
+/// The faces of a mesh whose only polygon runs over all its `n` points.
+pub fn one_face(n: usize) -> Vec<Vec<usize>> {
+    vec![(0..n).collect()]
+}
+
+/// A polygon mesh (one face) with the material binding API, optional per-vertex normals and
+/// extra lines.
+pub fn polygon<P: UsdPoint>(
+    name: &str,
+    points: &[P],
+    normals: Option<&[P]>,
+    extra: &str,
+) -> String {
+    let normals = normals
+        .map(|n| format!("    normal3f[] normals = [{}]\n", usd_list(n)))
+        .unwrap_or_default();
+    mesh(
+        name,
+        BINDING_API,
+        points,
+        &one_face(points.len()),
+        &format!("{normals}{extra}"),
+    )
+}
+
+/// An axis-aligned quad mesh in the z = `z` plane facing +Z, half-size `h`.
+pub fn quad(name: &str, z: f32, h: f32, extra: &str, api: &str) -> String {
+    let points = [[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]];
+    mesh(name, api, &points, &one_face(4), extra)
+}
+
+/// The cube [−h, h]³: corners (bit 1 of the index is x, bit 2 y, bit 4 z) and six quads.
+pub fn cube(h: f64) -> (Vec<DVec3>, Vec<Vec<usize>>) {
     let pts = (0..8)
         .map(|i| {
             let c = |bit: usize| if i & bit != 0 { h } else { -h };
@@ -115,20 +192,46 @@ pub fn cube_mesh(h: f64) -> (Vec<DVec3>, Vec<Vec<usize>>) {
     (pts, faces.iter().map(|f| f.to_vec()).collect())
 }
 
-/// A Lambertian plane with `inputs` under a constant dome of `l` nits, seen head-on.
-pub fn dome_plane_stage(shader_id: &str, inputs: &str, l: f32) -> String {
+/// The six faces of [`cube`] as separate quads, in the order z, x, y (−, + each) and wound the
+/// other way round.
+pub fn cube_faces(h: f64) -> [[DVec3; 4]; 6] {
+    let (pts, faces) = cube(h);
+    [0, 1, 4, 5, 2, 3].map(|f| {
+        let q = &faces[f];
+        [q[0], q[3], q[2], q[1]].map(|i| pts[i])
+    })
+}
+
+/// A white furnace: the closed cube [−1, 1]³ whose six walls each emit `le` nits on both sides
+/// (so winding does not matter) and reflect a spectrally flat `rho`; the camera sits inside.
+pub fn furnace_stage(le: f32, rho: f32) -> String {
+    let mut s = header();
+    s += &camera(0.5, 0.8, 0.0);
+    s += &looks_scope(&flat_diffuse("Wall", rho));
+    let light = format!(
+        "    uniform bool doubleSided = 1\n    float inputs:intensity = {le}\n{}",
+        binding("Wall")
+    );
+    for (i, f) in cube_faces(1.0).iter().enumerate() {
+        s += &mesh(&format!("Face{i}"), MESH_LIGHT_API, f, &one_face(4), &light);
+    }
+    s
+}
+
+/// A plane (the 2 × 2 quad "Plane" in z = 0, facing +Z, with `plane_extra` lines, bound to
+/// /Looks/Paint) under a constant dome of `l` nits, seen head-on by `camera(1, 0.2)`;
+/// `looks` is the /Looks scope.
+pub fn dome_plane_stage(l: f32, looks: &str, plane_extra: &str) -> String {
     let mut s = header();
     s += &camera(1.0, 0.2, 0.0);
     s += &format!("def DomeLight \"Sky\"\n{{\n    float inputs:intensity = {l}\n}}\n\n");
-    s += "def Scope \"Looks\"\n{\n";
-    s += &material("Paint", shader_id, inputs);
-    s += "}\n\n";
+    s += looks;
     s += &quad(
         "Plane",
         0.0,
         1.0,
-        &binding("Paint"),
-        "\"MaterialBindingAPI\"",
+        &format!("{plane_extra}{}", binding("Paint")),
+        BINDING_API,
     );
     s
 }
