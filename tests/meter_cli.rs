@@ -433,7 +433,7 @@ fn cli_errors_are_one_line_with_exit_code_1() {
                 "--normal",
                 "0,0,1",
                 "--integrator",
-                "vcm",
+                "vcn",
             ],
             "unknown integrator",
         ),

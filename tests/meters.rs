@@ -840,6 +840,7 @@ fn meters_agree_through_dispersive_glass() {
     let settings = Settings {
         max_depth: 7,
         filter: TextureFilter::Finest,
+        meters: true,
     };
     for kind in [
         Integrator::Light,

@@ -2,6 +2,8 @@
 //! [`MisHeuristic`], from the integrator's own table of names, parsed by [`named`] so that a
 //! wrong name says which names there are), the one-line load summary, and warnings.
 
+use crate::error::{Error, Result};
+use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::scene::Scene;
 use clap::builder::{PossibleValue, TypedValueParser};
@@ -33,6 +35,86 @@ impl ValueEnum for MisHeuristic {
     }
 }
 
+impl ValueEnum for VcmMode {
+    fn value_variants<'a>() -> &'a [Self] {
+        &VcmMode::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        let help = match self {
+            VcmMode::Vcm => "connections and merges",
+            VcmMode::Vc => "connections only: exactly BDPT",
+            VcmMode::Vm => "merges only: bidirectional photon mapping",
+        };
+        Some(PossibleValue::new(self.name()).help(help))
+    }
+}
+
+/// The flags that set an integrator's settings, as the commands take them.
+#[derive(clap::Args, Debug, Clone)]
+pub struct IntegratorArgs {
+    /// Light-transport algorithm.
+    #[arg(long, default_value = "path", value_parser = named::<Integrator>("integrator"))]
+    pub integrator: Integrator,
+    /// MIS heuristic of the integrators that combine techniques (bdpt, vcm).
+    #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
+    pub mis: MisHeuristic,
+    /// What VCM does at a vertex.
+    #[arg(long = "vcm-mode", value_parser = named::<VcmMode>("VCM mode"))]
+    pub vcm_mode: Option<VcmMode>,
+    /// VCM's base merging radius r0 in metres (default: 1.5 pixel footprints at the first
+    /// hit for images, 0.003 × the scene's radius for meters).
+    #[arg(long = "vcm-radius", allow_negative_numbers = true)]
+    pub vcm_radius: Option<f32>,
+    /// α of VCM's radius schedule r_i = r0 · i^((α−1)/2), in (0, 1] (default 0.75).
+    #[arg(long = "vcm-alpha", allow_negative_numbers = true)]
+    pub vcm_alpha: Option<f32>,
+}
+
+impl IntegratorArgs {
+    /// The integrator with its settings; VCM flags without `--integrator vcm` are an error.
+    pub fn integrator(&self) -> Result<Integrator> {
+        let integrator = self.integrator.with_mis(self.mis);
+        let Integrator::Vcm(p) = integrator else {
+            for (given, flag) in [
+                (self.vcm_mode.is_some(), "--vcm-mode"),
+                (self.vcm_radius.is_some(), "--vcm-radius"),
+                (self.vcm_alpha.is_some(), "--vcm-alpha"),
+            ] {
+                if given {
+                    return Err(Error::option(format!("{flag} needs --integrator vcm")));
+                }
+            }
+            return Ok(integrator);
+        };
+        if let Some(r) = self.vcm_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::option(format!(
+                    "--vcm-radius {r} must be a positive number of metres"
+                )));
+            }
+        }
+        if let Some(a) = self.vcm_alpha {
+            if !(a > 0.0 && a <= 1.0) {
+                return Err(Error::option(format!("--vcm-alpha {a} must be in (0, 1]")));
+            }
+        }
+        Ok(Integrator::Vcm(VcmParams {
+            mode: self.vcm_mode.unwrap_or(p.mode),
+            radius: self.vcm_radius.or(p.radius),
+            alpha: self.vcm_alpha.unwrap_or(p.alpha),
+            ..p
+        }))
+    }
+}
+
+/// Prints the integrator's report (`Estimator::report`) as a note.
+pub fn print_report(report: &Option<String>) {
+    if let Some(r) = report {
+        eprintln!("note: {r}");
+    }
+}
+
 /// A value parser for a `ValueEnum` whose error names the kind of value and lists the
 /// choices: `unknown integrator 'vcm' (available: path, light, bdpt)`. `--help` lists them
 /// with their help as for any `ValueEnum`.
@@ -58,7 +140,7 @@ impl<T: ValueEnum + Clone + Send + Sync + 'static> TypedValueParser for Named<T>
         _cmd: &clap::Command,
         _arg: Option<&clap::Arg>,
         value: &OsStr,
-    ) -> Result<T, clap::Error> {
+    ) -> std::result::Result<T, clap::Error> {
         let text = value.to_string_lossy();
         T::from_str(&text, false).map_err(|_| {
             let names: Vec<String> = T::value_variants()

@@ -16,9 +16,10 @@
 //! `--rel-error` each entry also has `"converged"`). Option errors, clap's included, are one
 //! line and exit 1; so is a luminance meter asked of light tracing, which cannot estimate it.
 
-use super::common::{clap_message, named, print_summary, warn_dropped, warn_limits};
+use super::common::{
+    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+};
 use crate::error::{Error, Result};
-use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::json;
 use crate::output::map::{num, IlluminanceMap};
 use crate::scene;
@@ -89,12 +90,8 @@ struct MeterArgs {
     /// Print the readings as JSON on stdout.
     #[arg(long)]
     json: bool,
-    /// Estimator (light tracing: illuminance only).
-    #[arg(long, default_value = "path", value_parser = named::<Integrator>("integrator"))]
-    integrator: Integrator,
-    /// MIS heuristic of the integrators that combine techniques (bdpt).
-    #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
-    mis: MisHeuristic,
+    #[command(flatten)]
+    integrator: IntegratorArgs,
 }
 
 /// The grid as given (stage coordinates).
@@ -242,6 +239,7 @@ fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> 
 /// Warnings about dropped samples and readings a cap stopped.
 fn warn(run: &MeterRun, opts: &MeterOptions) {
     warn_dropped(run.dropped);
+    print_report(&run.report);
     for (cap, what) in [
         (Cap::Samples, "the sample cap (--max-spp)"),
         (Cap::Time, "the time cap (--time)"),
@@ -516,6 +514,6 @@ fn options(a: &MeterArgs) -> Result<MeterOptions> {
         seed: a.seed,
         max_depth: a.max_depth,
         threads: a.threads,
-        integrator: a.integrator.with_mis(a.mis),
+        integrator: a.integrator.integrator()?,
     })
 }

@@ -1,10 +1,12 @@
 //! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
 
-use super::common::{clap_message, named, print_summary, warn_dropped, warn_limits};
+use super::common::{
+    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+};
 use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::integrator::bidir::strategies::StrategyImage;
-use crate::integrator::{Integrator, MisHeuristic};
+use crate::integrator::Integrator;
 use crate::output::{exr, png};
 use crate::session::image::xyz_to_rgb;
 use crate::session::{self, ImageSession, RenderOptions, RenderOutput};
@@ -41,12 +43,8 @@ struct RenderArgs {
     /// Maximum number of scattering events (pbrt's maxdepth; Mitsuba's max_depth − 1).
     #[arg(long = "max-depth", default_value_t = 7)]
     max_depth: u32,
-    /// Light-transport algorithm.
-    #[arg(long, default_value = "path", value_parser = named::<Integrator>("integrator"))]
-    integrator: Integrator,
-    /// MIS heuristic of the integrators that combine techniques (bdpt).
-    #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
-    mis: MisHeuristic,
+    #[command(flatten)]
+    integrator: IntegratorArgs,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
     strategies: Option<PathBuf>,
@@ -105,6 +103,7 @@ fn run(args: &RenderArgs) -> Result<()> {
     progress.finish();
     let out = session.output();
     warn_dropped(out.dropped_samples);
+    print_report(&out.report);
     let path = args
         .output
         .clone()
@@ -181,7 +180,7 @@ fn write_strategies(
 
 /// The render's options, checked before the stage is read.
 fn options(args: &RenderArgs) -> Result<RenderOptions> {
-    let integrator = args.integrator.with_mis(args.mis);
+    let integrator = args.integrator.integrator()?;
     if args.strategies.is_some() {
         if !integrator.capabilities().strategy_images {
             return Err(Error::option(format!(

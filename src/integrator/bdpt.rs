@@ -13,6 +13,7 @@
 //! loop.
 
 use super::bidir::connect::{connect, emitter_hit, escaped, next_event};
+use super::bidir::merge::{LightVertexStore, MergeParams};
 use super::bidir::vertex::bsdf_at;
 use super::bidir::{
     splat_light_subpath, trace_light_subpath, BidirContext, Mis, MisHeuristic, PathVertex, Walk,
@@ -31,6 +32,22 @@ use crate::spectral::{SampledSpectrum, SampledWavelengths};
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BdptIntegrator;
 
+/// Which techniques a bidirectional sample uses (Georgiev et al. 2012 §5): connections
+/// (s ≥ 1, and t = 1 through the sample's own light subpath), merges with the iteration's
+/// light vertices, or both. BDPT connects; bidirectional photon mapping merges; VCM does both.
+#[derive(Clone, Copy, Debug)]
+pub struct Techniques<'s> {
+    pub connect: bool,
+    pub merge: Option<(&'s LightVertexStore, MergeParams)>,
+}
+
+impl Techniques<'_> {
+    pub const BDPT: Techniques<'static> = Techniques {
+        connect: true,
+        merge: None,
+    };
+}
+
 impl BdptIntegrator {
     /// One BDPT sample for the sensor of `ctx`: the camera ray through raster point `film`
     /// with lens sample `u_sensor`, or a meter's ray from `u_sensor` (`film` unused);
@@ -44,38 +61,60 @@ impl BdptIntegrator {
         sampler: &mut Sampler,
         ws: &mut Workspace,
     ) {
-        trace_light_subpath(ctx, lambda, sampler, &mut ws.light);
-        splat_light_subpath(ctx, lambda, sampler, ws, true);
+        self.sample_with(&Techniques::BDPT, ctx, film, u_sensor, lambda, sampler, ws);
+    }
+
+    /// One sample with the techniques `tech`: with connections, the sample's own light
+    /// subpath is traced and splatted first (t = 1), then the camera subpath.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_with(
+        &self,
+        tech: &Techniques,
+        ctx: &BidirContext,
+        film: [f32; 2],
+        u_sensor: [f32; 2],
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        ws: &mut Workspace,
+    ) {
+        if tech.connect {
+            trace_light_subpath(ctx, lambda, sampler, &mut ws.light);
+            splat_light_subpath(ctx, lambda, sampler, ws, true);
+        }
         let Some(sr) = ctx.sensor.generate_ray(film, u_sensor) else {
             return;
         };
         if let Some(walk) = Walk::sensor(ctx, &sr) {
-            self.camera_subpath(ctx, walk, lambda, sampler, ws);
+            self.camera_subpath(tech, ctx, walk, lambda, sampler, ws);
         }
     }
 
-    /// The camera walk z_1, z_2, … with s = 0 at emitters and s ≥ 1 at every non-specular
-    /// vertex; z_{max_depth+1} only collects emission.
+    /// The camera walk z_1, z_2, … with s = 0 at emitters, and at every non-specular vertex
+    /// s ≥ 1 (connections) and merges; z_{max_depth+1} only collects emission. Without
+    /// connections (photon mapping) emitters count only at the end of a purely specular camera
+    /// path, which no merge can produce (SmallVCM's rule), with weight 1.
     fn camera_subpath(
         &self,
+        tech: &Techniques,
         ctx: &BidirContext,
         mut walk: Walk,
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
         ws: &mut Workspace,
     ) {
+        let mut specular_only = true;
         loop {
             // s = 0: escaped rays and analytic emitters end the walk.
             let si = match ctx.scene.intersect(&walk.ray, walk.t_max) {
                 None => {
                     let c = escaped(ctx, &walk, walk.ray.d, lambda);
-                    ws.record.add_camera(0, walk.depth + 2, c);
+                    record_emission(tech, ws, walk.depth + 2, c, specular_only);
                     return;
                 }
                 Some(Hit::Light { light, hit }) => {
                     walk.arrive(&ctx.mis, hit.p, hit.n);
                     if let Some(c) = emitter_hit(ctx, &walk, light, &hit, -walk.ray.d, lambda) {
-                        ws.record.add_camera(0, walk.depth + 1, c);
+                        record_emission(tech, ws, walk.depth + 1, c, specular_only);
                     }
                     return;
                 }
@@ -89,7 +128,7 @@ impl BdptIntegrator {
                     t: si.t,
                 };
                 if let Some(c) = emitter_hit(ctx, &walk, light, &hit, -walk.ray.d, lambda) {
-                    ws.record.add_camera(0, walk.depth + 1, c);
+                    record_emission(tech, ws, walk.depth + 1, c, specular_only);
                 }
             }
             if walk.depth > ctx.max_depth {
@@ -98,7 +137,16 @@ impl BdptIntegrator {
             let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
             let z = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
             if !bsdf.is_specular() {
-                self.connect_vertex(ctx, &z, lambda, sampler, ws);
+                specular_only = false;
+                if tech.connect {
+                    self.connect_vertex(ctx, &z, lambda, sampler, ws);
+                }
+                if let Some((store, params)) = &tech.merge {
+                    let m = store.merge(&z, &z.mis, lambda.secondary_terminated(), params);
+                    ws.record.camera.weighted += m.all;
+                    ws.record.camera.unweighted += m.all;
+                    ws.record.hero_only += m.hero_only;
+                }
             }
             if !walk.scatter(&ctx.mis, &z, TransportMode::Radiance, sampler) {
                 return;
@@ -127,6 +175,24 @@ impl BdptIntegrator {
                 ws.record.add_camera(y.depth + 1, t, c);
             }
         }
+    }
+}
+
+/// An emitter found by the camera walk (s = 0, strategy (0, t)): weighted by MIS with
+/// connections; without them (photon mapping) only at the end of a purely specular camera
+/// path, unweighted.
+fn record_emission(
+    tech: &Techniques,
+    ws: &mut Workspace,
+    t: u32,
+    c: super::bidir::Contribution,
+    specular_only: bool,
+) {
+    if tech.connect {
+        ws.record.add_camera(0, t, c);
+    } else if specular_only {
+        let whole = super::bidir::Contribution::new(c.unweighted, 1.0);
+        ws.record.add_camera(0, t, whole);
     }
 }
 
@@ -171,6 +237,6 @@ impl Estimator for BdptEstimator<'_> {
         ws.record.clear();
         let u = sampler.get_2d();
         self.bdpt.sample(&ctx, [0.0; 2], u, lambda, sampler, ws);
-        ws.record.total()
+        ws.record.total(lambda)
     }
 }

@@ -21,10 +21,40 @@ pub struct Settings {
     pub max_depth: u32,
     /// Texture footprints: the camera's for images, the finest level for meters.
     pub filter: TextureFilter,
+    /// The run measures light meters rather than an image.
+    pub meters: bool,
+}
+
+/// What an iteration is: the samples it covers share work prepared before any of them
+/// (VCM's light vertices and their hash grid).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Iteration {
+    /// The seed of the run.
+    pub seed: u64,
+    /// The iteration's index, from 0: the sample index of images, the round of meters.
+    pub index: u64,
 }
 
 /// One integrator run on one scene (`Integrator::estimator`).
-pub trait Estimator: Sync {
+pub trait Estimator: Sync + Send {
+    /// Samples per pixel (or per meter reading) of one iteration, for estimators whose
+    /// samples share work prepared per iteration ([`Estimator::begin_iteration`]); None when
+    /// every sample stands alone (path tracing, light tracing, BDPT).
+    fn iteration_samples(&self) -> Option<u64> {
+        None
+    }
+
+    /// Prepares iteration `it` before any of its samples is taken; runs on the session's
+    /// worker threads (it may use rayon). Only called when [`Estimator::iteration_samples`]
+    /// is Some.
+    fn begin_iteration(&mut self, _it: Iteration) {}
+
+    /// What a user should know about this run's settings and resources (VCM's radius and
+    /// store), one line; None when there is nothing to say.
+    fn report(&self) -> Option<String> {
+        None
+    }
+
     /// One sample of the pixel at raster position `film`, through lens sample `u_lens`:
     /// contributions into `ws.record`, which the caller has cleared. `lambda` may have its
     /// secondary wavelengths terminated on return.

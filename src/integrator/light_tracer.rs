@@ -80,6 +80,6 @@ impl Estimator for LightEstimator<'_> {
         let ctx = self.ctx.with_sensor(Sensor::Meter(*meter));
         ws.record.clear();
         self.tracer.sample(&ctx, lambda, sampler, ws);
-        ws.record.total()
+        ws.record.total(lambda)
     }
 }

@@ -8,7 +8,10 @@
 //!   estimators;
 //! - `light_tracer`: light (particle) tracing, splatting to the film;
 //! - `bdpt`: bidirectional path tracing, every (s, t) technique with MIS;
-//! - `bidir/`: what the bidirectional ones share (vertices, walks, MIS recurrences).
+//! - `vcm`: vertex connection and merging, BDPT plus merges with the iteration's light
+//!   vertices;
+//! - `bidir/`: what the bidirectional ones share (vertices, walks, MIS recurrences, the
+//!   light vertex store and its hash grid).
 //!
 //! Adding an integrator: an arm of [`Integrator`] (its name, capabilities and estimator, all
 //! in this file) and its own module implementing [`Estimator`].
@@ -19,16 +22,18 @@ pub mod estimator;
 pub mod light_tracer;
 pub mod meter;
 pub mod path;
+pub mod vcm;
 
 pub use bidir::{MisHeuristic, Workspace};
-pub use estimator::{Estimator, Settings};
+pub use estimator::{Estimator, Iteration, Settings};
 
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::sensor::meter::MeterKind;
+use vcm::{VcmMode, VcmParams};
 
 /// A light-transport algorithm with its settings.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Integrator {
     /// Path tracing with next-event estimation and MIS (`path.rs`).
     #[default]
@@ -37,6 +42,8 @@ pub enum Integrator {
     Light,
     /// Bidirectional path tracing, all (s, t) techniques combined by MIS (`bdpt.rs`).
     Bdpt { mis: MisHeuristic },
+    /// Vertex connection and merging (`vcm.rs`): BDPT plus merges, consistent.
+    Vcm(VcmParams),
 }
 
 /// What an integrator can and cannot do. Every check and warning about an integrator's
@@ -59,18 +66,28 @@ pub struct Capabilities {
     pub strategy_images: bool,
     /// Contributions land on other pixels than the sample's own (light subpaths splat).
     pub splats: bool,
+    /// The estimate's expectation is the answer at any sample count; otherwise it is
+    /// consistent (VCM's merges: the bias vanishes as the iterations shrink the radius).
+    pub unbiased: bool,
     /// The MIS heuristic is a setting (`--mis`).
     pub mis_heuristic: bool,
 }
 
 impl Integrator {
     /// Every integrator, with default settings, in the order the CLI lists them.
-    pub const ALL: [Integrator; 3] = [
+    pub const ALL: [Integrator; 4] = [
         Integrator::Path,
         Integrator::Light,
         Integrator::Bdpt {
             mis: MisHeuristic::Power,
         },
+        Integrator::Vcm(VcmParams {
+            mis: MisHeuristic::Power,
+            mode: VcmMode::Vcm,
+            radius: None,
+            alpha: vcm::DEFAULT_ALPHA,
+            meter_light_paths: vcm::DEFAULT_METER_LIGHT_PATHS,
+        }),
     ];
 
     /// The name the CLI and the EXR metadata use.
@@ -79,6 +96,7 @@ impl Integrator {
             Integrator::Path => "path",
             Integrator::Light => "light",
             Integrator::Bdpt { .. } => "bdpt",
+            Integrator::Vcm(_) => "vcm",
         }
     }
 
@@ -88,6 +106,7 @@ impl Integrator {
             Integrator::Path => "path tracing with next-event estimation and MIS",
             Integrator::Light => "light tracing (light subpaths connected to the sensor)",
             Integrator::Bdpt { .. } => "bidirectional path tracing, all (s, t) with MIS",
+            Integrator::Vcm(_) => "vertex connection and merging: BDPT plus merges (consistent)",
         }
     }
 
@@ -100,6 +119,7 @@ impl Integrator {
     pub fn with_mis(self, mis: MisHeuristic) -> Integrator {
         match self {
             Integrator::Bdpt { .. } => Integrator::Bdpt { mis },
+            Integrator::Vcm(p) => Integrator::Vcm(VcmParams { mis, ..p }),
             other => other,
         }
     }
@@ -113,6 +133,7 @@ impl Integrator {
             strategy_images: false,
             splats: true,
             mis_heuristic: false,
+            unbiased: true,
         };
         match self {
             Integrator::Path => Capabilities {
@@ -128,6 +149,11 @@ impl Integrator {
             Integrator::Bdpt { .. } => Capabilities {
                 strategy_images: true,
                 mis_heuristic: true,
+                ..bidirectional
+            },
+            Integrator::Vcm(p) => Capabilities {
+                mis_heuristic: true,
+                unbiased: p.mode == VcmMode::Vc,
                 ..bidirectional
             },
         }
@@ -207,6 +233,11 @@ impl Integrator {
             Integrator::Path => Box::new(path::PathEstimator::new(scene, settings)),
             Integrator::Light => Box::new(light_tracer::LightEstimator::new(scene, settings)),
             Integrator::Bdpt { mis } => Box::new(bdpt::BdptEstimator::new(scene, settings, mis)),
+            // `vc` is BDPT, the same estimator.
+            Integrator::Vcm(p) if p.mode == VcmMode::Vc => {
+                Box::new(bdpt::BdptEstimator::new(scene, settings, p.mis))
+            }
+            Integrator::Vcm(p) => Box::new(vcm::VcmEstimator::new(scene, settings, p)),
         }
     }
 
@@ -215,6 +246,7 @@ impl Integrator {
             Integrator::Path => "path tracing",
             Integrator::Light => "light tracing",
             Integrator::Bdpt { .. } => "bidirectional path tracing",
+            Integrator::Vcm(_) => "vertex connection and merging",
         }
     }
 
@@ -238,7 +270,7 @@ mod tests {
         for i in Integrator::ALL {
             assert_eq!(Integrator::from_name(i.name()), Some(i));
         }
-        assert_eq!(Integrator::from_name("vcm"), None);
+        assert_eq!(Integrator::from_name("auto"), None);
     }
 
     #[test]
@@ -247,7 +279,7 @@ mod tests {
         assert!(lt.check_meter(MeterKind::Illuminance).is_ok());
         let e = lt.check_meter(MeterKind::Luminance).unwrap_err().to_string();
         assert!(e.contains("use --integrator path or bdpt"), "{e}");
-        for i in [Integrator::Path, Integrator::ALL[2]] {
+        for i in [Integrator::Path, Integrator::ALL[2], Integrator::ALL[3]] {
             assert!(i.check_meter(MeterKind::Luminance).is_ok());
         }
     }

@@ -14,12 +14,17 @@
 //! splats of a chunk are merged in the same order however the passes fall. The path tracer
 //! has one chunk for the whole render. Per-thread buffers (`Workspace`) live as long as a
 //! rayon job and are reused by every sample of it.
+//!
+//! **Iterations.** An estimator whose samples share per-iteration work (VCM: the light
+//! vertices of the iteration and their hash grid) names its iteration size; segments then
+//! also end at iteration boundaries, and each iteration is prepared (`begin_iteration`) on
+//! the session's threads before its first sample.
 
 use super::{pool, PassStats, Progressive};
 use crate::error::Result;
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
-use crate::integrator::{Estimator, Integrator, Settings, Workspace};
+use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::sensor::film::{Film, Tile};
@@ -83,6 +88,8 @@ pub struct RenderOutput {
     pub dropped_samples: u64,
     /// Per-(s, t) images when `RenderOptions::strategies` was set.
     pub strategies: Option<Vec<StrategyImage>>,
+    /// The integrator's report on its settings and resources (`Estimator::report`).
+    pub report: Option<String>,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -124,6 +131,7 @@ impl<'a> ImageSession<'a> {
         let settings = Settings {
             max_depth: opts.max_depth,
             filter: texture_filter(opts),
+            meters: false,
         };
         let splats = opts.integrator.capabilities().splats;
         Ok(ImageSession {
@@ -167,6 +175,7 @@ impl<'a> ImageSession<'a> {
             wall_time_s: self.start.elapsed().as_secs_f64(),
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
+            report: self.estimator.report(),
         }
     }
 
@@ -262,9 +271,21 @@ impl Progressive for ImageSession<'_> {
             return None;
         }
         let end = self.done + self.pass_size();
+        let iteration = self.estimator.iteration_samples();
         while self.done < end {
-            let chunk_end = (self.done / self.chunk + 1).saturating_mul(self.chunk);
-            self.render_segment(self.done, chunk_end.min(end) - self.done);
+            let mut segment_end = (self.done / self.chunk + 1).saturating_mul(self.chunk);
+            if let Some(k) = iteration {
+                if self.done.is_multiple_of(k) {
+                    let it = Iteration {
+                        seed: self.opts.seed,
+                        index: self.done / k,
+                    };
+                    let estimator = &mut self.estimator;
+                    self.pool.install(|| estimator.begin_iteration(it));
+                }
+                segment_end = segment_end.min((self.done / k + 1).saturating_mul(k));
+            }
+            self.render_segment(self.done, segment_end.min(end) - self.done);
         }
         self.passes += 1;
         Some(PassStats {

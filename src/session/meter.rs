@@ -44,7 +44,7 @@
 
 use super::{pool, PassStats, Progressive};
 use crate::error::Result;
-use crate::integrator::{Estimator, Integrator, Settings, Workspace};
+use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::sensor::meter::{Meter, MeterSensor, Stats};
@@ -128,6 +128,8 @@ pub struct MeterRun {
     /// Samples whose estimate was NaN or infinite and were dropped (should be 0).
     pub dropped: u64,
     pub wall_time_s: f64,
+    /// The integrator's report on its settings and resources (`Estimator::report`).
+    pub report: Option<String>,
 }
 
 /// Measures every meter to the end (sample count, relative error or time budget).
@@ -180,6 +182,7 @@ impl<'a> MeterSession<'a> {
         let settings = Settings {
             max_depth: opts.max_depth,
             filter: TextureFilter::Finest,
+            meters: true,
         };
         Ok(MeterSession {
             pool: pool::new(opts.threads)?,
@@ -202,7 +205,50 @@ impl<'a> MeterSession<'a> {
             readings: self.states.iter().map(reading).collect(),
             dropped: self.dropped,
             wall_time_s: self.start.elapsed().as_secs_f64(),
+            report: self.estimator.report(),
         }
+    }
+}
+
+impl MeterSession<'_> {
+    /// The statistics of `blocks`, in parallel, in their order.
+    fn sample_blocks(&self, blocks: &[Block]) -> Vec<(Stats, u64)> {
+        let (estimator, sensors, seed) = (&*self.estimator, &self.sensors, self.opts.seed);
+        let max_depth = self.opts.max_depth;
+        self.pool.install(|| {
+            blocks
+                .par_iter()
+                .map_init(
+                    || Workspace::new(max_depth, 0),
+                    |ws, b| sample_block(estimator, &sensors[b.meter], b, seed, ws),
+                )
+                .collect()
+        })
+    }
+
+    /// The statistics of `blocks` (each within one iteration of `k` samples), iteration by
+    /// iteration in increasing order, each prepared first (`Estimator::begin_iteration`).
+    fn sample_blocks_by_iteration(&mut self, blocks: &[Block], k: u64) -> Vec<(Stats, u64)> {
+        let mut results = vec![(Stats::default(), 0); blocks.len()];
+        let mut iterations: Vec<u64> = blocks.iter().map(|b| b.first / k).collect();
+        iterations.sort_unstable();
+        iterations.dedup();
+        for index in iterations {
+            let it = Iteration {
+                seed: self.opts.seed,
+                index,
+            };
+            let estimator = &mut self.estimator;
+            self.pool.install(|| estimator.begin_iteration(it));
+            let picked: Vec<usize> = (0..blocks.len())
+                .filter(|&i| blocks[i].first / k == index)
+                .collect();
+            let group: Vec<Block> = picked.iter().map(|&i| blocks[i]).collect();
+            for (i, r) in picked.into_iter().zip(self.sample_blocks(&group)) {
+                results[i] = r;
+            }
+        }
+        results
     }
 }
 
@@ -217,21 +263,15 @@ impl Progressive for MeterSession<'_> {
         if !fit_time_budget(&mut self.states, &mut targets, opts, self.start) {
             return None;
         }
-        let blocks = blocks(&self.states, &targets);
+        let iteration = self.estimator.iteration_samples();
+        let blocks = blocks(&self.states, &targets, iteration);
         if blocks.is_empty() {
             return None;
         }
-        let (estimator, sensors, seed) = (&*self.estimator, &self.sensors, opts.seed);
-        let max_depth = opts.max_depth;
-        let results: Vec<(Stats, u64)> = self.pool.install(|| {
-            blocks
-                .par_iter()
-                .map_init(
-                    || Workspace::new(max_depth, 0),
-                    |ws, b| sample_block(estimator, &sensors[b.meter], b, seed, ws),
-                )
-                .collect()
-        });
+        let results = match iteration {
+            None => self.sample_blocks(&blocks),
+            Some(k) => self.sample_blocks_by_iteration(&blocks, k),
+        };
         for (b, (stats, bad)) in blocks.iter().zip(results) {
             let st = &mut self.states[b.meter];
             st.stats.merge(&stats);
@@ -349,12 +389,18 @@ fn fit_time_budget(
 }
 
 /// The round's work: for each reading, the blocks from its current count to its target.
-fn blocks(states: &[State], targets: &[u64]) -> Vec<Block> {
+/// Blocks also end at multiples of `iteration` (the estimator's iteration size), so that a
+/// block belongs to one iteration.
+fn blocks(states: &[State], targets: &[u64], iteration: Option<u64>) -> Vec<Block> {
     let mut out = Vec::new();
+    let next = |first: u64, unit: u64| (first / unit + 1).saturating_mul(unit);
     for (meter, (s, &target)) in states.iter().zip(targets).enumerate() {
         let mut first = s.taken;
         while first < target {
-            let end = (first / BLOCK + 1).saturating_mul(BLOCK).min(target);
+            let mut end = next(first, BLOCK).min(target);
+            if let Some(k) = iteration {
+                end = end.min(next(first, k));
+            }
             out.push(Block { meter, first, end });
             first = end;
         }
@@ -401,7 +447,7 @@ mod tests {
             },
             State::default(),
         ];
-        let b = blocks(&states, &[700, 100]);
+        let b = blocks(&states, &[700, 100], None);
         let spans: Vec<(usize, u64, u64)> = b.iter().map(|b| (b.meter, b.first, b.end)).collect();
         assert_eq!(spans, [(0, 300, 512), (0, 512, 700), (1, 0, 100)]);
     }

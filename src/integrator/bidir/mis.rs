@@ -19,9 +19,11 @@
 //!   up to the geometry of the next, not yet known, connection.
 //!
 //! Conventions: pdfs named `_w` per solid angle, `_a` per area; "forward" is the direction a
-//! subpath was built in, "reverse" the other one. A light sub-path count n_L = 1: one light path
-//! per camera path, with the camera's importance normalised over the whole image (see
-//! `sensor::camera`), so the report's n_VC = 1 and its N_L factors drop out. Russian roulette is
+//! subpath was built in, "reverse" the other one. Connections use one light subpath per camera
+//! subpath, n_VC = 1, with the camera's importance normalised over the whole image (see
+//! `sensor::camera`), so the report's N_L factors of connections drop out. Merging compares
+//! against all N_L light subpaths of an iteration: η_VCM = π r² N_L / n_VC [tech. rep. (20)]
+//! ([`Mis::vcm`]). Russian roulette is
 //! not folded into the pdfs (as pbrt-v4's BDPT): the weights are still a partition of unity for
 //! every path, which is all unbiasedness needs.
 
@@ -63,6 +65,31 @@ impl Mis {
             vm_weight: 0.0,
             vc_weight: 0.0,
         }
+    }
+
+    /// Vertex connection and merging with η_VCM = π r² N_L [tech. rep. (20); SmallVCM's
+    /// `mMisVmWeightFactor`, `mMisVcWeightFactor`]: `connect` false leaves only merging
+    /// (bidirectional photon mapping, where no connection competes: m(1/η) is 0), `merge`
+    /// false only connections (BDPT).
+    pub fn vcm(heuristic: MisHeuristic, eta: f32, connect: bool, merge: bool) -> Mis {
+        let m = |x: f32| Mis::bdpt(heuristic).m(x);
+        Mis {
+            heuristic,
+            vm_weight: if merge { m(eta) } else { 0.0 },
+            vc_weight: if connect { m(1.0 / eta) } else { 0.0 },
+        }
+    }
+
+    /// Merging camera vertex z_j with light vertex y_i (SmallVCM's merge weight, tech. rep.
+    /// (38), (39)): w_light = dVCM_y · m(1/η) + dVM_y · m(p→_z(ω_y)), the techniques that
+    /// build more of the path from the light side, with `pdf_dir` the camera BSDF's density
+    /// towards y_{i−1}; w_camera = dVCM_z · m(1/η) + dVM_z · m(p←_z(ω_z)), with `pdf_rev` its
+    /// density of the camera direction from ω_y.
+    #[inline]
+    pub fn merge(&self, dvcm_y: f32, dvm_y: f32, cam: &SubpathMis, pdf_dir: f32, pdf_rev: f32) -> f32 {
+        let w_light = dvcm_y * self.vc_weight + dvm_y * self.m(pdf_dir);
+        let w_camera = cam.dvcm * self.vc_weight + cam.dvm * self.m(pdf_rev);
+        weight(w_light + 1.0 + w_camera)
     }
 
     /// m(x): the heuristic applied to one pdf or pdf ratio.

@@ -8,6 +8,8 @@
 //! | `subpath.rs` | [`Walk`] (loop-carried state), [`trace_light_subpath`], [`BidirContext`] |
 //! | `connect.rs` | the techniques: s = 0, t = 1, s = 1 and general connections |
 //! | `splat.rs` | t = 1: the light subpath connected to the sensor |
+//! | `merge.rs` | vertex merging: the iteration's light vertices ([`merge::LightVertexStore`]) and the merge technique |
+//! | `hashgrid.rs` | the fixed-radius hash grid over them |
 //! | `record.rs` | a sample's contributions → tile sums and splats |
 //! | `strategies.rs` | the per-(s, t) decomposition written by `--strategies` |
 //!
@@ -21,6 +23,8 @@
 //! cleared and reused from sample to sample, so nothing is allocated per bounce.
 
 pub mod connect;
+pub mod hashgrid;
+pub mod merge;
 pub mod mis;
 pub mod record;
 pub mod splat;
@@ -29,6 +33,7 @@ pub mod subpath;
 pub mod vertex;
 
 pub use connect::Contribution;
+pub use merge::{LightVertexStore, MergeParams, MergeVertex};
 pub use mis::{Mis, MisHeuristic};
 pub use record::{SampleRecord, TileAccumulator};
 pub use splat::splat_light_subpath;

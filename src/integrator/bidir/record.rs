@@ -25,8 +25,12 @@ pub struct PendingSplat {
 /// Everything one (pixel, sample) produced; reused from sample to sample.
 #[derive(Clone, Debug, Default)]
 pub struct SampleRecord {
-    /// The weighted sum of the contributions to the sample's own pixel (t ≥ 2).
+    /// The weighted sum of the contributions to the sample's own pixel (t ≥ 2, merges).
     pub camera: Contribution,
+    /// Own-pixel contributions valid on the hero wavelength only, whatever the sample's final
+    /// wavelengths (merges with a light vertex whose subpath terminated the secondary
+    /// wavelengths, by a camera subpath that had not): see [`SampleRecord::own`].
+    pub hero_only: SampledSpectrum,
     pub splats: Vec<PendingSplat>,
     /// Per strategy (s, t), the sample's own-pixel contributions; empty when not recorded.
     pub strategies: Vec<Contribution>,
@@ -37,6 +41,7 @@ impl SampleRecord {
     pub fn new(strategy_count: usize) -> SampleRecord {
         SampleRecord {
             camera: Contribution::default(),
+            hero_only: SampledSpectrum::ZERO,
             splats: Vec::new(),
             strategies: vec![Contribution::default(); strategy_count],
         }
@@ -44,16 +49,35 @@ impl SampleRecord {
 
     pub fn clear(&mut self) {
         self.camera = Contribution::default();
+        self.hero_only = SampledSpectrum::ZERO;
         self.splats.clear();
         self.strategies.fill(Contribution::default());
     }
 
     /// The weighted sum of everything the sample contributed, whatever the bin: a meter's
     /// estimate (its contributions all go to its one reading).
-    pub fn total(&self) -> SampledSpectrum {
+    pub fn total(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
         self.splats
             .iter()
-            .fold(self.camera.weighted, |acc, s| acc + s.c.weighted)
+            .fold(self.own(lambda), |acc, s| acc + s.c.weighted)
+    }
+
+    /// The weighted own-pixel sum relative to the sample's final wavelengths `lambda`:
+    /// `camera` plus the hero-only part as the single-wavelength estimate it is — its hero
+    /// lane alone, × N when the secondary wavelengths still count (so that the conversion's
+    /// average over N lanes leaves it whole).
+    pub fn own(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
+        if self.hero_only.is_black() {
+            return self.camera.weighted;
+        }
+        let scale = if lambda.secondary_terminated() {
+            1.0
+        } else {
+            crate::spectral::N_LAMBDA as f32
+        };
+        let mut hero = SampledSpectrum::ZERO;
+        hero.0[0] = self.hero_only.0[0] * scale;
+        self.camera.weighted + hero
     }
 
     /// A technique (s, t ≥ 2) contributing to the sample's own pixel.
@@ -138,7 +162,7 @@ impl TileAccumulator {
     /// sample index is odd.
     pub fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths, odd: bool) {
         let xyz = |s| sampled_to_xyz(s, lambda);
-        let own = xyz(rec.camera.weighted);
+        let own = xyz(rec.own(lambda));
         let mut ok = finite(&own);
         let first_splat = self.splats.len();
         for s in &rec.splats {

@@ -1,0 +1,159 @@
+//! A hash grid over points for fixed-radius queries: the light vertices an iteration of VCM
+//! stores, looked up around every camera vertex (Georgiev et al. 2012 §5; SmallVCM's
+//! `HashGrid`, written anew).
+//!
+//! Cells are cubes of side 2r, so a ball of radius r around a query point overlaps at most
+//! the 2 × 2 × 2 block of cells nearest to it. Cells are hashed into a table of a power of two
+//! slots, at least as many as points (Teschner et al. 2003, "Optimized spatial hashing for
+//! collision detection of deformable objects", with their three primes); points are sorted by
+//! slot with a counting sort, so a slot's points are contiguous. Hash collisions only add
+//! candidates: every candidate is tested against the radius. The buffers are kept and reused
+//! by the next build.
+
+use glam::Vec3;
+
+#[derive(Clone, Debug, Default)]
+pub struct HashGrid {
+    /// Point indices sorted by slot.
+    indices: Vec<u32>,
+    /// `slot_end[k]`: one past the last entry of slot k in `indices` (slot k starts at
+    /// `slot_end[k − 1]`, or 0).
+    slot_end: Vec<u32>,
+    origin: Vec3,
+    inv_cell: f32,
+    radius2: f32,
+}
+
+impl HashGrid {
+    /// Rebuilds the grid over `points` for queries of radius `radius` (> 0, finite).
+    pub fn build(&mut self, points: impl ExactSizeIterator<Item = Vec3> + Clone, radius: f32) {
+        let n = points.len();
+        let slots = n.max(1).next_power_of_two();
+        let lo = points
+            .clone()
+            .fold(Vec3::splat(f32::INFINITY), |a, p| a.min(p));
+        self.origin = if lo.is_finite() { lo } else { Vec3::ZERO };
+        self.inv_cell = 1.0 / (2.0 * radius);
+        self.radius2 = radius * radius;
+        self.slot_end.clear();
+        self.slot_end.resize(slots, 0);
+        for p in points.clone() {
+            let k = self.slot_of(self.cell_of(p));
+            self.slot_end[k] += 1;
+        }
+        let mut start = 0u32;
+        for c in self.slot_end.iter_mut() {
+            start += *c;
+            *c = start;
+        }
+        self.indices.clear();
+        self.indices.resize(n, 0);
+        // Filling from the back leaves slot_end[k] at the slot's start; the pass after it
+        // restores the ends.
+        let mut cursor = self.slot_end.clone();
+        for (i, p) in points.enumerate() {
+            let k = self.slot_of(self.cell_of(p));
+            cursor[k] -= 1;
+            self.indices[cursor[k] as usize] = i as u32;
+        }
+    }
+
+    /// Calls `visit(i)` for every point index i whose point may lie within the radius of
+    /// `q` (the caller tests the distance; `within` does it for a point).
+    pub fn query(&self, q: Vec3, mut visit: impl FnMut(u32)) {
+        if self.indices.is_empty() {
+            return;
+        }
+        let c = (q - self.origin) * self.inv_cell;
+        let base = c.floor();
+        let frac = c - base;
+        // The 2 × 2 × 2 block: the cell of q and its neighbour on the side q is nearer to.
+        let step = |f: f32| if f < 0.5 { -1 } else { 1 };
+        let b = [base.x as i64, base.y as i64, base.z as i64];
+        let d = [step(frac.x), step(frac.y), step(frac.z)];
+        let mut seen = [usize::MAX; 8];
+        for (n, corner) in (0..8).enumerate() {
+            let cell = [
+                b[0] + if corner & 1 != 0 { d[0] } else { 0 },
+                b[1] + if corner & 2 != 0 { d[1] } else { 0 },
+                b[2] + if corner & 4 != 0 { d[2] } else { 0 },
+            ];
+            let k = self.slot_of(cell);
+            // Two cells of the block may hash to one slot: visit it once.
+            if seen[..n].contains(&k) {
+                continue;
+            }
+            seen[n] = k;
+            let start = if k == 0 { 0 } else { self.slot_end[k - 1] };
+            for &i in &self.indices[start as usize..self.slot_end[k] as usize] {
+                visit(i);
+            }
+        }
+    }
+
+    /// True when `p` lies within the radius of `q`.
+    #[inline]
+    pub fn within(&self, q: Vec3, p: Vec3) -> bool {
+        (p - q).length_squared() <= self.radius2
+    }
+
+    /// Bytes held by the grid's buffers.
+    pub fn bytes(&self) -> usize {
+        (self.indices.capacity() + self.slot_end.capacity()) * std::mem::size_of::<u32>()
+    }
+
+    fn cell_of(&self, p: Vec3) -> [i64; 3] {
+        let c = ((p - self.origin) * self.inv_cell).floor();
+        // Saturating casts: a point far outside the others lands in some cell, never UB.
+        [c.x as i64, c.y as i64, c.z as i64]
+    }
+
+    fn slot_of(&self, c: [i64; 3]) -> usize {
+        let h = (c[0].wrapping_mul(73_856_093))
+            ^ (c[1].wrapping_mul(19_349_663))
+            ^ (c[2].wrapping_mul(83_492_791));
+        (h as u64 as usize) & (self.slot_end.len() - 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::rng::Rng;
+
+    #[test]
+    fn queries_find_exactly_the_points_within_the_radius() {
+        let mut rng = Rng::new(7);
+        let points: Vec<Vec3> = (0..2000).map(|_| rng.vec3(-1.0, 1.0)).collect();
+        let mut grid = HashGrid::default();
+        for radius in [0.05f32, 0.2, 3.0] {
+            grid.build(points.iter().copied(), radius);
+            for _ in 0..200 {
+                let q = rng.vec3(-1.2, 1.2);
+                let mut found: Vec<u32> = Vec::new();
+                grid.query(q, |i| {
+                    if grid.within(q, points[i as usize]) {
+                        found.push(i);
+                    }
+                });
+                found.sort_unstable();
+                let brute: Vec<u32> = (0..points.len() as u32)
+                    .filter(|&i| (points[i as usize] - q).length() <= radius)
+                    .collect();
+                assert_eq!(found, brute, "radius {radius} at {q}");
+            }
+        }
+    }
+
+    #[test]
+    fn an_empty_grid_and_far_points_are_safe() {
+        let mut grid = HashGrid::default();
+        grid.build(std::iter::empty::<Vec3>(), 0.1);
+        grid.query(Vec3::ZERO, |_| panic!("no points"));
+        let far = [Vec3::splat(1e30), Vec3::splat(-1e30), Vec3::ZERO];
+        grid.build(far.iter().copied(), 1e-6);
+        let mut n = 0;
+        grid.query(Vec3::ZERO, |i| n += grid.within(Vec3::ZERO, far[i as usize]) as u32);
+        assert_eq!(n, 1);
+    }
+}
