@@ -27,8 +27,11 @@ use spectral_render::texture::TextureFilter;
 
 /// The bidirectional context's default (`BidirContext::new`): textures unfiltered.
 const FINEST: TextureFilter = TextureFilter::Finest;
+use spectral_render::integrator::bidir::merge::merge_weight;
 use spectral_render::integrator::bidir::vertex::LightOrigin;
-use spectral_render::integrator::bidir::{BidirContext, Mis, MisHeuristic, PathVertex, Walk};
+use spectral_render::integrator::bidir::{
+    BidirContext, MergeVertex, Mis, MisHeuristic, PathVertex, Walk,
+};
 use spectral_render::integrator::vcm::{VcmMode, VcmParams};
 use spectral_render::light::emit::LightLeSample;
 use spectral_render::light::{Light, LightHit, LightLiSample, LightSampleContext};
@@ -932,7 +935,7 @@ fn random_path(
 /// that samples through it, so its density is taken as 1 — it cancels in m(p_s)/Σ m(p_j) —
 /// with the area conversion kept; techniques that connect at it have p_s = 0
 /// (Veach 1997 §10.3.5; Georgiev 2012 tech. rep. (53)–(55) is the same rule as a recurrence).
-fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
+fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Techniques {
     let scene = ctx.scene;
     let n = path.n();
     let li = path.light as usize;
@@ -1018,7 +1021,7 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
         let pdf = bsdf_pdf(i + 1, i + 2, i, TransportMode::Radiance, lambda);
         to_area(pdf, i + 1, i)
     };
-    (0..n)
+    let connections = (0..n)
         .map(|s| {
             if path.connects_at_delta(s, &specular) {
                 return 0.0;
@@ -1027,7 +1030,31 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
             let r: f64 = (s..n).map(|i| reverse(i, &mut lambda)).product();
             f * r
         })
-        .collect()
+        .collect();
+    // Merging at x_i (1 ≤ i ≤ n − 2, non-specular): both subpaths sample x_i, the light one
+    // forward (as technique s = i + 1) and the camera one in reverse; times η in the caller
+    // [tech. rep. (19), (20)].
+    let merges = (0..n)
+        .map(|i| {
+            if i == 0 || i + 1 >= n || specular[i] {
+                return 0.0;
+            }
+            let f: f64 = (0..=i).map(|j| forward(j, i + 1, &mut lambda)).product();
+            let r: f64 = (i..n).map(|j| reverse(j, &mut lambda)).product();
+            f * r
+        })
+        .collect();
+    Techniques {
+        connections,
+        merges,
+    }
+}
+
+/// The densities of a path's techniques: connection s (s light vertices) at `connections[s]`,
+/// merging at x_i at `merges[i]` (without the factor η).
+struct Techniques {
+    connections: Vec<f64>,
+    merges: Vec<f64>,
 }
 
 /// Production weights for every technique of `path`: the subpaths are replayed through the
@@ -1043,16 +1070,36 @@ fn recurrent_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
             if path.connects_at_delta(s, &specular) {
                 0.0
             } else {
-                recurrent_weight(&ctx, path, s) as f64
+                recurrent_weight(&ctx, path, s, false) as f64
             }
         })
         .collect()
 }
 
-fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
+/// Production weights of merging at every x_i of `path` (0 where no merge can happen: the
+/// ends and specular vertices), index i.
+fn recurrent_merge_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
+    let ctx = path.sensor.context(ctx);
+    let specular = path.specular(ctx.scene);
+    let n = path.n();
+    (0..n)
+        .map(|i| {
+            if i == 0 || i + 1 >= n || specular[i] {
+                0.0
+            } else {
+                recurrent_weight(&ctx, path, i + 1, true) as f64
+            }
+        })
+        .collect()
+}
+
+/// The production weight of technique s of `path`, or with `merge` of merging at x_{s−1}
+/// (the light walk reaching x_{s−1}, the camera walk too).
+fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, merge: bool) -> f32 {
     let scene = ctx.scene;
     let n = path.n();
     let t = n - s;
+    let camera_end = if merge { t + 1 } else { t };
     let li = path.light;
     let light = &scene.lights[li as usize];
     let pmf = scene.light_sampler.pmf(li as usize);
@@ -1142,7 +1189,7 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
     };
     let mut walk = Walk::sensor(ctx, &sr).expect("sensor ray");
     let mut camera_vertex: Option<PathVertex> = None;
-    for j in 1..t {
+    for j in 1..camera_end {
         let i = n - 1 - j;
         if j >= 2 {
             let prev = camera_vertex.unwrap();
@@ -1167,6 +1214,10 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize) -> f32 {
         let si = &path.surfaces[i - 1];
         walk.arrive(&ctx.mis, si.p, si.ng);
         camera_vertex = Some(vertex(i, path.dir(i, i + 1), &walk, &mut lambda));
+    }
+    if merge {
+        let (z, y) = (camera_vertex.unwrap(), light_vertex.unwrap());
+        return merge_weight(&ctx.mis, &z, &z.mis, &MergeVertex::new(&y, false));
     }
     let pdf_dir = |p: Vec3| ctx.sensor.ray_pdf_dir_w((p - sensor_p).normalize());
     match (s, t) {
@@ -1224,10 +1275,22 @@ struct MisCheck {
 }
 
 /// Checks the recurrent weights of random paths from `sensor` against the brute-force sum.
+/// Which merging techniques compete in a brute-force MIS check, with η = π r² N_L.
+#[derive(Clone, Copy, Debug)]
+enum Merging {
+    /// BDPT: connections only.
+    None,
+    /// VCM: connections and merges.
+    Vcm(f32),
+    /// Bidirectional photon mapping: merges only.
+    Vm(f32),
+}
+
 fn check_mis(
     scene: &Scene,
     sensor: &SensorEnd,
     heuristic: MisHeuristic,
+    merging: Merging,
     paths_per_length: usize,
     seed: u64,
 ) -> MisCheck {
@@ -1245,7 +1308,15 @@ fn check_mis(
             Light::Dome(_) => "dome",
         })
         .collect();
-    let ctx = BidirContext::new(scene, Mis::bdpt(heuristic), 100);
+    let mut ctx = BidirContext::new(scene, Mis::bdpt(heuristic), 100);
+    let (eta, connect) = match merging {
+        Merging::None => (0.0, true),
+        Merging::Vcm(eta) => (eta, true),
+        Merging::Vm(eta) => (eta, false),
+    };
+    if eta > 0.0 {
+        ctx.mis = Mis::vcm(heuristic, eta, connect, true);
+    }
     let mut sampler = Sampler::new(seed, 0, heuristic as u64);
     let mut out = MisCheck {
         per_length: vec![0; 6],
@@ -1258,20 +1329,36 @@ fn check_mis(
             let Some(path) = random_path(scene, sensor, k, &mut sampler) else {
                 continue;
             };
-            let pdfs = technique_pdfs(&ctx, &path);
+            let t = technique_pdfs(&ctx, &path);
+            // Every technique's density: connections (unless only merging), then merges × η.
+            let mut pdfs: Vec<f64> = if connect {
+                t.connections.clone()
+            } else {
+                vec![0.0; path.n()]
+            };
+            pdfs.extend(t.merges.iter().map(|&p| p * eta as f64));
             let m: Vec<f64> = pdfs.iter().map(|&p| ctx.mis.m(p as f32) as f64).collect();
             let total: f64 = m.iter().sum();
             if !(total > 0.0 && total.is_finite()) {
                 continue;
             }
             let brute: Vec<f64> = m.iter().map(|x| x / total).collect();
-            let recurrent = recurrent_weights(&ctx, &path);
-            for s in 0..path.n() {
+            let mut recurrent = if connect {
+                recurrent_weights(&ctx, &path)
+            } else {
+                vec![0.0; path.n()]
+            };
+            if eta > 0.0 {
+                recurrent.extend(recurrent_merge_weights(&ctx, &path));
+            } else {
+                recurrent.extend(vec![0.0; path.n()]);
+            }
+            for s in 0..brute.len() {
                 let diff = (brute[s] - recurrent[s]).abs();
                 out.worst_diff = out.worst_diff.max(diff);
                 assert!(
                     diff < 2e-3,
-                    "{} {heuristic:?}, n = {}, s = {s}, light {}, specular {:?}: recurrent {:?} vs brute force {:?} (pdfs {:?})",
+                    "{} {heuristic:?} {merging:?}, n = {}, technique {s} (≥ n: merges), light {}, specular {:?}: recurrent {:?} vs brute force {:?} (pdfs {:?})",
                     sensor.name(),
                     path.n(),
                     kinds[path.light as usize],
@@ -1328,11 +1415,21 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
             Vec3::new(0.3, -0.6, -1.0),
         ),
     ];
+    // BDPT, VCM at a small and a large η (merges weak and dominant), and merging alone.
+    let modes = [
+        (Merging::None, 300),
+        (Merging::Vcm(0.05), 100),
+        (Merging::Vcm(20.0), 100),
+        (Merging::Vm(2.0), 100),
+    ];
     for (i, sensor) in sensors.iter().enumerate() {
-        for heuristic in [MisHeuristic::Power, MisHeuristic::Balance] {
-            let c = check_mis(&scene, sensor, heuristic, 300, 11 + i as u64);
+        for (heuristic, (merging, paths)) in [MisHeuristic::Power, MisHeuristic::Balance]
+            .into_iter()
+            .flat_map(|h| modes.iter().map(move |&m| (h, m)))
+        {
+            let c = check_mis(&scene, sensor, heuristic, merging, paths, 11 + i as u64);
             eprintln!(
-                "{} {heuristic:?}: paths per length (n = 2..7) {:?}, per light {:?}; {} with specular vertices ({} techniques excluded); max |recurrent − brute force| {:.2e}, max |Σ w − 1| {:.2e}",
+                "{} {heuristic:?} {merging:?}: paths per length (n = 2..7) {:?}, per light {:?}; {} with specular vertices ({} techniques excluded); max |recurrent − brute force| {:.2e}, max |Σ w − 1| {:.2e}",
                 sensor.name(),
                 c.per_length,
                 c.per_light,
@@ -1341,21 +1438,24 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
                 c.worst_diff,
                 c.worst_sum
             );
-            // A luminance meter looking at a plain floor sees no emitter directly (n = 2).
-            let first = if matches!(sensor, SensorEnd::Meter(m) if m.delta_direction()) {
+            // A luminance meter looking at a plain floor sees no emitter directly (n = 2),
+            // and a two-vertex path has nothing to merge at.
+            let first = if matches!(sensor, SensorEnd::Meter(m) if m.delta_direction())
+                || matches!(merging, Merging::Vm(_))
+            {
                 1
             } else {
                 0
             };
             for (k, &count) in c.per_length.iter().enumerate().skip(first) {
                 assert!(
-                    count >= 100,
+                    count >= paths.min(100),
                     "{}: too few paths with {k} surface vertices",
                     sensor.name()
                 );
             }
             assert!(
-                c.specular_paths >= 100,
+                c.specular_paths >= paths / 3,
                 "{}: few specular paths",
                 sensor.name()
             );
@@ -1370,7 +1470,7 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
                 "distant (delta)",
             ] {
                 assert!(
-                    c.per_light.get(kind).copied().unwrap_or(0) >= 10,
+                    c.per_light.get(kind).copied().unwrap_or(0) >= paths / 30,
                     "{}: few paths to {kind}: {:?}",
                     sensor.name(),
                     c.per_light

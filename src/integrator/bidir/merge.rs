@@ -13,7 +13,7 @@
 //! vertex of the iteration in [`MergeVertex`] (56 bytes), and a hash grid over them.
 
 use super::hashgrid::HashGrid;
-use super::mis::SubpathMis;
+use super::mis::{Mis, SubpathMis};
 use super::PathVertex;
 use crate::bxdf::TransportMode;
 use crate::spectral::SampledSpectrum;
@@ -74,7 +74,7 @@ pub struct Merged {
 #[derive(Clone, Copy, Debug)]
 pub struct MergeParams {
     /// m(1/η_VCM) and the heuristic (the `Mis` of the iteration).
-    pub mis: super::Mis,
+    pub mis: Mis,
     /// 1 / (π r² N_L) [tech. rep. (21)].
     pub normalization: f32,
     pub max_depth: u32,
@@ -115,11 +115,7 @@ impl LightVertexStore {
             if f.is_black() {
                 return;
             }
-            // The camera BSDF sampling ω_y (the light side's technique one vertex longer)
-            // and the reverse, sampling ω_z from ω_y (the camera side's).
-            let pdf_dir = z.bsdf.pdf(z.wo, y.wo, TransportMode::Radiance);
-            let pdf_rev = z.bsdf.pdf(y.wo, z.wo, TransportMode::Importance);
-            let w = params.mis.merge(y.dvcm, y.dvm, cam, pdf_dir, pdf_rev);
+            let w = merge_weight(&params.mis, z, cam, y);
             let c = z.beta * f * y.beta * (w * params.normalization);
             if y.hero_only && !camera_hero_only {
                 out.hero_only += c;
@@ -129,4 +125,13 @@ impl LightVertexStore {
         });
         out
     }
+}
+
+/// The MIS weight of merging camera vertex `z` (its walk's MIS `cam`) with light vertex `y`
+/// [tech. rep. (38), (39)]: the camera BSDF's density of ω_y (the light side's technique one
+/// vertex longer) and of ω_z from ω_y (the camera side's) enter `Mis::merge`.
+pub fn merge_weight(mis: &Mis, z: &PathVertex, cam: &SubpathMis, y: &MergeVertex) -> f32 {
+    let pdf_dir = z.bsdf.pdf(z.wo, y.wo, TransportMode::Radiance);
+    let pdf_rev = z.bsdf.pdf(y.wo, z.wo, TransportMode::Importance);
+    mis.merge(y.dvcm, y.dvm, cam, pdf_dir, pdf_rev)
 }
