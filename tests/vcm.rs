@@ -1,0 +1,333 @@
+//! VCM against a closed form on a path class no other estimator can sample: a caustic seen
+//! only in a mirror (E–S–D–S–L).
+//!
+//! A tiny sphere light (r = 0.1 mm, a point for every purpose but its finite luminance) hangs
+//! 10 cm above a Lambertian floor (ρ = 0.5) beside a vertical aluminium mirror A, which
+//! throws a caustic onto the floor; a black card just below the light shades the floor patch
+//! from the light itself. The camera sees that patch only through a second mirror B tilted
+//! 45° above it: every pixel's ray reflects off B down to the floor. The patch is lit only
+//! through A (E–S–D–S–L): no connection can end on a specular vertex and no camera path can
+//! hit a 0.1 mm light after two specular bounces (it would with probability ~10⁻⁸ per
+//! path), so path tracing and BDPT estimate 0, while merging at the floor finds the caustic.
+//!
+//! Closed form, per pixel: the camera ray (the renderer's own camera model) reflects off B to
+//! the floor point x; the luminance there is ρ/π · (E_direct + E_A), with the irradiance of a
+//! sphere of luminance L and radius r, E = π r² L cos θ / d² (exact for a sphere above the
+//! horizon), from the light and from its image in A (the image-source method: the segment
+//! from the image to x must cross A's rectangle), times A's Fresnel reflectance R(θ_A, λ);
+//! the pixel sees that times B's R(θ_B, λ). R is the unpolarised Fresnel reflectance of a
+//! conductor with complex index n + ik (Born and Wolf, Principles of Optics §14.2), computed
+//! here in f64 from the aluminium table of `spectra/metal/Al.csv`, and the luminance
+//! Y = K_m ∫ L(λ) ȳ(λ) dλ over the light's D65 spectrum on the 1 nm grid. With max depth 3
+//! nothing else reaches the pixels (floor → mirror → floor interreflection needs 4 events).
+
+mod common;
+use common::*;
+use glam::DVec3;
+use spectral_render::integrator::vcm::{VcmMode, VcmParams};
+use spectral_render::scene::Scene;
+use spectral_render::session::{self, RenderOptions};
+use spectral_render::spectral::data;
+use spectral_render::{Integrator, MisHeuristic};
+
+const LIGHT: DVec3 = DVec3::new(0.0, 0.1, 0.0);
+const LIGHT_RADIUS: f64 = 1.0e-4;
+const LIGHT_NITS: f64 = 8.0e7;
+const RHO: f64 = 0.5;
+const MAX_DEPTH: u32 = 3;
+const RES: u32 = 32;
+
+/// A mirror rectangle: centre, unit normal, and half-extent vectors.
+#[derive(Clone, Copy)]
+struct Mirror {
+    c: DVec3,
+    n: DVec3,
+    u: DVec3,
+    v: DVec3,
+}
+
+impl Mirror {
+    fn corners(&self) -> [DVec3; 4] {
+        let (c, u, v) = (self.c, self.u, self.v);
+        [c - u - v, c + u - v, c + u + v, c - u + v]
+    }
+
+    /// The point where segment a → b crosses the mirror's rectangle, if it does.
+    fn crossing(&self, a: DVec3, b: DVec3) -> Option<DVec3> {
+        let (da, db) = ((a - self.c).dot(self.n), (b - self.c).dot(self.n));
+        if da * db >= 0.0 {
+            return None;
+        }
+        let p = a + (b - a) * (da / (da - db));
+        let q = p - self.c;
+        let inside = |e: DVec3| q.dot(e).abs() <= e.length_squared();
+        (inside(self.u) && inside(self.v)).then_some(p)
+    }
+
+    fn image(&self, p: DVec3) -> DVec3 {
+        p - 2.0 * (p - self.c).dot(self.n) * self.n
+    }
+}
+
+/// Mirror A: x = 0.1, facing −x, 30 cm tall from the floor, 60 cm wide.
+const MIRROR_A: Mirror = Mirror {
+    c: DVec3::new(0.1, 0.15, 0.0),
+    n: DVec3::new(-1.0, 0.0, 0.0),
+    u: DVec3::new(0.0, 0.15, 0.0),
+    v: DVec3::new(0.0, 0.0, 0.3),
+};
+
+/// The black card shading the patch from the light: vertical, 1 cm to its left, from 6 to
+/// 20 cm above the floor — above the caustic's rays from A to the patch (at most 5.3 cm high
+/// there), below the light's own rays to it (at least 8 cm).
+const CARD: Mirror = Mirror {
+    c: DVec3::new(-0.01, 0.13, 0.0),
+    n: DVec3::new(1.0, 0.0, 0.0),
+    u: DVec3::new(0.0, 0.07, 0.0),
+    v: DVec3::new(0.0, 0.0, 0.3),
+};
+
+/// Mirror B: above the floor patch around (−0.15, 0, 0), tilted 45° to send the camera's
+/// +x view down.
+fn mirror_b() -> Mirror {
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    Mirror {
+        c: DVec3::new(-0.15, 0.25, 0.0),
+        n: DVec3::new(-s, -s, 0.0),
+        u: DVec3::new(s, -s, 0.0) * 0.1,
+        v: DVec3::new(0.0, 0.0, 0.08),
+    }
+}
+
+fn stage() -> String {
+    let p = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+    let aluminium = "        uniform token inputs:metal = \"Al\"\n";
+    let mut s = header();
+    s += &looks_scope(
+        &(material("Floor", "spectral:diffuse", &flat_reflectance(RHO))
+            + &material("Mirror", "spectral:conductor", aluminium)
+            + &material("Black", "spectral:diffuse", &flat_reflectance(0.0))),
+    );
+    s += &polygon("Card", &CARD.corners().map(p), None, &binding("Black"));
+    let floor = [[-1.0f32, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]];
+    s += &polygon("Floor", &floor, None, &binding("Floor"));
+    for (name, m) in [("MirrorA", MIRROR_A), ("MirrorB", mirror_b())] {
+        s += &polygon(name, &m.corners().map(p), None, &binding("Mirror"));
+    }
+    s += &prim(
+        "SphereLight",
+        "Bulb",
+        &(format!("    float inputs:radius = {LIGHT_RADIUS}\n    float inputs:intensity = {LIGHT_NITS}\n")
+            + &xform(&[("translate", format!("({}, {}, {})", LIGHT.x, LIGHT.y, LIGHT.z))])),
+    );
+    // At (−0.65, 0.25, 0) looking along +x (rotateY −90 turns −Z to +X), B filling the view.
+    s += &prim(
+        "Camera",
+        "Cam",
+        &("    float focalLength = 100\n    float horizontalAperture = 20\n    float verticalAperture = 20\n    float2 clippingRange = (0.01, 100)\n".to_string()
+            + &xform(&[
+                ("translate", "(-0.65, 0.25, 0)".into()),
+                ("rotateY", "-90".into()),
+            ])),
+    );
+    s
+}
+
+/// Unpolarised Fresnel reflectance of a conductor n + ik at incidence cos θ (Born & Wolf
+/// §14.2, the exact form with a² and b²).
+fn conductor_reflectance(cos: f64, n: f64, k: f64) -> f64 {
+    let (c2, s2) = (cos * cos, 1.0 - cos * cos);
+    let t = n * n - k * k - s2;
+    let a2b2 = (t * t + 4.0 * n * n * k * k).sqrt();
+    let a = (0.5 * (a2b2 + t)).max(0.0).sqrt();
+    let rs = (a2b2 + c2 - 2.0 * a * cos) / (a2b2 + c2 + 2.0 * a * cos);
+    let rp = rs * (a2b2 * c2 + s2 * s2 - 2.0 * a * cos * s2) / (a2b2 * c2 + s2 * s2 + 2.0 * a * cos * s2);
+    0.5 * (rs + rp)
+}
+
+/// The expected luminance of every pixel, and of the same pixels without the caustic.
+fn expected(scene: &Scene) -> (Vec<f64>, Vec<f64>) {
+    let b = mirror_b();
+    let (eta, k) = data::metal("Al").unwrap();
+    let d65 = data::illuminant("CIE-D65").unwrap();
+    let ybar = &data::cie_xyz()[1];
+    let lambdas: Vec<f32> = (360..=830).map(|l| l as f32).collect();
+    let weight: Vec<f64> = lambdas
+        .iter()
+        .map(|&l| d65.eval(l) as f64 * ybar.eval(l) as f64)
+        .collect();
+    let norm: f64 = weight.iter().sum();
+    // The light's D65 luminance-weighted mean of a spectral factor.
+    let mean = |f: &dyn Fn(f64, f64) -> f64| -> f64 {
+        lambdas
+            .iter()
+            .zip(&weight)
+            .map(|(&l, w)| w * f(eta.eval(l) as f64, k.eval(l) as f64))
+            .sum::<f64>()
+            / norm
+    };
+    let intensity = std::f64::consts::PI * LIGHT_RADIUS * LIGHT_RADIUS * LIGHT_NITS;
+    let cam = &scene.camera;
+    let (mut full, mut direct_only) = (Vec::new(), Vec::new());
+    for j in 0..RES {
+        for i in 0..RES {
+            let (ray, _) = cam.generate_ray([i as f32 + 0.5, j as f32 + 0.5], [0.5; 2]);
+            let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
+            let hit = b
+                .crossing(o, o + 10.0 * d)
+                .unwrap_or_else(|| panic!("pixel ({i}, {j}) misses mirror B"));
+            let cos_b = d.dot(b.n).abs();
+            let r = d - 2.0 * d.dot(b.n) * b.n;
+            let x = hit + r * (-hit.y / r.y);
+            // Irradiance factors cos θ / d² at x from the light and from its images in the
+            // mirrors, with the reflectance's incidence cosine, where the path is clear.
+            let g = |src: DVec3| {
+                let v = src - x;
+                v.y / v.length() / v.length_squared()
+            };
+            let occluders = [MIRROR_A, b, CARD];
+            let clear = |a: DVec3, z: DVec3, skip: Option<usize>| {
+                occluders
+                    .iter()
+                    .enumerate()
+                    .all(|(k, o)| Some(k) == skip || o.crossing(a, z).is_none())
+            };
+            let g_direct = if clear(LIGHT, x, None) { g(LIGHT) } else { 0.0 };
+            // Through mirror k (A = 0, B = 1): the segment from the light's image to x crosses
+            // the mirror at m, and both real segments are clear.
+            let via = |k: usize| -> Option<(f64, f64)> {
+                let m_k = occluders[k];
+                let image = m_k.image(LIGHT);
+                let m = m_k.crossing(image, x)?;
+                (clear(LIGHT, m, Some(k)) && clear(m, x, Some(k)))
+                    .then(|| (g(image), (LIGHT - m).normalize().dot(m_k.n).abs()))
+            };
+            let (g_a, cos_a) = via(0).unwrap_or((0.0, 1.0));
+            assert!(via(1).is_none(), "B must not light the patch");
+            let scale = intensity * RHO / std::f64::consts::PI;
+            full.push(
+                scale
+                    * mean(&|n, k| {
+                        conductor_reflectance(cos_b, n, k)
+                            * (g_direct + g_a * conductor_reflectance(cos_a, n, k))
+                    }),
+            );
+            direct_only.push(scale * g_direct * mean(&|n, k| conductor_reflectance(cos_b, n, k)));
+        }
+    }
+    (full, direct_only)
+}
+
+/// Mean luminance of the image over `runs` renders with `integrator` (and its standard error).
+fn image_mean(scene: &Scene, integrator: Integrator, spp: u32, runs: u64) -> (f64, f64) {
+    let means: Vec<f64> = (0..runs)
+        .map(|seed| {
+            let opts = RenderOptions {
+                spp: Some(spp),
+                seed: 100 + seed,
+                max_depth: MAX_DEPTH,
+                integrator,
+                ..Default::default()
+            };
+            let out = session::render(scene, &opts).unwrap();
+            assert_finite(&out);
+            out.xyz.iter().map(|p| p[1] as f64).sum::<f64>() / out.xyz.len() as f64
+        })
+        .collect();
+    mean_and_sem(means)
+}
+
+/// The relative bias of merging at radius `r`: the disk average of the caustic's irradiance
+/// (cos θ / d² from A's image of the light; R(θ) varies far slower) around a floor point
+/// against its centre value, the largest over the patch's corners and centre (numerically,
+/// 2000 points on the disk).
+fn merge_bias_bound(r: f64) -> f64 {
+    let e = |x: DVec3| {
+        let g = |src: DVec3| {
+            let v = src - x;
+            v.y / v.length() / v.length_squared()
+        };
+        g(MIRROR_A.image(LIGHT))
+    };
+    let mut worst = 0.0f64;
+    for (px, pz) in [(-0.25, -0.1), (-0.15, 0.0), (-0.05, 0.1), (-0.25, 0.1), (-0.05, -0.1)] {
+        let c = DVec3::new(px, 0.0, pz);
+        let n = 2000;
+        let avg: f64 = (0..n)
+            .map(|s| {
+                // Fibonacci points on the disk (uniform by area).
+                let a = (s as f64 + 0.5) / n as f64;
+                let phi = s as f64 * 2.399_963_229_728_653;
+                e(c + DVec3::new(phi.cos(), 0.0, phi.sin()) * (r * a.sqrt()))
+            })
+            .sum::<f64>()
+            / n as f64;
+        worst = worst.max((avg / e(c) - 1.0).abs());
+    }
+    worst
+}
+
+#[test]
+fn vcm_renders_a_caustic_seen_in_a_mirror_that_pt_and_bdpt_miss() {
+    let scene = load_text("sds", &stage(), (RES, RES));
+    let (full, direct) = expected(&scene);
+    let n = full.len() as f64;
+    let (exact, exact_direct) = (full.iter().sum::<f64>() / n, direct.iter().sum::<f64>() / n);
+    assert!(
+        exact > 0.0 && exact_direct == 0.0,
+        "the patch must be lit through A only: {exact} vs {exact_direct}"
+    );
+    let vcm = Integrator::Vcm(VcmParams::default());
+    let (v, v_sem) = image_mean(&scene, vcm, 128, 8);
+    let bdpt = Integrator::Bdpt {
+        mis: MisHeuristic::Power,
+    };
+    let (b, b_sem) = image_mean(&scene, bdpt, 48, 4);
+    let (p, p_sem) = image_mean(&scene, Integrator::Path, 96, 4);
+    // The largest radius VCM used is its base radius (r_0 = 1.5 pixel footprints at the first
+    // hit; the first hit is B, 0.5 m away, and the floor 0.25 m further: a footprint there is
+    // at most 0.75 m × the pixel's angle, 0.2 / 32 rad).
+    let r0 = 1.5 * 0.75 * 0.2 / RES as f64;
+    let bias = merge_bias_bound(r0) * exact;
+    eprintln!(
+        "E-S-D-S-L: exact {exact:.5} cd/m² (direct alone {exact_direct:.5}); VCM {v:.5} ± {v_sem:.5} (bias bound {bias:.2e}), BDPT {b:.5} ± {b_sem:.5}, PT {p:.5} ± {p_sem:.5}"
+    );
+    assert!(
+        (v - exact).abs() < 3.3 * v_sem + bias,
+        "VCM {v} ± {v_sem} vs the closed form {exact} (bias bound {bias})"
+    );
+    assert!(v_sem < 0.02 * exact, "VCM too noisy to judge: {v_sem}");
+    // PT and BDPT cannot sample the caustic in practice: nothing of it at these counts.
+    for (name, m, sem) in [("BDPT", b, b_sem), ("PT", p, p_sem)] {
+        assert!(
+            m + 3.3 * sem < 0.01 * exact,
+            "{name} {m} ± {sem}: no strategy of it samples E-S-D-S-L ({exact})"
+        );
+    }
+}
+
+#[test]
+fn photon_mapping_alone_converges_to_the_same_caustic() {
+    let scene = load_text("sds-vm", &stage(), (RES, RES));
+    let (full, _) = expected(&scene);
+    let exact = full.iter().sum::<f64>() / full.len() as f64;
+    let vm = Integrator::Vcm(VcmParams {
+        mode: VcmMode::Vm,
+        ..VcmParams::default()
+    });
+    let (v, sem) = image_mean(&scene, vm, 128, 8);
+    let r0 = 1.5 * 0.75 * 0.2 / RES as f64;
+    let bias = merge_bias_bound(r0) * exact;
+    eprintln!("photon mapping: {v:.5} ± {sem:.5} vs {exact:.5} (bias bound {bias:.2e})");
+    assert!((v - exact).abs() < 3.3 * sem + bias, "{v} ± {sem} vs {exact}");
+}
+
+/// The test's Fresnel formula against two known values: normal incidence
+/// ((n−1)² + k²)/((n+1)² + k²), and grazing incidence 1.
+#[test]
+fn conductor_reflectance_limits() {
+    let (n, k) = (1.2, 7.0);
+    let r0 = ((n - 1.0f64).powi(2) + k * k) / ((n + 1.0f64).powi(2) + k * k);
+    assert!((conductor_reflectance(1.0, n, k) - r0).abs() < 1e-12);
+    assert!((conductor_reflectance(1e-9, n, k) - 1.0).abs() < 1e-6);
+}
