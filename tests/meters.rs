@@ -955,3 +955,54 @@ fn readings_do_not_depend_on_the_number_of_threads() {
         assert_eq!(bits(run(1)), bits(run(2)), "{integrator:?}");
     }
 }
+
+/// VCM meters (merging at the meter subpath's vertices, connections as BDPT) against the
+/// furnace's exact answers and against the path tracer in the Cornell box. Their intervals
+/// come from iteration means (an iteration's samples share its light vertices); both checks
+/// are z-tests at |z| < 3.4, which an interval computed from correlated samples would fail.
+#[test]
+fn vcm_meters_read_the_furnace_and_agree_with_path_tracing() {
+    let vcm = Integrator::Vcm(spectral_render::integrator::vcm::VcmParams::default());
+    let (le, rho) = (2.0, 0.5);
+    let furnace = load("furnace-vcm", &furnace_stage(le as f32, rho as f32));
+    let l = le / (1.0 - rho);
+    let at = Vec3::new(0.2, -0.3, 0.1);
+    let meters = [
+        Meter::illuminance(at, Vec3::new(0.3, 1.0, -0.2)).unwrap(),
+        Meter::luminance(at, Vec3::new(-1.0, 0.2, 0.5)).unwrap(),
+    ];
+    let r = read_with(&furnace, &meters, Stop::RelError(0.01), 9, 10_000, vcm);
+    for (reading, exact) in r.iter().zip([PI * l, l]) {
+        let z = (reading.value - exact) / (reading.ci95 / 1.96);
+        eprintln!(
+            "VCM furnace: {} ± {} vs {exact} (z = {z:.2})",
+            reading.value, reading.ci95
+        );
+        assert!(
+            z.abs() < 3.4 && reading.ci95 / exact < 0.01,
+            "{reading:?} vs {exact}"
+        );
+    }
+    let scene = cbox();
+    let meters = [
+        Meter::illuminance(Vec3::new(0.6, 0.995, 0.6), Vec3::NEG_Y).unwrap(),
+        Meter::illuminance(Vec3::new(-0.99, 0.2, 0.5), Vec3::X).unwrap(),
+        Meter::luminance(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.1, 0.2, -1.0)).unwrap(),
+    ];
+    let stop = Stop::RelError(0.01);
+    let pt = read_with(&scene, &meters, stop, 23, 7, Integrator::Path);
+    let v = read_with(&scene, &meters, stop, 23, 7, vcm);
+    for ((m, a), b) in meters.iter().zip(&pt).zip(&v) {
+        let z = z_score(a, b);
+        eprintln!(
+            "cbox {} at {}: path {:.4} ± {:.4}, vcm {:.4} ± {:.4} (z = {z:.2})",
+            m.kind.name(),
+            m.p,
+            a.value,
+            a.ci95,
+            b.value,
+            b.ci95
+        );
+        assert!(z.abs() < 3.4, "{} at {}: z = {z:.2}", m.kind.name(), m.p);
+    }
+}

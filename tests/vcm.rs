@@ -109,7 +109,12 @@ fn stage() -> String {
             + &material("Black", "spectral:diffuse", &flat_reflectance(0.0))),
     );
     s += &polygon("Card", &CARD.corners().map(p), None, &binding("Black"));
-    let floor = [[-1.0f32, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]];
+    let floor = [
+        [-1.0f32, 0.0, -1.0],
+        [1.0, 0.0, -1.0],
+        [1.0, 0.0, 1.0],
+        [-1.0, 0.0, 1.0],
+    ];
     s += &polygon("Floor", &floor, None, &binding("Floor"));
     for (name, m) in [("MirrorA", MIRROR_A), ("MirrorB", mirror_b())] {
         s += &polygon(name, &m.corners().map(p), None, &binding("Mirror"));
@@ -117,8 +122,12 @@ fn stage() -> String {
     s += &prim(
         "SphereLight",
         "Bulb",
-        &(format!("    float inputs:radius = {LIGHT_RADIUS}\n    float inputs:intensity = {LIGHT_NITS}\n")
-            + &xform(&[("translate", format!("({}, {}, {})", LIGHT.x, LIGHT.y, LIGHT.z))])),
+        &(format!(
+            "    float inputs:radius = {LIGHT_RADIUS}\n    float inputs:intensity = {LIGHT_NITS}\n"
+        ) + &xform(&[(
+            "translate",
+            format!("({}, {}, {})", LIGHT.x, LIGHT.y, LIGHT.z),
+        )])),
     );
     // At (−0.65, 0.25, 0) looking along +x (rotateY −90 turns −Z to +X), B filling the view.
     s += &prim(
@@ -141,7 +150,8 @@ fn conductor_reflectance(cos: f64, n: f64, k: f64) -> f64 {
     let a2b2 = (t * t + 4.0 * n * n * k * k).sqrt();
     let a = (0.5 * (a2b2 + t)).max(0.0).sqrt();
     let rs = (a2b2 + c2 - 2.0 * a * cos) / (a2b2 + c2 + 2.0 * a * cos);
-    let rp = rs * (a2b2 * c2 + s2 * s2 - 2.0 * a * cos * s2) / (a2b2 * c2 + s2 * s2 + 2.0 * a * cos * s2);
+    let rp = rs * (a2b2 * c2 + s2 * s2 - 2.0 * a * cos * s2)
+        / (a2b2 * c2 + s2 * s2 + 2.0 * a * cos * s2);
     0.5 * (rs + rp)
 }
 
@@ -250,7 +260,13 @@ fn merge_bias_bound(r: f64) -> f64 {
         g(MIRROR_A.image(LIGHT))
     };
     let mut worst = 0.0f64;
-    for (px, pz) in [(-0.25, -0.1), (-0.15, 0.0), (-0.05, 0.1), (-0.25, 0.1), (-0.05, -0.1)] {
+    for (px, pz) in [
+        (-0.25, -0.1),
+        (-0.15, 0.0),
+        (-0.05, 0.1),
+        (-0.25, 0.1),
+        (-0.05, -0.1),
+    ] {
         let c = DVec3::new(px, 0.0, pz);
         let n = 2000;
         let avg: f64 = (0..n)
@@ -319,7 +335,10 @@ fn photon_mapping_alone_converges_to_the_same_caustic() {
     let r0 = 1.5 * 0.75 * 0.2 / RES as f64;
     let bias = merge_bias_bound(r0) * exact;
     eprintln!("photon mapping: {v:.5} ± {sem:.5} vs {exact:.5} (bias bound {bias:.2e})");
-    assert!((v - exact).abs() < 3.3 * sem + bias, "{v} ± {sem} vs {exact}");
+    assert!(
+        (v - exact).abs() < 3.3 * sem + bias,
+        "{v} ± {sem} vs {exact}"
+    );
 }
 
 /// The test's Fresnel formula against two known values: normal incidence

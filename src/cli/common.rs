@@ -69,17 +69,23 @@ pub struct IntegratorArgs {
     /// α of VCM's radius schedule r_i = r0 · i^((α−1)/2), in (0, 1] (default 0.75).
     #[arg(long = "vcm-alpha", allow_negative_numbers = true)]
     pub vcm_alpha: Option<f32>,
+    /// Light subpaths VCM stores per iteration of meter readings (default 4096; images
+    /// store one per pixel).
+    #[arg(long = "vcm-light-paths")]
+    pub vcm_light_paths: Option<u64>,
 }
 
 impl IntegratorArgs {
-    /// The integrator with its settings; VCM flags without `--integrator vcm` are an error.
-    pub fn integrator(&self) -> Result<Integrator> {
+    /// The integrator with its settings, for meters or an image; VCM flags without
+    /// `--integrator vcm` are an error.
+    pub fn integrator(&self, meters: bool) -> Result<Integrator> {
         let integrator = self.integrator.with_mis(self.mis);
         let Integrator::Vcm(p) = integrator else {
             for (given, flag) in [
                 (self.vcm_mode.is_some(), "--vcm-mode"),
                 (self.vcm_radius.is_some(), "--vcm-radius"),
                 (self.vcm_alpha.is_some(), "--vcm-alpha"),
+                (self.vcm_light_paths.is_some(), "--vcm-light-paths"),
             ] {
                 if given {
                     return Err(Error::option(format!("{flag} needs --integrator vcm")));
@@ -94,6 +100,15 @@ impl IntegratorArgs {
                 )));
             }
         }
+        match self.vcm_light_paths {
+            Some(_) if !meters => {
+                return Err(Error::option(
+                    "--vcm-light-paths is for meters; images store one light subpath per pixel",
+                ))
+            }
+            Some(0) => return Err(Error::option("--vcm-light-paths must be at least 1")),
+            _ => {}
+        }
         if let Some(a) = self.vcm_alpha {
             if !(a > 0.0 && a <= 1.0) {
                 return Err(Error::option(format!("--vcm-alpha {a} must be in (0, 1]")));
@@ -103,6 +118,7 @@ impl IntegratorArgs {
             mode: self.vcm_mode.unwrap_or(p.mode),
             radius: self.vcm_radius.or(p.radius),
             alpha: self.vcm_alpha.unwrap_or(p.alpha),
+            meter_light_paths: self.vcm_light_paths.unwrap_or(p.meter_light_paths),
             ..p
         }))
     }

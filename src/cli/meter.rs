@@ -514,6 +514,6 @@ fn options(a: &MeterArgs) -> Result<MeterOptions> {
         seed: a.seed,
         max_depth: a.max_depth,
         threads: a.threads,
-        integrator: a.integrator.integrator()?,
+        integrator: a.integrator.integrator(true)?,
     })
 }

@@ -180,7 +180,7 @@ fn write_strategies(
 
 /// The render's options, checked before the stage is read.
 fn options(args: &RenderArgs) -> Result<RenderOptions> {
-    let integrator = args.integrator.integrator()?;
+    let integrator = args.integrator.integrator(false)?;
     if args.strategies.is_some() {
         if !integrator.capabilities().strategy_images {
             return Err(Error::option(format!(

@@ -94,9 +94,9 @@ impl Default for VcmParams {
 /// α of Georgiev et al. 2012 (their eq. 25 and §6).
 pub const DEFAULT_ALPHA: f32 = 0.75;
 /// Light subpaths per iteration of a meter reading.
-pub const DEFAULT_METER_LIGHT_PATHS: u64 = 1 << 14;
+pub const DEFAULT_METER_LIGHT_PATHS: u64 = 1 << 12;
 /// Samples per reading in one iteration of meters (one block of the meter driver).
-pub const METER_ITERATION_SAMPLES: u64 = 256;
+pub const METER_ITERATION_SAMPLES: u64 = 64;
 /// r_0 of meters relative to the scene's bounding radius (SmallVCM's default factor).
 pub const METER_RADIUS_FACTOR: f32 = 0.003;
 /// r_0 of images in pixel footprints at the first hit (median over the image).

@@ -19,6 +19,13 @@
 //! [`MIN_SAMPLES_REL`] samples first so that s is not judged on a handful of samples. The
 //! interval is checked for coverage on heavy-tailed cases in `tests/meters.rs`.
 //!
+//! **Iterations.** An estimator whose samples share per-iteration work (VCM: the light
+//! vertices merged with) names its iteration size; blocks then end at iteration boundaries,
+//! each iteration is prepared once per round before its blocks, and a reading's statistics
+//! are over iteration means, its only independent observations (batch means), while
+//! `samples` still counts samples. Such readings take at least [`MIN_ITERATIONS_REL`]
+//! iterations before a relative-error target is judged.
+//!
 //! ```
 //! use spectral_render::desc::*;
 //! use spectral_render::scene::build;
@@ -57,6 +64,9 @@ use std::time::Instant;
 pub const BLOCK: u64 = 256;
 /// Samples every reading takes before its interval is trusted under [`Stop::RelError`].
 pub const MIN_SAMPLES_REL: u64 = 1024;
+/// Iteration means every reading of an estimator with iterations (VCM) takes before its
+/// interval is trusted under [`Stop::RelError`].
+pub const MIN_ITERATIONS_REL: u64 = 32;
 /// Samples per reading when neither a count nor a relative error is asked for.
 pub const DEFAULT_SAMPLES: u64 = 4096;
 /// Default cap on the samples of one reading under [`Stop::RelError`].
@@ -142,7 +152,12 @@ pub fn measure(scene: &Scene, meters: &[Meter], opts: &MeterOptions) -> Result<M
 /// Where one reading stands.
 #[derive(Clone, Copy, Debug, Default)]
 struct State {
+    /// The reading's observations: its samples, or for an estimator with iterations (VCM),
+    /// the mean of each iteration's samples — samples of one iteration share its light
+    /// vertices, so only iteration means are independent and give an honest interval.
     stats: Stats,
+    /// Finite samples averaged.
+    samples: u64,
     /// Sample indices used so far (finite or not).
     taken: u64,
     finished: bool,
@@ -211,6 +226,15 @@ impl<'a> MeterSession<'a> {
 }
 
 impl MeterSession<'_> {
+    /// Samples a reading takes before its interval is trusted: [`MIN_SAMPLES_REL`], and for
+    /// an estimator with iterations at least [`MIN_ITERATIONS_REL`] iteration means.
+    fn min_samples_rel(&self) -> u64 {
+        match self.estimator.iteration_samples() {
+            Some(k) => MIN_SAMPLES_REL.max(MIN_ITERATIONS_REL * k),
+            None => MIN_SAMPLES_REL,
+        }
+    }
+
     /// The statistics of `blocks`, in parallel, in their order.
     fn sample_blocks(&self, blocks: &[Block]) -> Vec<(Stats, u64)> {
         let (estimator, sensors, seed) = (&*self.estimator, &self.sensors, self.opts.seed);
@@ -254,11 +278,12 @@ impl MeterSession<'_> {
 
 impl Progressive for MeterSession<'_> {
     fn step(&mut self) -> Option<PassStats> {
+        let min_rel = self.min_samples_rel();
         let opts = &self.opts;
         let mut targets: Vec<u64> = self
             .states
             .iter_mut()
-            .map(|s| next_target(s, opts))
+            .map(|s| next_target(s, opts, min_rel))
             .collect();
         if !fit_time_budget(&mut self.states, &mut targets, opts, self.start) {
             return None;
@@ -274,7 +299,12 @@ impl Progressive for MeterSession<'_> {
         };
         for (b, (stats, bad)) in blocks.iter().zip(results) {
             let st = &mut self.states[b.meter];
-            st.stats.merge(&stats);
+            st.samples += stats.n;
+            if iteration.is_some() && stats.n > 0 {
+                st.stats.push(stats.mean);
+            } else {
+                st.stats.merge(&stats);
+            }
             st.taken = b.end;
             self.dropped += bad;
         }
@@ -298,7 +328,7 @@ fn reading(s: &State) -> Reading {
     Reading {
         value: s.stats.mean,
         ci95: s.stats.ci95(),
-        samples: s.stats.n,
+        samples: s.samples,
         capped: s.capped,
     }
 }
@@ -307,7 +337,7 @@ fn reading(s: &State) -> Reading {
 /// finished). Under a relative-error target the count needed is extrapolated from
 /// ci95 ∝ 1/√n with 20% to spare, at most ×4 per round (the variance estimate of a
 /// heavy-tailed estimator can be far off early), rounded to whole blocks.
-fn next_target(s: &mut State, opts: &MeterOptions) -> u64 {
+fn next_target(s: &mut State, opts: &MeterOptions, min_rel: u64) -> u64 {
     if s.finished {
         return s.taken;
     }
@@ -317,8 +347,8 @@ fn next_target(s: &mut State, opts: &MeterOptions) -> u64 {
         // Under a time budget, growing rounds so that the budget is checked often.
         Stop::Samples(n) if timed => Some(n.min(round_up((2 * s.taken).max(BLOCK)))),
         Stop::Samples(n) => Some(n),
-        Stop::RelError(_) if s.taken < MIN_SAMPLES_REL.min(opts.max_samples) => {
-            Some(MIN_SAMPLES_REL.min(opts.max_samples))
+        Stop::RelError(_) if s.taken < min_rel.min(opts.max_samples) => {
+            Some(min_rel.min(opts.max_samples))
         }
         Stop::RelError(r) if s.stats.relative_ci95() < r => None,
         Stop::RelError(_) if s.taken >= opts.max_samples => {
@@ -460,7 +490,7 @@ mod tests {
             ..Default::default()
         };
         let mut s = State::default();
-        assert_eq!(next_target(&mut s, &opts), MIN_SAMPLES_REL);
+        assert_eq!(next_target(&mut s, &opts, MIN_SAMPLES_REL), MIN_SAMPLES_REL);
         // 1024 samples with a relative ci of 4%: needs ~16× more, grows by at most 4×.
         s.taken = 1024;
         s.stats = Stats {
@@ -468,9 +498,9 @@ mod tests {
             mean: 1.0,
             m2: (0.04 / 1.96 * 32.0f64).powi(2) * 1023.0,
         };
-        assert_eq!(next_target(&mut s, &opts), 4096);
+        assert_eq!(next_target(&mut s, &opts, MIN_SAMPLES_REL), 4096);
         s.stats.m2 = 0.0;
-        assert_eq!(next_target(&mut s, &opts), 1024);
+        assert_eq!(next_target(&mut s, &opts, MIN_SAMPLES_REL), 1024);
         assert!(s.finished && s.capped.is_none());
     }
 }
