@@ -1,20 +1,23 @@
-//! Equal-time image error of path tracing and BDPT against a long reference.
+//! Equal-time image error of several integrators against a long reference.
 //!
 //! ```text
 //! cargo run --release --example equal_time -- STAGE [--time S] [--reference-time S]
 //!     [--resolution WxH] [--max-depth N] [--reference REF.exr] [--threads N]
+//!     [--integrators path,bdpt,vcm] [--reference-integrator bdpt|vcm|path]
 //! ```
 //!
-//! 1. Reference: BDPT for `--reference-time` seconds (default 600) as two independent halves
+//! 1. Reference: `--reference-integrator` (default BDPT; VCM where only merging samples the
+//!    light, a consistent rather than unbiased reference) for `--reference-time` seconds
+//!    (default 600) as two independent halves
 //!    A and B; the reference is (A + B)/2 and its own noise variance per pixel is estimated as
 //!    (A − B)²/4, which is subtracted from every MSE below. With `--reference PATH` the
 //!    reference is read from (or, if absent, written to) PATH; its noise estimate travels in
 //!    the `XYZ.X` channel of a second file `PATH.noise.exr`.
-//! 2. PT and BDPT each render for `--time` seconds (default 30; the render loop sizes its passes
-//!    to end near the budget).
+//! 2. Each of `--integrators` (default path,bdpt) renders for `--time` seconds (default 30;
+//!    the render loop sizes its passes to end near the budget).
 //! 3. For each: RMSE of luminance (XYZ.Y, cd/m²) against the reference, relative RMSE, the
-//!    time actually spent, and the ratios PT/BDPT of the MSE and of MSE × time (the inverse
-//!    efficiency, fair even if the times differ a little).
+//!    time actually spent, and the ratio of its MSE and of its MSE × time (the inverse
+//!    efficiency, fair even if the times differ a little) to the first integrator's.
 
 use spectral_render::output::exr;
 use spectral_render::session::{self, RenderOptions};
@@ -29,6 +32,12 @@ struct Args {
     max_depth: u32,
     reference: Option<PathBuf>,
     threads: Option<usize>,
+    integrators: Vec<Integrator>,
+    reference_integrator: Integrator,
+}
+
+fn integrator(name: &str) -> Result<Integrator, String> {
+    Integrator::from_name(name).ok_or(format!("unknown integrator {name}"))
 }
 
 fn parse() -> Result<Args, String> {
@@ -40,6 +49,15 @@ fn parse() -> Result<Args, String> {
         max_depth: 7,
         reference: None,
         threads: None,
+        integrators: vec![
+            Integrator::Path,
+            Integrator::Bdpt {
+                mis: MisHeuristic::Power,
+            },
+        ],
+        reference_integrator: Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
     };
     let mut it = std::env::args().skip(1);
     let mut stage = None;
@@ -53,6 +71,13 @@ fn parse() -> Result<Args, String> {
             "--max-depth" => a.max_depth = value()?.parse().map_err(|e| format!("{e}"))?,
             "--threads" => a.threads = Some(value()?.parse().map_err(|e| format!("{e}"))?),
             "--reference" => a.reference = Some(value()?.into()),
+            "--integrators" => {
+                a.integrators = value()?
+                    .split(',')
+                    .map(integrator)
+                    .collect::<Result<_, _>>()?
+            }
+            "--reference-integrator" => a.reference_integrator = integrator(&value()?)?,
             "--resolution" => {
                 let v = value()?;
                 let (w, h) = v.split_once('x').ok_or("--resolution WxH")?;
@@ -105,27 +130,16 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
         }
     }
     let half = 0.5 * args.reference_time;
-    let (a, ta, sa) = render_y(
-        scene,
-        args,
-        Integrator::Bdpt {
-            mis: MisHeuristic::Power,
-        },
-        half,
-        1001,
-    );
-    let (b, tb, sb) = render_y(
-        scene,
-        args,
-        Integrator::Bdpt {
-            mis: MisHeuristic::Power,
-        },
-        half,
-        1002,
-    );
+    let kind = args.reference_integrator;
+    let (a, ta, sa) = render_y(scene, args, kind, half, 1001);
+    let (b, tb, sb) = render_y(scene, args, kind, half, 1002);
     eprintln!(
-        "reference: BDPT {} + {} spp in {:.0} + {:.0} s",
-        sa, sb, ta, tb
+        "reference: {} {} + {} spp in {:.0} + {:.0} s",
+        kind.name(),
+        sa,
+        sb,
+        ta,
+        tb
     );
     let mean: Vec<f64> = a.iter().zip(&b).map(|(x, y)| 0.5 * (x + y)).collect();
     let noise: Vec<f64> = a
@@ -137,7 +151,7 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let meta = exr::ExrMetadata {
             spp: sa + sb,
-            integrator: "bdpt".into(),
+            integrator: kind.name().into(),
             seed: 1001,
             wall_time_s: ta + tb,
             version: env!("CARGO_PKG_VERSION").into(),
@@ -181,15 +195,8 @@ fn main() {
         "", "time s", "spp", "RMSE cd/m²", "relRMSE"
     );
     let mut rows = Vec::new();
-    for (name, kind) in [
-        ("path", Integrator::Path),
-        (
-            "bdpt",
-            Integrator::Bdpt {
-                mis: MisHeuristic::Power,
-            },
-        ),
-    ] {
+    for &kind in &args.integrators {
+        let name = kind.name();
         let (y, t, spp) = render_y(&scene, &args, kind, args.time, 7);
         let mse = y
             .iter()
@@ -203,13 +210,15 @@ fn main() {
             "{name:>6} {t:8.1} {spp:7} {rmse:12.4e} {:9.4}",
             rmse / ref_mean
         );
-        rows.push((mse, t));
+        rows.push((name, mse, t));
     }
-    let (pt, bd) = (rows[0], rows[1]);
-    println!(
-        "equal time: MSE(PT)/MSE(BDPT) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}",
-        pt.0 / bd.0,
-        (pt.0 / bd.0).sqrt(),
-        (pt.0 * pt.1) / (bd.0 * bd.1)
-    );
+    let (first, mse0, t0) = rows[0];
+    for &(name, mse, t) in &rows[1..] {
+        println!(
+            "equal time: MSE({first})/MSE({name}) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}",
+            mse0 / mse,
+            (mse0 / mse).sqrt(),
+            (mse0 * t0) / (mse * t)
+        );
+    }
 }

@@ -14,8 +14,8 @@
 //! **Wavelengths.** A merge may only combine vertices that carry the same wavelengths, so an
 //! iteration shares one hero tuple, and the tuples of successive iterations are stratified:
 //! the hero of iteration k is drawn at the base-2 radical inverse of k (van der Corput),
-//! shifted by a hash of the seed, within the first quarter of [0, 1) that the 4 rotated lanes
-//! then cover. A light subpath that terminates its secondary wavelengths at a dispersive
+//! shifted by a hash of the seed — over all of [0, 1), since a path that terminates its
+//! secondary wavelengths (dispersion) keeps the hero alone. A light subpath that terminates its secondary wavelengths at a dispersive
 //! vertex stores its vertices as hero-only; a merge with one counts on the hero lane alone
 //! (`SampleRecord::hero_only`).
 //!
@@ -37,7 +37,7 @@ use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene};
 use crate::sensor::meter::MeterSensor;
 use crate::sensor::Sensor;
-use crate::spectral::{SampledSpectrum, SampledWavelengths, N_LAMBDA};
+use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
@@ -115,11 +115,10 @@ pub fn radius(r0: f32, alpha: f32, k: u64) -> f32 {
 }
 
 /// The hero-wavelength sample of iteration `k`: the radical inverse of k in base 2, shifted
-/// by the seed, in [0, 1/N) — the rotated lanes cover the rest.
+/// by the seed (Cranley–Patterson rotation), in [0, 1).
 pub fn iteration_u(seed: u64, k: u64) -> f32 {
     let shift = (splitmix(seed) >> 40) as f64 / (1u64 << 24) as f64;
-    let u = (radical_inverse_2(k) + shift).fract();
-    (u / N_LAMBDA as f64) as f32
+    ((radical_inverse_2(k) + shift).fract() as f32).min(1.0 - f32::EPSILON)
 }
 
 /// The base-2 radical inverse (van der Corput) of k.
@@ -404,12 +403,12 @@ mod tests {
 
     #[test]
     fn iteration_wavelengths_are_stratified() {
-        // The first 2^m iterations put one hero sample in each of 2^m strata of [0, 1/4).
+        // The first 2^m iterations put one hero sample in each of 2^m strata of [0, 1).
         let mut strata = [0u32; 16];
         for k in 0..16 {
             let u = iteration_u(3, k);
-            assert!((0.0..0.25).contains(&u), "{u}");
-            strata[(u * 64.0) as usize] += 1;
+            assert!((0.0..1.0).contains(&u), "{u}");
+            strata[(u * 16.0) as usize] += 1;
         }
         assert!(strata.iter().all(|&n| n == 1), "{strata:?}");
     }
