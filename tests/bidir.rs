@@ -27,7 +27,7 @@ use spectral_render::texture::TextureFilter;
 
 /// The bidirectional context's default (`BidirContext::new`): textures unfiltered.
 const FINEST: TextureFilter = TextureFilter::Finest;
-use spectral_render::integrator::bidir::merge::merge_weight;
+use spectral_render::integrator::bidir::merge::{merge_weight, sensor_merge_weight};
 use spectral_render::integrator::bidir::vertex::LightOrigin;
 use spectral_render::integrator::bidir::{
     BidirContext, MergeVertex, Mis, MisHeuristic, PathVertex, Walk,
@@ -664,6 +664,11 @@ enum SensorEnd {
 }
 
 impl SensorEnd {
+    /// An irradiance meter, which VCM also merges at.
+    fn merges_at_point(&self) -> bool {
+        matches!(self, SensorEnd::Meter(m) if !m.delta_direction())
+    }
+
     fn p(&self) -> Vec3 {
         match self {
             SensorEnd::Camera(p) => *p,
@@ -952,8 +957,9 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Techniques {
         b.pdf(path.dir(i, from), path.dir(i, to), mode) as f64
     };
     let ng = |i: usize| -> Vec3 {
-        match (i, path.end) {
-            (0, LightEnd::Point { n, .. }) => n,
+        match (i, path.end, &path.sensor) {
+            (0, LightEnd::Point { n, .. }, _) => n,
+            (i, _, SensorEnd::Meter(m)) if i == n - 1 => m.dir,
             _ => path.surfaces[i - 1].ng,
         }
     };
@@ -1044,9 +1050,19 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Techniques {
             f * r
         })
         .collect();
+    // Merging at an irradiance meter's point: the light subpath covers every vertex, the
+    // last one landing within the radius of the meter (its cosine at the meter's normal).
+    let sensor_merge = match &path.sensor {
+        // Light vertices of depth ≥ 2 only (`bidir::connect::sensor_merge`).
+        SensorEnd::Meter(m) if !m.delta_direction() && n >= 3 => {
+            (0..n).map(|j| forward(j, n, &mut lambda)).product()
+        }
+        _ => 0.0,
+    };
     Techniques {
         connections,
         merges,
+        sensor_merge,
     }
 }
 
@@ -1055,12 +1071,15 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Techniques {
 struct Techniques {
     connections: Vec<f64>,
     merges: Vec<f64>,
+    /// Merging at an irradiance meter's point (0 for other sensors), without η.
+    sensor_merge: f64,
 }
 
 /// Production weights for every technique of `path`: the subpaths are replayed through the
 /// integrators' own walk, MIS update and weight functions.
 fn recurrent_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
-    let ctx = path.sensor.context(ctx);
+    let mut ctx = path.sensor.context(ctx);
+    ctx.sensor_merges = path.sensor.merges_at_point() && ctx.mis.vm_weight > 0.0;
     let specular = path.specular(ctx.scene);
     (0..path.n())
         .map(|s| {
@@ -1070,16 +1089,28 @@ fn recurrent_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
             if path.connects_at_delta(s, &specular) {
                 0.0
             } else {
-                recurrent_weight(&ctx, path, s, false) as f64
+                recurrent_weight(&ctx, path, s, Replay::Connect) as f64
             }
         })
         .collect()
 }
 
+/// The production weight of merging the light subpath's last vertex at an irradiance meter's
+/// point (0 for other sensors).
+fn recurrent_sensor_merge_weight(ctx: &BidirContext, path: &FullPath) -> f64 {
+    if !path.sensor.merges_at_point() || path.n() < 3 {
+        return 0.0;
+    }
+    let mut ctx = path.sensor.context(ctx);
+    ctx.sensor_merges = true;
+    recurrent_weight(&ctx, path, path.n(), Replay::SensorMerge) as f64
+}
+
 /// Production weights of merging at every x_i of `path` (0 where no merge can happen: the
 /// ends and specular vertices), index i.
 fn recurrent_merge_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
-    let ctx = path.sensor.context(ctx);
+    let mut ctx = path.sensor.context(ctx);
+    ctx.sensor_merges = path.sensor.merges_at_point() && ctx.mis.vm_weight > 0.0;
     let specular = path.specular(ctx.scene);
     let n = path.n();
     (0..n)
@@ -1087,18 +1118,29 @@ fn recurrent_merge_weights(ctx: &BidirContext, path: &FullPath) -> Vec<f64> {
             if i == 0 || i + 1 >= n || specular[i] {
                 0.0
             } else {
-                recurrent_weight(&ctx, path, i + 1, true) as f64
+                recurrent_weight(&ctx, path, i + 1, Replay::Merge) as f64
             }
         })
         .collect()
 }
 
-/// The production weight of technique s of `path`, or with `merge` of merging at x_{s−1}
-/// (the light walk reaching x_{s−1}, the camera walk too).
-fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, merge: bool) -> f32 {
+/// Which technique `recurrent_weight` replays.
+#[derive(Clone, Copy, PartialEq)]
+enum Replay {
+    /// Connection s.
+    Connect,
+    /// Merging at x_{s−1}: the light walk reaches x_{s−1}, the camera walk too.
+    Merge,
+    /// Merging at an irradiance meter's point (s = n): the light walk reaches the meter.
+    SensorMerge,
+}
+
+/// The production weight of technique s of `path` (see [`Replay`]).
+fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Replay) -> f32 {
     let scene = ctx.scene;
     let n = path.n();
     let t = n - s;
+    let merge = replay == Replay::Merge;
     let camera_end = if merge { t + 1 } else { t };
     let li = path.light;
     let light = &scene.lights[li as usize];
@@ -1162,9 +1204,13 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, merge: bool) 
             Walk::light(ctx, &o, &le).unwrap_or_else(|| panic!("emission: light {li} {le:?}"));
         origin = Some(o);
         for i in 1..s {
+            // The surface point x_i, or the meter's point for the last of a sensor merge.
+            let (p_i, n_i) = match &path.sensor {
+                SensorEnd::Meter(m) if i == n - 1 => (m.p, m.dir),
+                _ => (path.surfaces[i - 1].p, path.surfaces[i - 1].ng),
+            };
             if i == 1 {
-                let si = &path.surfaces[0];
-                let direct = first_hit_direct(ctx, &o, si.p, si.ng, walk.ray.d);
+                let direct = first_hit_direct(ctx, &o, p_i, n_i, walk.ray.d);
                 walk.mis.light_direct(&ctx.mis, direct);
             } else {
                 let prev = light_vertex.unwrap();
@@ -1175,8 +1221,24 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, merge: bool) 
                     TransportMode::Importance,
                 );
             }
-            let si = &path.surfaces[i - 1];
-            walk.arrive(&ctx.mis, si.p, si.ng);
+            walk.arrive(&ctx.mis, p_i, n_i);
+            if replay == Replay::SensorMerge && i == n - 1 {
+                let SensorEnd::Meter(m) = &path.sensor else {
+                    unreachable!("a sensor merge needs a meter");
+                };
+                let wo = path.dir(i, i - 1);
+                let y = MergeVertex {
+                    p: p_i,
+                    wo,
+                    beta: walk.beta,
+                    dvcm: walk.mis.dvcm,
+                    dvm: walk.mis.dvm,
+                    cos_ng: n_i.dot(wo).abs(),
+                    depth: i as u32,
+                    hero_only: false,
+                };
+                return sensor_merge_weight(&ctx.mis, m, &y);
+            }
             light_vertex = Some(vertex(i, path.dir(i, i - 1), &walk, &mut lambda));
         }
     }
@@ -1337,6 +1399,7 @@ fn check_mis(
                 vec![0.0; path.n()]
             };
             pdfs.extend(t.merges.iter().map(|&p| p * eta as f64));
+            pdfs.push(t.sensor_merge * eta as f64);
             let m: Vec<f64> = pdfs.iter().map(|&p| ctx.mis.m(p as f32) as f64).collect();
             let total: f64 = m.iter().sum();
             if !(total > 0.0 && total.is_finite()) {
@@ -1350,8 +1413,9 @@ fn check_mis(
             };
             if eta > 0.0 {
                 recurrent.extend(recurrent_merge_weights(&ctx, &path));
+                recurrent.push(recurrent_sensor_merge_weight(&ctx, &path));
             } else {
-                recurrent.extend(vec![0.0; path.n()]);
+                recurrent.extend(vec![0.0; path.n() + 1]);
             }
             for s in 0..brute.len() {
                 let diff = (brute[s] - recurrent[s]).abs();

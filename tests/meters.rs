@@ -816,7 +816,12 @@ fn shaped_lights_agree_with_path_light_and_bdpt() {
 /// contributions on both subpaths before and after it).
 #[test]
 fn meters_agree_through_dispersive_glass() {
-    let (pts, faces) = cube(1.0);
+    // A solid slab: `cube`'s faces turned outwards.
+    let (pts, inward) = cube(1.0);
+    let faces: Vec<Vec<usize>> = inward
+        .iter()
+        .map(|f| f.iter().rev().copied().collect())
+        .collect();
     let slab: Vec<DVec3> = pts
         .iter()
         .map(|p| DVec3::new(p.x, 1.1 + 0.1 * p.y, p.z))

@@ -278,11 +278,22 @@ impl Estimator for VcmEstimator<'_> {
         ws: &mut Workspace,
     ) -> SampledSpectrum {
         *lambda = self.lambda;
-        let ctx = self.ctx.with_sensor(Sensor::Meter(*meter));
+        let mut ctx = self.ctx.with_sensor(Sensor::Meter(*meter));
+        // An irradiance meter merges at its own point too (a luminance meter's direction is a
+        // delta no light vertex arrives along).
+        ctx.sensor_merges = !meter.delta_direction();
         ws.record.clear();
         let u = sampler.get_2d();
         let tech = self.techniques();
         BdptIntegrator.sample_with(&tech, &ctx, [0.0; 2], u, lambda, sampler, ws);
+        if ctx.sensor_merges {
+            let m = self
+                .store
+                .merge_at_sensor(meter, lambda.secondary_terminated(), &self.merge);
+            ws.record.camera.weighted += m.all;
+            ws.record.camera.unweighted += m.all;
+            ws.record.hero_only += m.hero_only;
+        }
         ws.record.total(lambda)
     }
 }

@@ -173,7 +173,8 @@ pub fn quad(name: &str, z: f32, h: f32, extra: &str, api: &str) -> String {
     mesh(name, api, &points, &one_face(4), extra)
 }
 
-/// The cube [−h, h]³: corners (bit 1 of the index is x, bit 2 y, bit 4 z) and six quads.
+/// The cube [−h, h]³: corners (bit 1 of the index is x, bit 2 y, bit 4 z) and six quads wound
+/// to face inwards (a room; reverse them for a solid).
 pub fn cube(h: f64) -> (Vec<DVec3>, Vec<Vec<usize>>) {
     let pts = (0..8)
         .map(|i| {

@@ -92,8 +92,30 @@ pub fn sensor_weight(ctx: &BidirContext, y: &PathVertex, p_sensor: Vec3, pdf_dir
     let dist2 = d.length_squared();
     let wi = d / dist2.sqrt();
     let cam_a = pdf_dir_w * y.cos_geo(wi) / dist2;
-    ctx.mis
-        .light_to_camera(&y.mis, cam_a, y.reverse_pdf(wi, TransportMode::Importance))
+    let land = || y.bsdf.pdf(y.wo, wi, TransportMode::Importance);
+    let merge = sensor_merge(ctx, wi, dist2, land);
+    ctx.mis.light_to_camera(
+        &y.mis,
+        cam_a,
+        y.reverse_pdf(wi, TransportMode::Importance),
+        merge,
+    )
+}
+
+/// The ratio of merging at an irradiance meter's point (VCM) for a light subpath reaching it
+/// along unit `wi` over `dist2` from a scattering vertex, its direction density `pdf_w()`
+/// there: m(p_a η) with p_a on the meter's normal [`Mis::sensor_merge_ratio`]; 0 without such
+/// merges. The meter merges light vertices of depth ≥ 2 only: at depth 1 the competing
+/// connection of the light's own point would need its emission density in place of the
+/// next-event one the vertex carries, and direct light is the connections' anyway.
+fn sensor_merge(ctx: &BidirContext, wi: Vec3, dist2: f32, pdf_w: impl FnOnce() -> f32) -> f32 {
+    match ctx.sensor.infinite_light_meter() {
+        Some(m) if ctx.sensor_merges => {
+            let cos = m.dir.dot(wi).abs();
+            ctx.mis.sensor_merge_ratio(pdf_w() * cos / dist2)
+        }
+        _ => 0.0,
+    }
 }
 
 /// s = 1, t = 1: the light subpath's own origin y_0 seen by the sensor. Its estimate is
@@ -141,7 +163,8 @@ pub fn origin_weight(ctx: &BidirContext, o: &LightOrigin, p_sensor: Vec3, pdf_di
     let d = p_sensor - o.p;
     let dist2 = d.length_squared();
     let cam_a = pdf_dir_w * o.n.dot(d).abs() / (dist2 * dist2.sqrt());
-    ctx.mis.origin_to_camera(cam_a, o.pmf * o.pdf_pos_a)
+    // No merge at the meter competes: it merges light vertices of depth 2 or more only.
+    ctx.mis.origin_to_camera(cam_a, o.pmf * o.pdf_pos_a, 0.0)
 }
 
 /// s = 1, t = 1 for an infinite light and an irradiance meter. The emitted point on the disk
@@ -188,7 +211,7 @@ pub fn infinite_origin_weight(ctx: &BidirContext, o: &LightOrigin, pdf_dir_w: f3
     if o.delta_dir {
         return 1.0;
     }
-    ctx.mis.origin_to_camera(pdf_dir_w, o.pmf * o.pdf_dir_w)
+    ctx.mis.origin_to_camera(pdf_dir_w, o.pmf * o.pdf_dir_w, 0.0)
 }
 
 /// s = 1, t ≥ 2: next-event estimation at camera vertex `z`, one light chosen by power
@@ -319,6 +342,7 @@ pub fn emitter_weight(ctx: &BidirContext, walk: &Walk, light: u32, hit: &LightHi
     let pmf = ctx.scene.light_sampler.pmf(light as usize);
     let pdf = lgt.pdf_le(hit.p, hit.n, w, &ctx.sphere);
     if walk.depth == 1 {
+        // Two-vertex paths: no merge at the sensor competes (see `sensor_merge`).
         return ctx.mis.emitter_hit(&walk.mis, pmf * pdf.pos_a, 0.0);
     }
     let dist2 = (hit.p - walk.prev.p).length_squared();

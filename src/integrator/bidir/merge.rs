@@ -10,12 +10,21 @@
 //! iteration. No cosine: the density of the light subpath's arrival per area carries it.
 //!
 //! The store ([`LightVertexStore`]) keeps what merging needs of every non-specular light
-//! vertex of the iteration in [`MergeVertex`] (56 bytes), and a hash grid over them.
+//! vertex of the iteration in [`MergeVertex`] (60 bytes), and a hash grid over them.
+//!
+//! **At an irradiance meter.** A meter lying on a surface also merges at its own point z_0:
+//! the light vertices within r of it estimate the irradiance there directly,
+//! E ≈ Σ β_y (cos θ_meter / cos θ_surface) / (π r² N_L) over those arriving from the meter's
+//! hemisphere, for vertices of depth 2 or more — the only technique for light reaching the
+//! meter through specular surfaces from a point-like light (a caustic under a glass table). It assumes the meter lies on the
+//! surface the vertices landed on (within r of an edge, vertices of another surface count as
+//! if on the meter's).
 
 use super::hashgrid::HashGrid;
 use super::mis::{Mis, SubpathMis};
 use super::PathVertex;
 use crate::bxdf::TransportMode;
+use crate::sensor::meter::MeterSensor;
 use crate::spectral::SampledSpectrum;
 use glam::Vec3;
 
@@ -30,6 +39,8 @@ pub struct MergeVertex {
     /// y_i's dVCM and dVM [tech. rep. (31)–(36)].
     pub dvcm: f32,
     pub dvm: f32,
+    /// |cos| between ω_y and the geometric normal of the surface the vertex lies on.
+    pub cos_ng: f32,
     /// i: segments from the light.
     pub depth: u32,
     /// The light subpath terminated its secondary wavelengths (dispersion): only the hero
@@ -45,6 +56,7 @@ impl MergeVertex {
             beta: y.beta,
             dvcm: y.mis.dvcm,
             dvm: y.mis.dvm,
+            cos_ng: y.ng.dot(y.wo).abs(),
             depth: y.depth,
             hero_only,
         }
@@ -125,6 +137,41 @@ impl LightVertexStore {
         });
         out
     }
+}
+
+impl LightVertexStore {
+    /// Merges the light vertices within the radius of irradiance meter `m`'s point, weighted
+    /// by MIS against every other technique (`Mis::merge_at_sensor`); `hero_only` as
+    /// [`LightVertexStore::merge`].
+    pub fn merge_at_sensor(&self, m: &MeterSensor, camera_hero_only: bool, params: &MergeParams) -> Merged {
+        let mut out = Merged::default();
+        self.grid.query(m.p, |i| {
+            let y = &self.vertices[i as usize];
+            let cos = m.dir.dot(y.wo);
+            if !self.grid.within(m.p, y.p)
+                || cos <= 0.0
+                || y.cos_ng <= 0.0
+                || y.depth < 2
+                || y.depth > params.max_depth + 1
+            {
+                return;
+            }
+            let w = sensor_merge_weight(&params.mis, m, y);
+            let c = y.beta * (cos / y.cos_ng * w * params.normalization);
+            if y.hero_only && !camera_hero_only {
+                out.hero_only += c;
+            } else {
+                out.all += c;
+            }
+        });
+        out
+    }
+}
+
+/// The MIS weight of merging light vertex `y` at irradiance meter `m`'s point: the meter's ray
+/// density towards y_{i−1} (cos θ / π) takes the place of a camera BSDF's.
+pub fn sensor_merge_weight(mis: &Mis, m: &MeterSensor, y: &MergeVertex) -> f32 {
+    mis.merge_at_sensor(y.dvcm, y.dvm, m.pdf_dir_w(y.wo))
 }
 
 /// The MIS weight of merging camera vertex `z` (its walk's MIS `cam`) with light vertex `y`

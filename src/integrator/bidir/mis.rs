@@ -80,6 +80,14 @@ impl Mis {
         }
     }
 
+    /// Merging light vertex y_i at the meter point z_0 (an irradiance meter): no technique is
+    /// more light-sided, and all others are reached through y_i's partial weights with the
+    /// meter's ray density `pdf_dir` towards y_{i−1} (Mis::merge with w_camera = 0).
+    #[inline]
+    pub fn merge_at_sensor(&self, dvcm_y: f32, dvm_y: f32, pdf_dir: f32) -> f32 {
+        weight(1.0 + dvcm_y * self.vc_weight + dvm_y * self.m(pdf_dir))
+    }
+
     /// Merging camera vertex z_j with light vertex y_i (SmallVCM's merge weight, tech. rep.
     /// (38), (39)): w_light = dVCM_y · m(1/η) + dVM_y · m(p→_z(ω_y)), the techniques that
     /// build more of the path from the light side, with `pdf_dir` the camera BSDF's density
@@ -115,10 +123,30 @@ impl Mis {
     /// Light vertex y_{s−1} (s ≥ 2) connected to the camera, t = 1 [tech. rep. (46), (47),
     /// (37)]; `cam_a` is the density with which a camera ray would find y_{s−1} (with n_L = 1).
     #[inline]
-    pub fn light_to_camera(&self, light: &SubpathMis, cam_a: f32, light_rev_w: f32) -> f32 {
+    /// `sensor_merge` is the ratio of merging at the meter's point, when VCM does
+    /// ([`Mis::sensor_merge_ratio`]), 0 otherwise.
+    pub fn light_to_camera(
+        &self,
+        light: &SubpathMis,
+        cam_a: f32,
+        light_rev_w: f32,
+        sensor_merge: f32,
+    ) -> f32 {
         let w_light =
             self.m(cam_a) * (self.vm_weight + light.dvcm + light.dvc * self.m(light_rev_w));
-        weight(w_light + 1.0)
+        weight(w_light + 1.0 + sensor_merge)
+    }
+
+    /// Merging at an irradiance meter's point relative to the connection of the same light
+    /// vertex to it: m(p_a · η), with `land_a` the density per area at the meter point (on its
+    /// normal) with which the light subpath would have landed there.
+    #[inline]
+    pub fn sensor_merge_ratio(&self, land_a: f32) -> f32 {
+        if land_a > 0.0 {
+            self.m(land_a) * self.vm_weight
+        } else {
+            0.0
+        }
     }
 
     /// The light's own point y_0 seen by the camera (s = 1, t = 1): the only other technique
@@ -127,8 +155,8 @@ impl Mis {
     /// light connected to a meter both densities are per solid angle at the meter: the
     /// meter's ray density and pmf · p_dir of the light's emitted direction.
     #[inline]
-    pub fn origin_to_camera(&self, cam_a: f32, emit_pos_a: f32) -> f32 {
-        weight(1.0 + self.m(cam_a / emit_pos_a))
+    pub fn origin_to_camera(&self, cam_a: f32, emit_pos_a: f32, sensor_merge: f32) -> f32 {
+        weight(1.0 + self.m(cam_a / emit_pos_a) + sensor_merge)
     }
 
     /// Next-event estimation at camera vertex z_{t−1}, s = 1 [tech. rep. (44), (45), (37)].
@@ -154,7 +182,10 @@ impl Mis {
     /// quantities are not yet divided by the distance, §5.1) and `emit` = pmf · p_pos · p_dir.
     #[inline]
     pub fn emitter_hit(&self, cam: &SubpathMis, direct_a: f32, emit: f32) -> f32 {
-        let w_camera = self.m(direct_a) * cam.dvcm + self.m(emit) * cam.dvc;
+        let mut w_camera = self.m(direct_a) * cam.dvcm;
+        if cam.dvc != 0.0 {
+            w_camera += self.m(emit) * cam.dvc;
+        }
         weight(1.0 + w_camera)
     }
 }
@@ -212,6 +243,23 @@ impl SubpathMis {
             dvcm: mis.m(1.0 / pdf_dir_w),
             dvc: 0.0,
             dvm: 0.0,
+        }
+    }
+
+    /// The start of an irradiance meter's subpath when merging also happens at the meter
+    /// point (a light vertex within the radius of it, `merge::LightVertexStore::merge_at_sensor`):
+    /// that technique, t = 0 through merging, is the most light-sided of all, so it enters
+    /// every other technique's weight from the camera side as the light's own start does for
+    /// s = 0 [tech. rep. (31)–(33) with the roles of the subpaths exchanged]: dVC = m(cos/p_dir) ·
+    /// m(η) (as a merge relative to connections), dVM = m(cos/p_dir), with `cos` the meter's
+    /// cosine of its first ray and the meter's position density 1 (a delta).
+    #[inline]
+    pub fn meter_start_with_sensor_merges(mis: &Mis, pdf_dir_w: f32, cos: f32) -> SubpathMis {
+        let hit = mis.m(cos.abs() / pdf_dir_w);
+        SubpathMis {
+            dvcm: mis.m(1.0 / pdf_dir_w),
+            dvc: hit * mis.vm_weight,
+            dvm: hit,
         }
     }
 
@@ -319,7 +367,7 @@ mod tests {
                 ..Default::default()
             };
             let w0 = mis.emitter_hit(&cam, pos_a, 123.0);
-            let w1 = mis.origin_to_camera(cam_a, pos_a);
+            let w1 = mis.origin_to_camera(cam_a, pos_a, 0.0);
             assert!((w0 + w1 - 1.0).abs() < 1e-6);
         }
     }

@@ -31,6 +31,9 @@ pub struct BidirContext<'a> {
     pub max_depth: u32,
     /// Texture footprints: the camera's for images (`render.rs`), none for meters.
     pub filter: TextureFilter,
+    /// An irradiance meter's point also merges light vertices (VCM): its subpath's MIS
+    /// start accounts for that technique.
+    pub sensor_merges: bool,
 }
 
 impl<'a> BidirContext<'a> {
@@ -43,6 +46,7 @@ impl<'a> BidirContext<'a> {
             mis,
             max_depth,
             filter: TextureFilter::Finest,
+            sensor_merges: false,
         }
     }
 
@@ -105,7 +109,12 @@ impl Walk {
             if pdf_dir_w.is_nan() || pdf_dir_w <= 0.0 {
                 return None;
             }
-            SubpathMis::camera_start(&ctx.mis, pdf_dir_w)
+            match ctx.sensor.infinite_light_meter() {
+                Some(m) if ctx.sensor_merges => {
+                    SubpathMis::meter_start_with_sensor_merges(&ctx.mis, pdf_dir_w, d.dot(m.dir))
+                }
+                _ => SubpathMis::camera_start(&ctx.mis, pdf_dir_w),
+            }
         };
         let weight = ctx.sensor.ray_weight(d);
         if !(weight > 0.0 && weight.is_finite()) {
