@@ -9,13 +9,24 @@
 //! Layout: [`stage`] opens the stage and reads its metadata, [`values`] is typed attribute
 //! access, [`xform`] composes transforms, and [`mesh`], [`material`], [`light`], [`camera`]
 //! read one kind of prim each; [`vocab`] holds the `spectral:` vocabulary.
+//!
+//! Hostile input: every layer is read through [`resolver`] (regular files only; text layers
+//! checked by [`usda_check`], crate files by [`usdc_check`]), composition arcs are checked by
+//! [`arcs`] before the stage is traversed, and [`guard`] turns any panic left inside openusd
+//! into a one-line error.
 
+mod arcs;
 mod camera;
+mod guard;
 mod light;
+mod lz4;
 mod material;
 mod mesh;
+pub(crate) mod resolver;
 mod shapes;
 mod stage;
+mod usda_check;
+mod usdc_check;
 mod values;
 mod vocab;
 mod xform;
@@ -58,7 +69,13 @@ const NON_XFORMABLE_TYPES: [&str; 6] = [
 
 /// Reads a .usda/.usdc/.usdz stage (flattened, or with local references) into plain data.
 pub fn load(path: &Path) -> Result<SceneDescription> {
+    guard::catch_panics(path, || read(path))
+}
+
+/// [`load`] without the panic guard.
+fn read(path: &Path) -> Result<SceneDescription> {
     let stage = stage::open(path)?;
+    arcs::check(path, &stage)?;
     let meters_per_unit = stage::meters_per_unit(path, &stage)?;
     let z_up = stage::z_up(path, &stage)?;
     let ctx = Ctx {
