@@ -3,6 +3,7 @@
 //! its ray queries (`render_scene.rs`), and texture footprints at hits (`texcoord.rs`).
 
 internal_modules!(build, render_scene, usd);
+mod limits;
 mod texcoord;
 
 pub use build::build;

@@ -239,6 +239,11 @@ impl<'s> Reader<'s> {
         } else {
             xform::local_xform(&self.ctx, prim)?.under(parent.local_to_world)
         };
+        if !local_to_world.is_finite() {
+            let reason = "the composed transform overflows (its xformOps multiply past the \
+                          range of a double)";
+            return Err(self.ctx.err(prim, reason));
+        }
         let purpose = self.authored_purpose(prim)?.unwrap_or(parent.purpose);
         let invisible = parent.invisible
             || type_name == "PointInstancer"
