@@ -387,10 +387,16 @@ impl<'s> Reader<'s> {
             .children()
             .map_err(|e| self.ctx.usd_err(mesh, "listing children", e))?;
         for subset in children {
-            if self.ctx.type_name(&subset)? != "GeomSubset" || !self.binds_directly(&subset)? {
+            if self.ctx.type_name(&subset)? != "GeomSubset" {
                 continue;
             }
-            if let Some(faces) = self.subset_faces(&subset, face_count)? {
+            // Every subset's indices are checked, bound or not: out-of-range faces mean the
+            // subsets describe another mesh.
+            let faces = self.subset_faces(&subset, face_count)?;
+            if !self.binds_directly(&subset)? {
+                continue;
+            }
+            if let Some(faces) = faces {
                 let group = subsets.len();
                 for face in faces {
                     face_group[face].get_or_insert(group);

@@ -37,8 +37,10 @@ impl Ctx<'_> {
 
     /// Records a warning about `prim`.
     pub fn warn(&mut self, prim: &usd::Prim, message: impl AsRef<str>) {
-        self.warnings
-            .push(format!("{}: {}", prim.path().as_str(), message.as_ref()));
+        let warning = format!("{}: {}", prim.path().as_str(), message.as_ref());
+        if !self.warnings.contains(&warning) {
+            self.warnings.push(warning);
+        }
     }
 
     /// Maps an openusd error about `prim` into ours.
