@@ -38,7 +38,8 @@ pub fn radiance(e: &EmissionDesc, geometry: Photometric) -> Reason<Spectrum> {
     let luminance = luminance_nits(e, geometry)?;
     if !luminance.is_finite() || luminance < 0.0 {
         return Err(format!(
-            "light luminance {luminance} is not a finite non-negative number"
+            "the light's luminance ({luminance} cd/m²) is not a finite non-negative number: \
+             its intensity, exposure or photometric quantity is too large"
         ));
     }
     Ok(shape.scaled(luminance))
