@@ -1,11 +1,11 @@
 //! Reading raster images (lat-long dome textures; later material textures) and encoding
 //! PNG. The only module that names the `image` crate (tests aside).
 
+use crate::error::{Error, Result};
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageDecoder, ImageEncoder};
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
-use crate::error::{Error, Result};
 use std::path::Path;
 
 /// The most pixels an image may have: 2^25 (8192 × 4096, an 8K lat-long dome), about 720 MB
@@ -85,13 +85,15 @@ fn rgba_f32(img: image::DynamicImage) -> Vec<[f32; 4]> {
 /// file), a scene error when it is not an image the decoder understands or its header
 /// declares more pixels than [`MAX_PIXELS`] or than its size can hold.
 fn open(path: &Path) -> Result<image::DynamicImage> {
-    let cannot_read = |e: &dyn std::fmt::Display| Error::io(path, format!("cannot read image: {e}"));
+    let cannot_read =
+        |e: &dyn std::fmt::Display| Error::io(path, format!("cannot read image: {e}"));
     let file_bytes = match std::fs::metadata(path) {
         Ok(m) if m.is_file() => m.len(),
         Ok(_) => return Err(cannot_read(&"not a regular file")),
         Err(e) => return Err(cannot_read(&e)),
     };
-    let cannot_decode = |e: image::ImageError| Error::scene(path, format!("cannot decode image: {e}"));
+    let cannot_decode =
+        |e: image::ImageError| Error::scene(path, format!("cannot decode image: {e}"));
     let mut reader = image::ImageReader::open(path).map_err(|e| cannot_read(&e))?;
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(MAX_PIXELS * 16 + (64 << 20));
@@ -102,7 +104,10 @@ fn open(path: &Path) -> Result<image::DynamicImage> {
 }
 
 /// The header's size against [`MAX_PIXELS`] and the file's length, before decoding.
-fn check_declared_size(decoder: &impl ImageDecoder, file_bytes: u64) -> std::result::Result<(), String> {
+fn check_declared_size(
+    decoder: &impl ImageDecoder,
+    file_bytes: u64,
+) -> std::result::Result<(), String> {
     let (w, h) = decoder.dimensions();
     let pixels = u64::from(w) * u64::from(h);
     if pixels > MAX_PIXELS {

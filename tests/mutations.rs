@@ -50,8 +50,8 @@ impl Rng {
         (self.next() % n.max(1) as u64) as usize
     }
 
-    fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
-        &items[self.below(items.len())]
+    fn pick<T: Copy>(&mut self, items: &[T]) -> T {
+        items[self.below(items.len())]
     }
 }
 
@@ -118,11 +118,11 @@ fn mutate_text(text: &str, rng: &mut Rng) -> String {
             // Up to three numbers replaced by extremes.
             let mut out = text.to_string();
             let mut picks: Vec<(usize, usize)> =
-                (0..1 + rng.below(3)).map(|_| *rng.pick(&nums)).collect();
+                (0..1 + rng.below(3)).map(|_| rng.pick(&nums)).collect();
             picks.sort();
             picks.dedup();
             for (s, e) in picks.into_iter().rev() {
-                out.replace_range(s..e, *rng.pick(&EXTREMES));
+                out.replace_range(s..e, rng.pick(&EXTREMES));
             }
             out
         }
@@ -151,7 +151,7 @@ fn mutate_text(text: &str, rng: &mut Rng) -> String {
         }
         8 if !nums.is_empty() => {
             // A tuple loses a component, or a number becomes a word.
-            let (s, e) = *rng.pick(&nums);
+            let (s, e) = rng.pick(&nums);
             let mut out = text.to_string();
             let cut = if out[e..].starts_with(", ") { e + 2 } else { e };
             out.replace_range(s..cut, "");
@@ -199,7 +199,10 @@ fn mutate_stage(text: &str, rng: &mut Rng) -> String {
             let mpu = rng.pick(&["1e19", "1e-30", "0", "-1", "nan", "1e300"]);
             text.replacen("metersPerUnit = 1", &format!("metersPerUnit = {mpu}"), 1)
         }
-        4 => text.replacen("inputs:intensity", *rng.pick(&["inputs:intensty", "inputs:exposure", "inputs:color"]), 1),
+        4 => {
+            let typo = rng.pick(&["inputs:intensty", "inputs:exposure", "inputs:color"]);
+            text.replacen("inputs:intensity", typo, 1)
+        }
         _ => mutate_text(text, rng),
     }
 }
@@ -211,8 +214,8 @@ fn mutate_image(bytes: &[u8], png: bool, rng: &mut Rng) -> Vec<u8> {
         0 if png => {
             // IHDR width and height (bytes 16..24) made large, with a correct CRC, so that
             // only the size checks stand in the way.
-            let w = *rng.pick(&[8192u32, 65535, 1 << 30, 4096]);
-            let h = *rng.pick(&[8192u32, 65535, 1, 4096]);
+            let w = rng.pick(&[8192u32, 65535, 1 << 30, 4096]);
+            let h = rng.pick(&[8192u32, 65535, 1, 4096]);
             b[16..20].copy_from_slice(&w.to_be_bytes());
             b[20..24].copy_from_slice(&h.to_be_bytes());
             let crc = crc32(&b[12..29]);
@@ -226,7 +229,7 @@ fn mutate_image(bytes: &[u8], png: bool, rng: &mut Rng) -> Vec<u8> {
         _ => {
             for _ in 0..1 + rng.below(4) {
                 let k = rng.below(b.len());
-                b[k] = *rng.pick(&[0x00, 0xff, 0x7f, 0x80, 0x01]);
+                b[k] = rng.pick(&[0x00, 0xff, 0x7f, 0x80, 0x01]);
             }
             b
         }
@@ -320,7 +323,7 @@ enum Outcome {
 
 /// Runs the binary on `stage` (a meter reading or an 8×8 render) and classifies the end.
 fn run_case(stage: &Path, meter: bool) -> Outcome {
-    let exe = std::env::var("MUTATION_EXE").unwrap_or(env!("CARGO_BIN_EXE_spectral-render").into());
+    let exe = env!("CARGO_BIN_EXE_spectral-render");
     let dir = stage.parent().unwrap();
     let mut args: Vec<String> = vec![exe.into()];
     if meter {

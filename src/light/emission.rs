@@ -10,8 +10,8 @@
 //!   (and from its ShapingAPI distribution: the scene builder integrates the shaping factor
 //!   over directions, `light::shaping`).
 
-use crate::error::Reason;
 use crate::desc::{EmissionDesc, SpdDesc};
+use crate::error::Reason;
 use crate::spectral::uplift::RgbIlluminantSpectrum;
 use crate::spectral::{blackbody, color, data, xyz, DenseSpectrum, Spectrum};
 use std::sync::Arc;

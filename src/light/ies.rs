@@ -128,7 +128,9 @@ impl<'a> Numbers<'a> {
 impl IesProfile {
     /// Reads and parses `path`: a regular file of at most [`MAX_FILE_BYTES`].
     pub fn read(path: &Path) -> Reason<IesProfile> {
-        let cannot = |e: &dyn std::fmt::Display| format!("{}: cannot read the IES file: {e}", path.display());
+        let cannot = |e: &dyn std::fmt::Display| {
+            format!("{}: cannot read the IES file: {e}", path.display())
+        };
         let meta = std::fs::metadata(path).map_err(|e| cannot(&e))?;
         if !meta.is_file() {
             return Err(cannot(&"not a regular file"));
@@ -141,7 +143,12 @@ impl IesProfile {
         }
         let mut bytes = Vec::new();
         std::fs::File::open(path)
-            .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, MAX_FILE_BYTES + 1), &mut bytes))
+            .and_then(|f| {
+                std::io::Read::read_to_end(
+                    &mut std::io::Read::take(f, MAX_FILE_BYTES + 1),
+                    &mut bytes,
+                )
+            })
             .map_err(|e| cannot(&e))?;
         // LM-63 files are ASCII; older ones are often Latin-1 in their keyword lines.
         let text: String = bytes.iter().map(|&b| b as char).collect();

@@ -1,12 +1,13 @@
 //! From the plain [`SceneDescription`] to the render [`Scene`]: spectra resolved and
 //! validated, lights built in absolute units, triangles put behind the BVH, a camera chosen.
 
-use crate::error::Reason;
-use crate::desc::*;
 use super::limits;
 use super::render_scene::{Mesh, Scene, Summary, TriRef};
 use crate::accel::bvh::Bvh;
 use crate::bxdf::TrowbridgeReitz;
+use crate::desc::*;
+use crate::error::Reason;
+use crate::error::{Error, Result};
 use crate::imageio;
 use crate::light::dome::LatLong;
 use crate::light::emission::{self, Photometric};
@@ -27,7 +28,6 @@ use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
 use crate::spectral::{data, DenseSpectrum, Spectrum};
 use crate::texture::{TextureCache, TextureInput};
-use crate::error::{Error, Result};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -210,10 +210,7 @@ fn material(
 }
 
 /// A reflectance input: the texture when there is one, else the spectrum `r`.
-fn color_input(
-    r: &SpectrumDesc,
-    texture: Option<TextureInput>,
-) -> Reason<ColorInput> {
+fn color_input(r: &SpectrumDesc, texture: Option<TextureInput>) -> Reason<ColorInput> {
     Ok(match texture {
         Some(t) => ColorInput::Texture(t),
         None => ColorInput::Constant(reflectance(r)?),
@@ -323,10 +320,7 @@ fn decoded_as_srgb(tex: &TextureDesc) -> bool {
 }
 
 /// The image and node parameters of a texture, loaded through the cache.
-fn texture_input(
-    cache: &mut TextureCache,
-    tex: &TextureDesc,
-) -> Reason<TextureInput> {
+fn texture_input(cache: &mut TextureCache, tex: &TextureDesc) -> Reason<TextureInput> {
     cache
         .input(tex)
         .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))
@@ -367,11 +361,7 @@ fn non_negative(name: &str, v: f32) -> Reason<f32> {
 
 /// η (`k_part` false) or k (true) of a conductor: a metal in `spectra/metal/`, any tabulated
 /// spectrum, or samples. η must be positive and k non-negative at every wavelength.
-fn conductor_spectrum(
-    s: &SpectrumDesc,
-    what: &str,
-    k_part: bool,
-) -> Reason<Spectrum> {
+fn conductor_spectrum(s: &SpectrumDesc, what: &str, k_part: bool) -> Reason<Spectrum> {
     let dense = match s {
         SpectrumDesc::Named(token) => match (data::metal(token), data::named(token)) {
             (Some((n, k)), _) => if k_part { k } else { n }.clone(),
@@ -519,10 +509,7 @@ fn corner_uvs(m: &MeshDesc, k: usize) -> [Vec2; 3] {
 }
 
 /// The radiance of an emissive mesh (MeshLightAPI first, then the material's emissiveColor).
-fn mesh_emission(
-    desc: &SceneDescription,
-    m: &MeshDesc,
-) -> Reason<Option<(Spectrum, bool)>> {
+fn mesh_emission(desc: &SceneDescription, m: &MeshDesc) -> Reason<Option<(Spectrum, bool)>> {
     let area: f32 = m
         .indices
         .iter()
@@ -626,7 +613,9 @@ fn light(l: &LightDesc) -> Reason<Light> {
 /// The largest luminance (cd/m²) `light` emits in any direction (an upper bound for domes).
 fn peak_luminance(light: &Light) -> f64 {
     let shaped = |r: &Spectrum, s: &Option<Shaping>| {
-        limits::luminance(r) * s.as_ref().map_or(1.0, |s| f64::from(s.photometry.max_factor))
+        limits::luminance(r)
+            * s.as_ref()
+                .map_or(1.0, |s| f64::from(s.photometry.max_factor))
     };
     match light {
         Light::Rect(l) => shaped(&l.radiance, &l.shaping),
@@ -651,9 +640,9 @@ fn texture_peak(t: &TextureInput) -> f64 {
     for y in 0..h {
         for x in 0..w {
             let texel = t.image.level_texel(0, x, y);
-            for c in 0..3 {
-                let v = f64::from(texel[c]) * f64::from(t.scale[c]) + f64::from(t.bias[c]);
-                peak = peak.max(v.abs());
+            for ((v, s), b) in texel.iter().zip(t.scale).zip(t.bias).take(3) {
+                let out = f64::from(*v) * f64::from(s) + f64::from(b);
+                peak = peak.max(out.abs());
             }
         }
     }
@@ -901,7 +890,10 @@ fn check_dome_texels(
     let mut peak = 0.0f64;
     for p in pixels {
         if p.iter().any(|v| !v.is_finite()) {
-            return Err(format!("dome texture {} has non-finite texels", path.display()));
+            return Err(format!(
+                "dome texture {} has non-finite texels",
+                path.display()
+            ));
         }
         for c in 0..3 {
             peak = peak.max(f64::from(p[c]) * f64::from(tint[c]) * f64::from(scale));

@@ -74,7 +74,7 @@ pub fn check_transform(m: &Mat4, size: f32) -> Reason<()> {
         .iter()
         .map(|a| a.truncate().length() * size)
         .fold(0.0f32, f32::max);
-    if !(extent <= MAX_COORDINATE) {
+    if extent.is_nan() || extent > MAX_COORDINATE {
         return Err(format!(
             "it is {extent:e} m large, beyond the {MAX_COORDINATE:e} m supported"
         ));
@@ -93,8 +93,8 @@ pub fn check_luminance(nits: f64) -> Reason<()> {
         return Ok(());
     }
     Err(format!(
-        "its peak luminance {nits:.3e} cd/m² exceeds {MAX_LUMINANCE:e} cd/m², the largest supported \
-         (the Sun's is 1.6e9)"
+        "its peak luminance {nits:.3e} cd/m² exceeds {MAX_LUMINANCE:e} cd/m², the largest \
+         supported (the Sun's is 1.6e9)"
     ))
 }
 

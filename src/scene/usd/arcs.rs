@@ -110,7 +110,8 @@ fn read_layer(resolver: &CheckedResolver, id: &str) -> Option<Box<dyn AbstractDa
 
 fn facts(id: &str, data: &dyn AbstractData, resolver: &CheckedResolver) -> LayerFacts {
     let anchor = ResolvedPath::new(id);
-    let layer_of = |asset: &str| (!asset.is_empty()).then(|| resolver.create_identifier(asset, Some(&anchor)));
+    let layer_of =
+        |asset: &str| (!asset.is_empty()).then(|| resolver.create_identifier(asset, Some(&anchor)));
     let root = sdf::Path::abs_root();
     let mut f = LayerFacts {
         id: id.to_string(),
@@ -129,45 +130,74 @@ fn facts(id: &str, data: &dyn AbstractData, resolver: &CheckedResolver) -> Layer
             continue;
         }
         let name = path.as_str().to_string();
-        let mut targets = Vec::new();
-        for key in ["inheritPaths", "specializes"] {
-            if let Some(Value::PathListOp(op)) = field(data, &path, key) {
-                targets.extend(op.flatten().iter().map(|t| path.make_absolute(t).as_str().to_string()));
-            }
+        let targets = inherit_targets(data, &path);
+        let mut references = references(data, &path);
+        let has_arcs = !targets.is_empty()
+            || !references.is_empty()
+            || field(data, &path, "variantSetNames").is_some();
+        if has_arcs {
+            f.with_arcs.insert(name.clone());
         }
-        let mut arcs = !targets.is_empty() || field(data, &path, "variantSetNames").is_some();
         if !targets.is_empty() {
             f.inherits.push((name.clone(), targets));
         }
-        let mut add = |asset: &str, target: &sdf::Path| {
+        for (asset, target) in references.drain(..) {
             f.references.push(Reference {
                 prim: name.clone(),
-                asset: asset.to_string(),
-                layer: layer_of(asset),
-                target: (!target.is_empty()).then(|| path.make_absolute(target).as_str().to_string()),
+                layer: layer_of(&asset),
+                asset,
+                target,
             });
-        };
-        match field(data, &path, "references") {
-            Some(Value::ReferenceListOp(op)) => op.flatten().iter().for_each(|r| add(&r.asset_path, &r.prim_path)),
-            _ => {}
-        }
-        match field(data, &path, "payload") {
-            Some(Value::PayloadListOp(op)) => op.flatten().iter().for_each(|p| add(&p.asset_path, &p.prim_path)),
-            Some(Value::Payload(p)) => add(&p.asset_path, &p.prim_path),
-            _ => {}
-        }
-        arcs |= f.references.last().is_some_and(|r| r.prim == name);
-        if arcs {
-            f.with_arcs.insert(name.clone());
         }
         f.prims.insert(name);
     }
     f
 }
 
+/// The absolute inherits and specializes targets authored on `path`.
+fn inherit_targets(data: &dyn AbstractData, path: &sdf::Path) -> Vec<String> {
+    let mut targets = Vec::new();
+    for key in ["inheritPaths", "specializes"] {
+        if let Some(Value::PathListOp(op)) = field(data, path, key) {
+            let absolute = op.flatten().into_iter().map(|t| path.make_absolute(&t));
+            targets.extend(absolute.map(|t| t.as_str().to_string()));
+        }
+    }
+    targets
+}
+
+/// The references and payloads authored on `path`: (asset path, absolute prim path).
+fn references(data: &dyn AbstractData, path: &sdf::Path) -> Vec<(String, Option<String>)> {
+    let arc = |asset: &str, target: &sdf::Path| {
+        let target = (!target.is_empty()).then(|| path.make_absolute(target).as_str().to_string());
+        (asset.to_string(), target)
+    };
+    let mut out = Vec::new();
+    if let Some(Value::ReferenceListOp(op)) = field(data, path, "references") {
+        out.extend(
+            op.flatten()
+                .iter()
+                .map(|r| arc(&r.asset_path, &r.prim_path)),
+        );
+    }
+    match field(data, path, "payload") {
+        Some(Value::PayloadListOp(op)) => out.extend(
+            op.flatten()
+                .iter()
+                .map(|p| arc(&p.asset_path, &p.prim_path)),
+        ),
+        Some(Value::Payload(p)) => out.push(arc(&p.asset_path, &p.prim_path)),
+        _ => {}
+    }
+    out
+}
+
 /// A field's value, `None` when absent or unreadable.
 fn field(data: &dyn AbstractData, path: &sdf::Path, key: &str) -> Option<Value> {
-    data.try_field(path, key).ok().flatten().map(|v| v.into_owned())
+    data.try_field(path, key)
+        .ok()
+        .flatten()
+        .map(|v| v.into_owned())
 }
 
 fn token(data: &dyn AbstractData, path: &sdf::Path, key: &str) -> Option<String> {
@@ -218,16 +248,16 @@ fn check_inherits(file: &Path, layers: &[LayerFacts]) -> Result<()> {
         let (walks, chain) = walk(file, &graph, &mut done, start)?;
         total = total.saturating_add(walks);
         if chain > MAX_CHAIN {
-            return Err(Error::usd(
-                file,
-                format!("<{start}> starts a chain of {chain} inherits/specializes arcs; at most {MAX_CHAIN} are supported"),
-            ));
+            let reason = format!(
+                "<{start}> starts a chain of {chain} inherits/specializes arcs; at most \
+                 {MAX_CHAIN} are supported"
+            );
+            return Err(Error::usd(file, reason));
         }
         if total > MAX_WALKS {
-            return Err(Error::usd(
-                file,
-                "the inherits/specializes arcs are too entangled to compose (more than a million paths through them)",
-            ));
+            let reason = "the inherits/specializes arcs are too entangled to compose (more \
+                          than a million paths through them)";
+            return Err(Error::usd(file, reason));
         }
     }
     Ok(())
@@ -293,7 +323,10 @@ fn check_references(file: &Path, layers: &[LayerFacts]) -> Result<()> {
                 return Err(Error::prim(
                     file,
                     &r.prim,
-                    format!("references @{}@ without a prim path, and it has no defaultPrim", r.asset),
+                    format!(
+                        "references @{}@ without a prim path, and it has no defaultPrim",
+                        r.asset
+                    ),
                 ));
             };
             if !candidates.iter().any(|l| provides(l, target)) {
@@ -314,7 +347,10 @@ fn check_references(file: &Path, layers: &[LayerFacts]) -> Result<()> {
 }
 
 /// `root` and its sublayers, recursively.
-fn layer_stack<'a>(by_id: &HashMap<&str, &'a LayerFacts>, root: &'a LayerFacts) -> Vec<&'a LayerFacts> {
+fn layer_stack<'a>(
+    by_id: &HashMap<&str, &'a LayerFacts>,
+    root: &'a LayerFacts,
+) -> Vec<&'a LayerFacts> {
     let mut stack = vec![root];
     let mut next = 0;
     while next < stack.len() {

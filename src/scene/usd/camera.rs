@@ -200,10 +200,7 @@ fn warn_ignored_settings(ctx: &mut Ctx, prim: &usd::Prim) -> Result<()> {
             Some(v) => matches_behaviour(&name, v),
         };
         if !harmless {
-            ctx.warn(
-                prim,
-                format!("{name} is not supported; ignored"),
-            );
+            ctx.warn(prim, format!("{name} is not supported; ignored"));
         }
     }
     Ok(())
@@ -224,9 +221,7 @@ fn matches_behaviour(name: &str, value: &sdf::Value) -> bool {
     match name {
         "pixelAspectRatio" => values::to_f64(value) == Some(1.0),
         "dataWindowNDC" => values::to_vec4(value, 1.0) == Some([0.0, 0.0, 1.0, 1.0]),
-        "aspectRatioConformPolicy" => {
-            values::to_token(value).as_deref() == Some("expandAperture")
-        }
+        "aspectRatioConformPolicy" => values::to_token(value).as_deref() == Some("expandAperture"),
         "disableMotionBlur" | "instantaneousShutter" => true,
         "disableDepthOfField" => values::to_bool(value) == Some(false),
         "includedPurposes" => tokens(value) == Some(vec!["default".into(), "render".into()]),

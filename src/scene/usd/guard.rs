@@ -61,7 +61,10 @@ mod tests {
         })
         .unwrap_err();
         assert_eq!(e.kind, crate::error::ErrorKind::Usd);
-        assert!(e.to_string().starts_with("x.usdc: the USD reader failed"), "{e}");
+        assert!(
+            e.to_string().starts_with("x.usdc: the USD reader failed"),
+            "{e}"
+        );
         assert_eq!(catch_panics(Path::new("x"), || Ok(7)).unwrap(), 7);
     }
 }

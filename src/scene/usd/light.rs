@@ -273,7 +273,11 @@ fn type_inputs(type_name: &str) -> &'static [&'static str] {
 fn warn_unknown_inputs(ctx: &mut Ctx, prim: &usd::Prim, type_name: &str) -> Result<()> {
     let mut known: Vec<&str> = LIGHT_API_INPUTS.to_vec();
     known.extend_from_slice(type_inputs(type_name));
-    let what = if type_name.is_empty() { "a light" } else { type_name };
+    let what = if type_name.is_empty() {
+        "a light"
+    } else {
+        type_name
+    };
     vocab::warn_unknown_inputs(ctx, prim, &known, what)
 }
 
@@ -282,7 +286,11 @@ fn warn_unknown_inputs(ctx: &mut Ctx, prim: &usd::Prim, type_name: &str) -> Resu
 /// UsdLux does not define.
 pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result<()> {
     let type_name = ctx.type_name(prim)?;
-    let light_type = if is_light_type(&type_name) { type_name.as_str() } else { "" };
+    let light_type = if is_light_type(&type_name) {
+        type_name.as_str()
+    } else {
+        ""
+    };
     warn_unknown_inputs(ctx, prim, light_type)?;
     let names = ctx.property_names(prim)?;
     let has = |prefix: &str| {

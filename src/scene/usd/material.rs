@@ -330,7 +330,8 @@ fn check_unit_inputs(ctx: &mut Ctx, shader: &usd::Prim, p: &PreviewSurfaceDesc) 
     ];
     for (name, v) in inputs {
         if v < 0.0 {
-            let reason = format!("inputs:{name} = {v} is negative; UsdPreviewSurface defines it on [0, 1]");
+            let reason =
+                format!("inputs:{name} = {v} is negative; UsdPreviewSurface defines it on [0, 1]");
             return Err(ctx.err(shader, reason));
         }
         if v > 1.0 {

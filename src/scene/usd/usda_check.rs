@@ -57,7 +57,11 @@ impl<'a> Scanner<'a> {
             self.i += 1;
             match c {
                 b'\n' => {
-                    if self.tuple_type.as_ref().is_some_and(|t| t.depth == self.depth) {
+                    if self
+                        .tuple_type
+                        .as_ref()
+                        .is_some_and(|t| t.depth == self.depth)
+                    {
                         self.tuple_type = None;
                     }
                     self.line += 1;
@@ -173,7 +177,10 @@ impl<'a> Scanner<'a> {
 
     fn count_lines(&mut self, end: usize) {
         let end = end.min(self.text.len());
-        self.line += self.text[self.i..end].iter().filter(|&&b| b == b'\n').count();
+        self.line += self.text[self.i..end]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
         self.i = end;
     }
 }
@@ -187,9 +194,12 @@ fn tuple_arity(word: &str) -> Option<usize> {
     if word == "frame4d" {
         return Some(4);
     }
-    let prefix = ["point", "normal", "vector", "color", "texCoord", "float", "double", "half", "int", "matrix"]
-        .into_iter()
-        .find(|p| word.starts_with(p))?;
+    let prefix = [
+        "point", "normal", "vector", "color", "texCoord", "float", "double", "half", "int",
+        "matrix",
+    ]
+    .into_iter()
+    .find(|p| word.starts_with(p))?;
     let rest = &word[prefix.len()..];
     let n = match rest.as_bytes().first()? {
         b'2' => 2,
@@ -236,7 +246,10 @@ mod tests {
         assert!(check(ok.as_bytes()).is_ok());
         let short = ok.replace("(1, 0, 1e-3)", "(1, 0)");
         let e = check(short.as_bytes()).unwrap_err();
-        assert_eq!(e, "line 3: a tuple of 2 values in a point3f value, which needs 3");
+        assert_eq!(
+            e,
+            "line 3: a tuple of 2 values in a point3f value, which needs 3"
+        );
         let long_row = ok.replace("(0, 1, 0, 0)", "(0, 1, 0)");
         assert!(check(long_row.as_bytes()).unwrap_err().contains("matrix4d"));
     }

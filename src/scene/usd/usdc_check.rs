@@ -179,7 +179,9 @@ impl<'a> Crate<'a> {
         }
         let out = match data.split_first() {
             None => Vec::new(),
-            Some((0, block)) => lz4::decompress(block, limit).map_err(|e| format!("{what}: {e}"))?,
+            Some((0, block)) => {
+                lz4::decompress(block, limit).map_err(|e| format!("{what}: {e}"))?
+            }
             Some(_) => return Err(format!("{what}: chunked LZ4 data is not supported")),
         };
         Ok((out, pos + 8 + size))
@@ -195,7 +197,10 @@ impl<'a> Crate<'a> {
         // The common value and two bits per integer at least, four more bytes each at most.
         let least = 4 + (2 * count).div_ceil(8);
         let (data, next) = self.compressed(pos, (least, least + 4 * count), what)?;
-        Ok((decode_ints32(&data, count).map_err(|e| format!("{what}: {e}"))?, next))
+        Ok((
+            decode_ints32(&data, count).map_err(|e| format!("{what}: {e}"))?,
+            next,
+        ))
     }
 
     // ---------------------------------------------------------------- structure
@@ -244,7 +249,10 @@ impl<'a> Crate<'a> {
             let name = String::from_utf8_lossy(&entry[..name_len]).into_owned();
             let start = u64::from_le_bytes(entry[16..24].try_into().expect("8 bytes")) as usize;
             let size = u64::from_le_bytes(entry[24..32].try_into().expect("8 bytes")) as usize;
-            if start.checked_add(size).is_none_or(|end| end > self.bytes.len()) {
+            if start
+                .checked_add(size)
+                .is_none_or(|end| end > self.bytes.len())
+            {
                 return Err(format!("section {name} lies outside the file"));
             }
             self.sections.push((name, start, size));
@@ -262,9 +270,7 @@ impl<'a> Crate<'a> {
         let (data, _) = self.compressed(start + 16, (size, size), "TOKENS")?;
         let found = data.iter().filter(|&&b| b == 0).count();
         if found != count {
-            return Err(format!(
-                "TOKENS declares {count} tokens but holds {found}"
-            ));
+            return Err(format!("TOKENS declares {count} tokens but holds {found}"));
         }
         Ok(count)
     }
@@ -379,7 +385,9 @@ impl<'a> Crate<'a> {
                 self.fits(pos + 4, lut, size, what)?;
                 pos += 4 + lut * size;
             } else if code != b'i' {
-                return Err(format!("an array at byte {pos} has compression code {code}"));
+                return Err(format!(
+                    "an array at byte {pos} has compression code {code}"
+                ));
             }
             self.encoded_ints(pos, count, what)?;
         } else {
@@ -425,7 +433,9 @@ impl<'a> Crate<'a> {
     fn forward(&self, pos: usize) -> Reason<usize> {
         let offset = self.u64_at(pos)? as i64;
         if offset < 8 {
-            return Err(format!("a value offset at byte {pos} does not point forward"));
+            return Err(format!(
+                "a value offset at byte {pos} does not point forward"
+            ));
         }
         Ok(pos.saturating_add(offset as usize))
     }
@@ -571,7 +581,10 @@ fn check_path_tree(
     while let Some(mut index) = pending.pop() {
         loop {
             if index >= n || std::mem::replace(&mut seen[index], true) {
-                return Err("the PATHS tree is malformed (an entry is reached twice or lies outside it)".into());
+                return Err(
+                    "the PATHS tree is malformed (an entry is reached twice or lies outside it)"
+                        .into(),
+                );
             }
             let in_range = usize::try_from(indexes[index]).is_ok_and(|i| i < path_count)
                 && (index == 0 || (elements[index].unsigned_abs() as usize) < tokens);

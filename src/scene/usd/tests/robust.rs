@@ -28,7 +28,11 @@ fn an_inherits_arc_into_a_cycle_is_an_error() {
     let err = load_body_err(
         "def Xform \"A\" ( inherits = </B> ) {}\nclass \"B\" ( inherits = </C> ) {}\nclass \"C\" ( inherits = </B> ) {}\n",
     );
-    assert_error(&err, None, "inherits/specializes arcs form a cycle through </B>");
+    assert_error(
+        &err,
+        None,
+        "inherits/specializes arcs form a cycle through </B>",
+    );
     let err = load_body_err("def Xform \"A\" ( inherits = </A> ) {}\n");
     assert_error(&err, None, "cycle through </A>");
 }
@@ -72,11 +76,18 @@ fn nesting_within_the_limit_loads_quickly() {
 #[test]
 fn a_reference_to_a_missing_prim_is_an_error() {
     let err = load_body_err("def Xform \"A\" ( references = </Missing> ) {}\n");
-    assert_error(&err, Some("/A"), "references </Missing>, which does not exist");
+    assert_error(
+        &err,
+        Some("/A"),
+        "references </Missing>, which does not exist",
+    );
 
     let dir = temp_dir();
-    std::fs::write(dir.join("part.usda"), format!("{METRES_Y_UP}def Xform \"Part\" {{}}\n"))
-        .unwrap();
+    std::fs::write(
+        dir.join("part.usda"),
+        format!("{METRES_Y_UP}def Xform \"Part\" {{}}\n"),
+    )
+    .unwrap();
     let stage = |body: &str| {
         let path = dir.join("main.usda");
         std::fs::write(&path, format!("{METRES_Y_UP}{body}")).unwrap();
@@ -85,15 +96,27 @@ fn a_reference_to_a_missing_prim_is_an_error() {
     let ok = stage("def Xform \"A\" ( references = @part.usda@</Part> ) {}\n");
     assert!(ok.is_ok(), "{:?}", ok.err());
     let err = stage("def Xform \"A\" ( references = @part.usda@</Nope> ) {}\n").unwrap_err();
-    assert_error(&err, Some("/A"), "references </Nope> in @part.usda@, which does not exist");
+    assert_error(
+        &err,
+        Some("/A"),
+        "references </Nope> in @part.usda@, which does not exist",
+    );
     let err = stage("def Xform \"A\" ( references = @part.usda@ ) {}\n").unwrap_err();
-    assert_error(&err, Some("/A"), "without a prim path, and it has no defaultPrim");
+    assert_error(
+        &err,
+        Some("/A"),
+        "without a prim path, and it has no defaultPrim",
+    );
 }
 
 #[test]
 fn a_short_tuple_is_an_error() {
     let err = load_body_err(&SCENE.replace("(0, 0, 1)", "(0, 0)"));
-    assert_error(&err, None, "line 7: a tuple of 2 values in a point3f value, which needs 3");
+    assert_error(
+        &err,
+        None,
+        "line 7: a tuple of 2 values in a point3f value, which needs 3",
+    );
 }
 
 #[test]
@@ -117,7 +140,11 @@ fn nan_transforms_are_errors_naming_the_prim() {
 
 #[test]
 fn a_thin_lens_needs_a_focus_distance() {
-    for focus in ["", "    float focusDistance = 0\n", "    float focusDistance = -2\n"] {
+    for focus in [
+        "",
+        "    float focusDistance = 0\n",
+        "    float focusDistance = -2\n",
+    ] {
         let camera = format!("def Camera \"Cam\" {{\n    float fStop = 2.8\n{focus}}}\n");
         let err = load_body_err(&format!("{SCENE}{camera}"));
         assert_error(&err, Some("/Cam"), "needs focusDistance > 0");
@@ -129,22 +156,44 @@ fn a_thin_lens_needs_a_focus_distance() {
 #[test]
 fn out_of_range_subset_indices_are_errors_bound_or_not() {
     let subset = "    def GeomSubset \"S\" {\n        uniform token elementType = \"face\"\n        int[] indices = [0, 5]\n    }\n}\n";
-    let body = SCENE.replacen("    int[] faceVertexIndices = [0, 2, 1]\n}\n", &format!("    int[] faceVertexIndices = [0, 2, 1]\n{subset}"), 1);
+    let body = SCENE.replacen(
+        "    int[] faceVertexIndices = [0, 2, 1]\n}\n",
+        &format!("    int[] faceVertexIndices = [0, 2, 1]\n{subset}"),
+        1,
+    );
     let err = load_body_err(&body);
     assert_error(&err, Some("/Floor/S"), "face 5 is out of range");
 }
 
 #[test]
 fn a_misspelt_light_input_is_named_with_a_suggestion() {
-    let desc = load_body(&SCENE.replace("float inputs:radius", "float inputs:intensty = 5\n    float inputs:radius"));
+    let desc = load_body(&SCENE.replace(
+        "float inputs:radius",
+        "float inputs:intensty = 5\n    float inputs:radius",
+    ));
     assert_warned(
         &desc,
-        &["/Bulb", "unknown input 'inputs:intensty' for SphereLight", "did you mean inputs:intensity?"],
+        &[
+            "/Bulb",
+            "unknown input 'inputs:intensty' for SphereLight",
+            "did you mean inputs:intensity?",
+        ],
     );
-    let desc = load_body(&SCENE.replace("float inputs:radius", "float inputs:glow = 5\n    float inputs:radius"));
+    let desc = load_body(&SCENE.replace(
+        "float inputs:radius",
+        "float inputs:glow = 5\n    float inputs:radius",
+    ));
     assert_warned(&desc, &["unknown input 'inputs:glow'"]);
-    assert!(!desc.warnings.iter().any(|w| w.contains("did you mean")), "{:?}", desc.warnings);
-    assert!(load_body(SCENE).warnings.is_empty(), "{:?}", load_body(SCENE).warnings);
+    assert!(
+        !desc.warnings.iter().any(|w| w.contains("did you mean")),
+        "{:?}",
+        desc.warnings
+    );
+    assert!(
+        load_body(SCENE).warnings.is_empty(),
+        "{:?}",
+        load_body(SCENE).warnings
+    );
 }
 
 #[test]
@@ -168,12 +217,29 @@ fn misspelt_shader_inputs_are_named() {
     let dir = temp_dir();
     let png = dir.join("tex.png");
     crate::imageio::write_png_rgba8(&png, &[255; 16], 2, 2).unwrap();
-    let body = SCENE.replace("    int[] faceVertexCounts", "    rel material:binding = </M>\n    int[] faceVertexCounts");
+    let body = SCENE.replace(
+        "    int[] faceVertexCounts",
+        "    rel material:binding = </M>\n    int[] faceVertexCounts",
+    );
     let path = dir.join("stage.usda");
     std::fs::write(&path, format!("{METRES_Y_UP}{body}{material}")).unwrap();
     let desc = super::super::load(&path).unwrap();
-    assert_warned(&desc, &["/M/S", "'inputs:roughnes' for UsdPreviewSurface", "did you mean inputs:roughness?"]);
-    assert_warned(&desc, &["/M/T", "'inputs:wrapz' for UsdUVTexture", "did you mean inputs:wrapS?"]);
+    assert_warned(
+        &desc,
+        &[
+            "/M/S",
+            "'inputs:roughnes' for UsdPreviewSurface",
+            "did you mean inputs:roughness?",
+        ],
+    );
+    assert_warned(
+        &desc,
+        &[
+            "/M/T",
+            "'inputs:wrapz' for UsdUVTexture",
+            "did you mean inputs:wrapS?",
+        ],
+    );
 }
 
 #[test]
@@ -183,11 +249,23 @@ fn preview_surface_ranges() {
             "def Material \"M\" {{\n    token outputs:surface.connect = </M/S.outputs:surface>\n    def Shader \"S\" {{\n        uniform token info:id = \"UsdPreviewSurface\"\n        {input}\n        token outputs:surface\n    }}\n}}\n"
         )
     };
-    let body = SCENE.replace("    int[] faceVertexCounts", "    rel material:binding = </M>\n    int[] faceVertexCounts");
-    let err = load_body_err(&format!("{body}{}", material("float inputs:roughness = -0.2")));
+    let body = SCENE.replace(
+        "    int[] faceVertexCounts",
+        "    rel material:binding = </M>\n    int[] faceVertexCounts",
+    );
+    let err = load_body_err(&format!(
+        "{body}{}",
+        material("float inputs:roughness = -0.2")
+    ));
     assert_error(&err, Some("/M/S"), "inputs:roughness = -0.2 is negative");
-    let desc = load_body(&format!("{body}{}", material("float inputs:metallic = 1.5")));
-    assert_warned(&desc, &["/M/S", "inputs:metallic = 1.5 is above 1; clamped to 1"]);
+    let desc = load_body(&format!(
+        "{body}{}",
+        material("float inputs:metallic = 1.5")
+    ));
+    assert_warned(
+        &desc,
+        &["/M/S", "inputs:metallic = 1.5 is above 1; clamped to 1"],
+    );
 }
 
 #[test]
@@ -202,8 +280,14 @@ fn ignored_render_settings_are_named() {
 ";
     let desc = load_body(&format!("{SCENE}{settings}"));
     assert_eq!(desc.render.resolution, Some((64, 32)));
-    assert_warned(&desc, &["/Settings", "pixelAspectRatio is not supported; ignored"]);
-    assert_warned(&desc, &["/Settings", "dataWindowNDC is not supported; ignored"]);
+    assert_warned(
+        &desc,
+        &["/Settings", "pixelAspectRatio is not supported; ignored"],
+    );
+    assert_warned(
+        &desc,
+        &["/Settings", "dataWindowNDC is not supported; ignored"],
+    );
     assert_eq!(desc.warnings.len(), 2, "{:?}", desc.warnings);
     let fallbacks = settings
         .replace("float pixelAspectRatio = 2", "float pixelAspectRatio = 1")
@@ -279,4 +363,19 @@ fn corrupt_crate_files_are_one_line_errors() {
         }
     }
     assert!(refused > 100, "only {refused} corrupt files refused");
+}
+
+#[test]
+fn crate_files_written_by_openusd_pass_the_checks() {
+    for scene in [
+        "scenes/cornell-box.usda",
+        "scenes/materials.usda",
+        "scenes/room.usda",
+    ] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+        let data = openusd::usda::parse(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let mut bytes = Vec::new();
+        openusd::usdc::CrateWriter::write(&data, &mut std::io::Cursor::new(&mut bytes)).unwrap();
+        super::super::resolver::check_layer(&bytes).unwrap_or_else(|e| panic!("{scene}: {e}"));
+    }
 }
