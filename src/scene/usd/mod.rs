@@ -39,7 +39,8 @@ use openusd::{sdf, usd};
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::desc::{MeshDesc, SceneDescription};
+use crate::desc::{ExtractedAssets, MeshDesc, SceneDescription};
+use std::sync::Arc;
 use crate::error::Result;
 use values::Ctx;
 
@@ -86,6 +87,7 @@ fn read(path: &Path) -> Result<SceneDescription> {
         z_up,
         stage_to_world: stage::stage_to_world(meters_per_unit, z_up),
         warnings: Vec::new(),
+        extracted: Arc::new(ExtractedAssets::unique()),
     };
     let mut reader = Reader::new(ctx);
     reader.read_stage()?;
@@ -173,6 +175,7 @@ impl<'s> Reader<'s> {
             camera::read_render_settings(&mut self.ctx, &self.render_settings, &self.desc.cameras)?;
         self.desc.warnings = std::mem::take(&mut self.ctx.warnings);
         self.desc.stage_to_world = self.ctx.stage_to_world;
+        self.desc.extracted = Some(self.ctx.extracted.clone());
         Ok(self.desc)
     }
 
