@@ -458,3 +458,38 @@ fn silent_defaults_are_named() {
         ],
     );
 }
+
+#[test]
+fn a_distant_light_narrower_than_f32_is_not_a_sun_of_its_luminance() {
+    // Without normalize, intensity is luminance: a cone of 1e-30° gives E = L π sin²θ ≈ 0,
+    // as 1e-6° does, not the L lux of a delta light (angle 0).
+    let dir = temp_dir("narrow");
+    let mut lux = Vec::new();
+    for angle in ["1e-30", "1e-6", "0"] {
+        let sun = format!("def DistantLight \"Sun\" {{\n    float inputs:angle = {angle}\n    float inputs:intensity = 50000\n    float xformOp:rotateX = -90\n    uniform token[] xformOpOrder = [\"xformOp:rotateX\"]\n}}\n");
+        let stage = write(&dir, "sun.usda", &format!("{HEADER}{FLOOR}{sun}"));
+        let out = spectral_render(
+            &[
+                "meter",
+                stage.to_str().unwrap(),
+                "--at",
+                "0,0.1,0",
+                "--normal",
+                "0,1,0",
+                "--json",
+            ],
+            &dir,
+        );
+        let json = common::stdout(&out);
+        let value = json
+            .split("\"value\":")
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .next()
+            .unwrap();
+        lux.push(value.parse::<f64>().unwrap());
+    }
+    assert!(lux[0] < 1e-6 && lux[1] < 1e-6, "{lux:?}");
+    assert!((lux[2] / 50000.0 - 1.0).abs() < 0.01, "{lux:?}");
+}

@@ -806,13 +806,20 @@ fn distant(l: &LightDesc, angle_deg: f32) -> Reason<Light> {
         flux_per_nit: None,
         intensity_per_nit: None,
     };
-    let radiance = emission::radiance(&l.emission, g)?;
+    let mut radiance = emission::radiance(&l.emission, g)?;
+    let one_minus_cos = 2.0 * (0.5 * theta_max).sin().powi(2);
+    if theta_max > 0.0 && one_minus_cos == 0.0 {
+        // A cone too narrow for f32 (θmax below ~1e-19 rad) is sampled as a delta light,
+        // whose radiance is its illuminance: L · π sin²θmax, not L.
+        let e = f64::from(PI) * f64::from(theta_max).sin().powi(2);
+        radiance = radiance.scaled(e as f32);
+    }
     let to_light = l.to_world.transform_vector3(Vec3::Z).normalize();
     Ok(Light::Distant(DistantLight {
         prim_path: l.prim_path.clone(),
         to_light,
         cos_theta_max: theta_max.cos(),
-        one_minus_cos: 2.0 * (0.5 * theta_max).sin().powi(2),
+        one_minus_cos,
         radiance,
     }))
 }

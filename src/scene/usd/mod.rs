@@ -22,7 +22,7 @@ mod light;
 mod lz4;
 mod material;
 mod mesh;
-pub(crate) mod resolver;
+mod resolver;
 mod shapes;
 mod stage;
 mod usda_check;

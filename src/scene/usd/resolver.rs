@@ -72,7 +72,7 @@ impl CheckedResolver {
 }
 
 /// Fails unless `path` names a regular file (after following symbolic links).
-pub(crate) fn regular_file(path: &Path) -> Reason<()> {
+fn regular_file(path: &Path) -> Reason<()> {
     match std::fs::metadata(path) {
         Ok(m) if m.is_file() => Ok(()),
         Ok(_) => Err(format!("{} is not a regular file", path.display())),
