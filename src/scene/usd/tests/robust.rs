@@ -322,15 +322,18 @@ fn crate_bytes() -> Vec<u8> {
 }
 
 #[test]
-fn a_crate_file_loads() {
-    let path = temp_dir().join("cbox.usdc");
-    std::fs::write(&path, crate_bytes()).unwrap();
-    let desc = super::super::load(&path).unwrap();
-    let text = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.usda");
-    let reference = super::super::load(&text).unwrap();
-    assert_eq!(paths(&desc), paths(&reference));
-    for (a, b) in desc.meshes.iter().zip(&reference.meshes) {
-        assert_eq!(a.positions, b.positions, "{}", a.prim_path);
+fn crate_files_load_as_their_text() {
+    // Written by usd-core (`Sdf.Layer.Export`) from the scenes of the same name.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for name in ["cornell-box", "materials"] {
+        let desc = super::super::load(&root.join(format!("tests/data/usdc/{name}.usdc"))).unwrap();
+        let reference = super::super::load(&root.join(format!("scenes/{name}.usda"))).unwrap();
+        assert_eq!(paths(&desc), paths(&reference));
+        for (a, b) in desc.meshes.iter().zip(&reference.meshes) {
+            assert_eq!(a.positions, b.positions, "{}", a.prim_path);
+            assert_eq!(a.indices, b.indices, "{}", a.prim_path);
+        }
+        assert_eq!(desc.lights.len(), reference.lights.len(), "{name}");
     }
 }
 
