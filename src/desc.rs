@@ -7,6 +7,8 @@
 
 use glam::{Affine2, DMat4, Mat4, Vec2, Vec3};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 
 /// The whole stage as plain data.
 #[derive(Clone, Debug, Default)]
@@ -23,6 +25,35 @@ pub struct SceneDescription {
     /// Stage space (stage units, stage up axis) to world space (metres, Y up), for converting
     /// points and directions given in stage coordinates (light-meter positions and normals).
     pub stage_to_world: DMat4,
+    /// The directory holding assets copied out of a `.usdz` package (textures, IES files)
+    /// for the builder to open; it is removed when the last description holding it is
+    /// dropped.
+    pub extracted: Option<Arc<ExtractedAssets>>,
+}
+
+/// A temporary directory of assets extracted from a package, removed on drop.
+#[derive(Debug)]
+pub struct ExtractedAssets {
+    pub dir: PathBuf,
+}
+
+impl ExtractedAssets {
+    /// A fresh directory name under the system's temporary directory, unique to this process
+    /// and this call (it is created when the first asset is written).
+    pub fn unique() -> ExtractedAssets {
+        static COUNT: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNT.fetch_add(1, Ordering::Relaxed);
+        let name = format!("spectral-render-usdz-{}-{n}", std::process::id());
+        ExtractedAssets {
+            dir: std::env::temp_dir().join(name),
+        }
+    }
+}
+
+impl Drop for ExtractedAssets {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
 }
 
 /// A triangulated mesh in world space (metres, Y up).

@@ -64,21 +64,6 @@
 //! ```
 #![forbid(unsafe_code)]
 
-/// Declares modules that are internal to the crate: `pub(crate)` for a library user, `pub`
-/// (and hidden from the docs) under the `testing` feature, for the project's own tests,
-/// benches and examples.
-macro_rules! internal_modules {
-    ($($name:ident),* $(,)?) => {
-        $(
-            #[cfg(feature = "testing")]
-            #[doc(hidden)]
-            pub mod $name;
-            #[cfg(not(feature = "testing"))]
-            pub(crate) mod $name;
-        )*
-    };
-}
-
 pub mod cli;
 pub mod desc;
 pub mod error;
@@ -87,9 +72,64 @@ pub mod scene;
 pub mod session;
 pub mod spectral;
 
-internal_modules!(
-    accel, bxdf, geometry, imageio, integrator, light, material, math, sampling, sensor, texture
-);
+// Internal modules: `pub(crate)` for a library user, `pub` (and hidden from the docs) under the
+// `testing` feature, for the project's own tests, benches and examples. Written out rather than
+// through a macro so that rustfmt reaches them.
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod accel;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod accel;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod bxdf;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod bxdf;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod geometry;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod geometry;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod imageio;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod imageio;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod integrator;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod integrator;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod light;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod light;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod material;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod material;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod math;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod math;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod sampling;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod sampling;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod sensor;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod sensor;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod texture;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod texture;
 
 #[cfg(any(test, feature = "testing"))]
 #[doc(hidden)]

@@ -115,8 +115,8 @@ pub fn spawn_ray_to_point(p_from: Vec3, err_from: Vec3, n_from: Vec3, p_to: Vec3
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::rng::Rng;
     use crate::geometry::triangle::{hit_point_error, intersect, is_degenerate};
+    use crate::testing::rng::Rng;
 
     #[test]
     fn gamma_matches_its_definition() {

@@ -185,7 +185,11 @@ pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3, t_max: f32) -> Option<
     if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
         return None;
     }
-    intersect_packed(&WatertightRay::new(ray)?, &PackedTriangle::new(p0, p1, p2), t_max)
+    intersect_packed(
+        &WatertightRay::new(ray)?,
+        &PackedTriangle::new(p0, p1, p2),
+        t_max,
+    )
 }
 
 /// [`intersect_prepared`] for triangles already known not to be degenerate, packed (the BVH
@@ -367,8 +371,8 @@ pub fn hit_point_error(hit: &TriangleHit, p0: Vec3, p1: Vec3, p2: Vec3) -> Vec3 
 
 #[cfg(test)]
 mod tests {
-    use crate::testing::rng::Rng;
     use super::*;
+    use crate::testing::rng::Rng;
 
     fn ray(o: Vec3, d: Vec3) -> Ray {
         Ray::new(o, d)

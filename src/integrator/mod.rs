@@ -277,7 +277,10 @@ mod tests {
     fn light_tracing_refuses_luminance_meters_only() {
         let lt = Integrator::Light;
         assert!(lt.check_meter(MeterKind::Illuminance).is_ok());
-        let e = lt.check_meter(MeterKind::Luminance).unwrap_err().to_string();
+        let e = lt
+            .check_meter(MeterKind::Luminance)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("use --integrator path or bdpt"), "{e}");
         for i in [Integrator::Path, Integrator::ALL[2], Integrator::ALL[3]] {
             assert!(i.check_meter(MeterKind::Luminance).is_ok());
@@ -289,7 +292,9 @@ mod tests {
         assert!(Integrator::Path.check_strategies(5).is_err());
         let bdpt = Integrator::ALL[2];
         assert_eq!(bdpt.check_strategies(2).unwrap(), 9);
-        assert!(bdpt.check_strategies(bidir::strategies::MAX_DEPTH + 1).is_err());
+        assert!(bdpt
+            .check_strategies(bidir::strategies::MAX_DEPTH + 1)
+            .is_err());
     }
 
     #[test]
@@ -301,7 +306,10 @@ mod tests {
                 mis: MisHeuristic::Balance
             }
         );
-        assert_eq!(Integrator::Path.with_mis(MisHeuristic::Balance), Integrator::Path);
+        assert_eq!(
+            Integrator::Path.with_mis(MisHeuristic::Balance),
+            Integrator::Path
+        );
         assert!(b.capabilities().mis_heuristic && !Integrator::Light.capabilities().mis_heuristic);
     }
 }

@@ -382,8 +382,9 @@ impl Estimator for PathEstimator<'_> {
             MeterKind::Illuminance => {
                 meter.irradiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler)
             }
-            MeterKind::Luminance => meter.radiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler),
+            MeterKind::Luminance => {
+                meter.radiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler)
+            }
         }
     }
 }
-

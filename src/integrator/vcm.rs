@@ -29,8 +29,8 @@
 
 use super::bdpt::{BdptIntegrator, Techniques};
 use super::bidir::{
-    trace_light_subpath, BidirContext, LightSubpath, LightVertexStore, MergeParams,
-    MergeVertex, Mis, MisHeuristic, Workspace,
+    trace_light_subpath, BidirContext, LightSubpath, LightVertexStore, MergeParams, MergeVertex,
+    Mis, MisHeuristic, Workspace,
 };
 use super::{Estimator, Iteration, Settings};
 use crate::sampling::Sampler;
@@ -407,7 +407,10 @@ mod tests {
         let mut last = r0;
         for k in [10u64, 1000, 1_000_000, u64::MAX / 2] {
             let r = radius(r0, 0.05, k);
-            assert!(r > 0.0 && r <= last && (PI * r * r * 1e6).is_normal(), "{k}: {r}");
+            assert!(
+                r > 0.0 && r <= last && (PI * r * r * 1e6).is_normal(),
+                "{k}: {r}"
+            );
             last = r;
         }
     }

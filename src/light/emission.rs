@@ -10,8 +10,8 @@
 //!   (and from its ShapingAPI distribution: the scene builder integrates the shaping factor
 //!   over directions, `light::shaping`).
 
-use crate::error::Reason;
 use crate::desc::{EmissionDesc, SpdDesc};
+use crate::error::Reason;
 use crate::spectral::uplift::RgbIlluminantSpectrum;
 use crate::spectral::{blackbody, color, data, xyz, DenseSpectrum, Spectrum};
 use std::sync::Arc;
@@ -38,7 +38,8 @@ pub fn radiance(e: &EmissionDesc, geometry: Photometric) -> Reason<Spectrum> {
     let luminance = luminance_nits(e, geometry)?;
     if !luminance.is_finite() || luminance < 0.0 {
         return Err(format!(
-            "light luminance {luminance} is not a finite non-negative number"
+            "the light's luminance ({luminance} cd/m²) is not a finite non-negative number: \
+             its intensity, exposure or photometric quantity is too large"
         ));
     }
     Ok(shape.scaled(luminance))

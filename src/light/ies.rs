@@ -39,6 +39,10 @@ use crate::error::Reason;
 use std::f64::consts::PI as PI64;
 use std::path::Path;
 
+/// The largest IES file read (real LM-63 files hold at most a few hundred kB: 361 × 181
+/// candela values are about 400 kB).
+pub const MAX_FILE_BYTES: u64 = 4 << 20;
+
 /// A parsed type C profile, expanded to horizontal angles 0–360°.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IesProfile {
@@ -103,7 +107,8 @@ impl<'a> Numbers<'a> {
 
     /// `n` numbers as angles in degrees, strictly increasing.
     fn angles(&mut self, n: usize, what: &str) -> Reason<Vec<(f64, usize)>> {
-        let mut out: Vec<(f64, usize)> = Vec::with_capacity(n);
+        // Never more room than the numbers left can fill: a count is not an allocation.
+        let mut out: Vec<(f64, usize)> = Vec::with_capacity(n.min(self.tokens.len()));
         for i in 0..n {
             let (a, line) = self.next(&format!("{what} {} of {n}", i + 1))?;
             if let Some(&(prev, _)) = out.last() {
@@ -121,10 +126,30 @@ impl<'a> Numbers<'a> {
 }
 
 impl IesProfile {
-    /// Reads and parses `path`.
+    /// Reads and parses `path`: a regular file of at most [`MAX_FILE_BYTES`].
     pub fn read(path: &Path) -> Reason<IesProfile> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| format!("{}: cannot read the IES file: {e}", path.display()))?;
+        let cannot = |e: &dyn std::fmt::Display| {
+            format!("{}: cannot read the IES file: {e}", path.display())
+        };
+        let meta = std::fs::metadata(path).map_err(|e| cannot(&e))?;
+        if !meta.is_file() {
+            return Err(cannot(&"not a regular file"));
+        }
+        if meta.len() > MAX_FILE_BYTES {
+            return Err(cannot(&format!(
+                "it has {} bytes; IES files of more than {MAX_FILE_BYTES} bytes are refused",
+                meta.len()
+            )));
+        }
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| {
+                std::io::Read::read_to_end(
+                    &mut std::io::Read::take(f, MAX_FILE_BYTES + 1),
+                    &mut bytes,
+                )
+            })
+            .map_err(|e| cannot(&e))?;
         // LM-63 files are ASCII; older ones are often Latin-1 in their keyword lines.
         let text: String = bytes.iter().map(|&b| b as char).collect();
         IesProfile::parse(&text, path)
@@ -147,7 +172,15 @@ impl IesProfile {
                 if cd < 0.0 {
                     return Err(numbers.err(line, format!("{what} is negative ({cd})")));
                 }
-                column.push((cd * header.multiplier) as f32);
+                let scaled = (cd * header.multiplier) as f32;
+                if !scaled.is_finite() {
+                    let reason = format!(
+                        "{what} times the multipliers ({cd} × {}) overflows",
+                        header.multiplier
+                    );
+                    return Err(numbers.err(line, reason));
+                }
+                column.push(scaled);
             }
             columns.push(column);
         }

@@ -24,9 +24,9 @@
 //! (1 − ff)·τ(λ) + ff. For photometry the tint counts by its luminance-weighted mean over the
 //! light's own spectrum, τ_v = ∫ L₀ τ ȳ / ∫ L₀ ȳ.
 
-use crate::error::Reason;
 use super::ies::IesProfile;
 use crate::desc::ShapingDesc;
+use crate::error::Reason;
 use crate::spectral::uplift::{self, Sigmoid};
 use crate::spectral::{data, SampledSpectrum, SampledWavelengths, Spectrum};
 use glam::{Mat3, Mat4, Vec3};

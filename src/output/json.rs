@@ -37,6 +37,9 @@ mod tests {
         };
         let s = pretty(&t).unwrap();
         let v: serde_json::Value = serde_json::from_str(&s).unwrap();
-        assert_eq!(v, serde_json::json!({"a": null, "b": null, "c": [1.5, null]}));
+        assert_eq!(
+            v,
+            serde_json::json!({"a": null, "b": null, "c": [1.5, null]})
+        );
     }
 }

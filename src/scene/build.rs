@@ -1,11 +1,13 @@
 //! From the plain [`SceneDescription`] to the render [`Scene`]: spectra resolved and
 //! validated, lights built in absolute units, triangles put behind the BVH, a camera chosen.
 
-use crate::error::Reason;
-use crate::desc::*;
+use super::limits;
 use super::render_scene::{Mesh, Scene, Summary, TriRef};
 use crate::accel::bvh::Bvh;
 use crate::bxdf::TrowbridgeReitz;
+use crate::desc::*;
+use crate::error::Reason;
+use crate::error::{Error, Result};
 use crate::imageio;
 use crate::light::dome::LatLong;
 use crate::light::emission::{self, Photometric};
@@ -26,7 +28,6 @@ use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::uplift::{self, RgbIlluminantSpectrum};
 use crate::spectral::{data, DenseSpectrum, Spectrum};
 use crate::texture::{TextureCache, TextureInput};
-use crate::error::{Error, Result};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -72,6 +73,13 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
     let (center, radius) = bounding_sphere(&bvh);
     for l in &desc.lights {
         lights.push(light(l).map_err(|r| Error::prim(file, &l.prim_path, r))?);
+    }
+    if lights.is_empty() {
+        warnings.push(
+            "the stage has no lights (UsdLux lights, MeshLightAPI prims or emissive \
+             materials), so it renders black"
+                .into(),
+        );
     }
     let camera = camera(desc, resolution, center, radius)?;
     let light_sampler = LightSampler::new(&lights, radius);
@@ -202,10 +210,7 @@ fn material(
 }
 
 /// A reflectance input: the texture when there is one, else the spectrum `r`.
-fn color_input(
-    r: &SpectrumDesc,
-    texture: Option<TextureInput>,
-) -> Reason<ColorInput> {
+fn color_input(r: &SpectrumDesc, texture: Option<TextureInput>) -> Reason<ColorInput> {
     Ok(match texture {
         Some(t) => ColorInput::Texture(t),
         None => ColorInput::Constant(reflectance(r)?),
@@ -315,10 +320,7 @@ fn decoded_as_srgb(tex: &TextureDesc) -> bool {
 }
 
 /// The image and node parameters of a texture, loaded through the cache.
-fn texture_input(
-    cache: &mut TextureCache,
-    tex: &TextureDesc,
-) -> Reason<TextureInput> {
+fn texture_input(cache: &mut TextureCache, tex: &TextureDesc) -> Reason<TextureInput> {
     cache
         .input(tex)
         .map_err(|e| format!("texture <{}>: {e}", tex.shader_path))
@@ -359,11 +361,7 @@ fn non_negative(name: &str, v: f32) -> Reason<f32> {
 
 /// η (`k_part` false) or k (true) of a conductor: a metal in `spectra/metal/`, any tabulated
 /// spectrum, or samples. η must be positive and k non-negative at every wavelength.
-fn conductor_spectrum(
-    s: &SpectrumDesc,
-    what: &str,
-    k_part: bool,
-) -> Reason<Spectrum> {
+fn conductor_spectrum(s: &SpectrumDesc, what: &str, k_part: bool) -> Reason<Spectrum> {
     let dense = match s {
         SpectrumDesc::Named(token) => match (data::metal(token), data::named(token)) {
             (Some((n, k)), _) => if k_part { k } else { n }.clone(),
@@ -443,9 +441,7 @@ fn mesh(
             "face vertex index {bad} is out of range (the mesh has {n} points)"
         ));
     }
-    if m.positions.iter().any(|p| !p.is_finite()) {
-        return Err("points must be finite".into());
-    }
+    limits::check_points(&m.positions)?;
     let material = m.material.map_or(default_material, |i| i as u32);
     let tangents = if materials[material as usize].perturbs_normal() {
         Tangents::of(&m.positions, &m.indices, m.uvs.as_deref())
@@ -453,8 +449,17 @@ fn mesh(
         Tangents::Unused
     };
     let emission = match m.material.and_then(|i| emissive[i].as_ref()) {
-        Some(t) if m.light.is_none() => Some((Emitter::Textured(t.clone()), m.double_sided)),
-        _ => mesh_emission(desc, m)?.map(|(r, two)| (Emitter::Constant(r), two)),
+        Some(t) if m.light.is_none() => {
+            limits::check_luminance(texture_peak(t))?;
+            Some((Emitter::Textured(t.clone()), m.double_sided))
+        }
+        _ => match mesh_emission(desc, m)? {
+            Some((r, two)) => {
+                limits::check_luminance(limits::luminance(&r))?;
+                Some((Emitter::Constant(r), two))
+            }
+            None => None,
+        },
     };
     let light_offset = emission.map(|(emitter, two_sided)| {
         let offset = lights.len() as u32;
@@ -504,10 +509,7 @@ fn corner_uvs(m: &MeshDesc, k: usize) -> [Vec2; 3] {
 }
 
 /// The radiance of an emissive mesh (MeshLightAPI first, then the material's emissiveColor).
-fn mesh_emission(
-    desc: &SceneDescription,
-    m: &MeshDesc,
-) -> Reason<Option<(Spectrum, bool)>> {
+fn mesh_emission(desc: &SceneDescription, m: &MeshDesc) -> Reason<Option<(Spectrum, bool)>> {
     let area: f32 = m
         .indices
         .iter()
@@ -594,8 +596,61 @@ fn uniform_scale(m: &Mat4) -> f32 {
     (s.x * s.y * s.z).cbrt()
 }
 
-/// A UsdLux light in absolute units, with its shaping.
+/// A UsdLux light in absolute units, with its shaping, within the bounds of `limits.rs`.
 fn light(l: &LightDesc) -> Reason<Light> {
+    let size = match &l.kind {
+        LightKind::Rect { width, height } => width.max(*height),
+        LightKind::Disk { radius } | LightKind::Sphere { radius } => *radius,
+        LightKind::Cylinder { radius, length } => radius.max(*length),
+        LightKind::Distant { .. } | LightKind::Dome { .. } => 1.0,
+    };
+    limits::check_transform(&l.to_world, size)?;
+    let light = build_light(l)?;
+    limits::check_luminance(peak_luminance(&light))?;
+    Ok(light)
+}
+
+/// The largest luminance (cd/m²) `light` emits in any direction (an upper bound for domes).
+fn peak_luminance(light: &Light) -> f64 {
+    let shaped = |r: &Spectrum, s: &Option<Shaping>| {
+        limits::luminance(r)
+            * s.as_ref()
+                .map_or(1.0, |s| f64::from(s.photometry.max_factor))
+    };
+    match light {
+        Light::Rect(l) => shaped(&l.radiance, &l.shaping),
+        Light::Disk(l) => shaped(&l.radiance, &l.shaping),
+        Light::Sphere(l) => shaped(&l.radiance, &l.shaping),
+        Light::Cylinder(l) => shaped(&l.radiance, &l.shaping),
+        Light::Triangle(l) => limits::luminance(&l.radiance),
+        Light::Distant(l) => limits::luminance(&l.radiance),
+        // A textured dome's texels are checked as it is built (`dome`).
+        Light::Dome(l) => match &l.map {
+            None => limits::luminance(&l.radiance),
+            Some(_) => 0.0,
+        },
+    }
+}
+
+/// The largest channel of an emissive texture's output (`texel · scale + bias`), which
+/// bounds the luminance it emits.
+fn texture_peak(t: &TextureInput) -> f64 {
+    let (w, h) = t.image.level_size(0);
+    let mut peak = 0.0f64;
+    for y in 0..h {
+        for x in 0..w {
+            let texel = t.image.level_texel(0, x, y);
+            for ((v, s), b) in texel.iter().zip(t.scale).zip(t.bias).take(3) {
+                let out = f64::from(*v) * f64::from(s) + f64::from(b);
+                peak = peak.max(out.abs());
+            }
+        }
+    }
+    peak
+}
+
+/// [`light`] without the bounds.
+fn build_light(l: &LightDesc) -> Reason<Light> {
     Ok(match &l.kind {
         LightKind::Rect { width, height } => rect(l, *width, *height)?,
         LightKind::Disk { radius } => disk(l, *radius)?,
@@ -751,13 +806,20 @@ fn distant(l: &LightDesc, angle_deg: f32) -> Reason<Light> {
         flux_per_nit: None,
         intensity_per_nit: None,
     };
-    let radiance = emission::radiance(&l.emission, g)?;
+    let mut radiance = emission::radiance(&l.emission, g)?;
+    let one_minus_cos = 2.0 * (0.5 * theta_max).sin().powi(2);
+    if theta_max > 0.0 && one_minus_cos == 0.0 {
+        // A cone too narrow for f32 (θmax below ~1e-19 rad) is sampled as a delta light,
+        // whose radiance is its illuminance: L · π sin²θmax, not L.
+        let e = f64::from(PI) * f64::from(theta_max).sin().powi(2);
+        radiance = radiance.scaled(e as f32);
+    }
     let to_light = l.to_world.transform_vector3(Vec3::Z).normalize();
     Ok(Light::Distant(DistantLight {
         prim_path: l.prim_path.clone(),
         to_light,
         cos_theta_max: theta_max.cos(),
-        one_minus_cos: 2.0 * (0.5 * theta_max).sin().powi(2),
+        one_minus_cos,
         radiance,
     }))
 }
@@ -783,6 +845,8 @@ fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> Reason<Light> {
     }
     let img = imageio::read_rgb_linear(path).map_err(|e| e.to_string())?;
     let tint = e.color;
+    let scale = e.intensity * e.exposure.exp2();
+    check_dome_texels(path, &img.pixels, tint, scale)?;
     let texels: Vec<RgbIlluminantSpectrum> = img
         .pixels
         .iter()
@@ -807,7 +871,6 @@ fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> Reason<Light> {
         })
         .collect();
     let distribution = Distribution2D::new(&weights, img.width, img.height);
-    let scale = e.intensity * e.exposure.exp2();
     let map = LatLong {
         width: img.width,
         height: img.height,
@@ -821,6 +884,29 @@ fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> Reason<Light> {
         radiance: Spectrum::Constant(scale),
         map: Some(map),
     }))
+}
+
+/// Dome texels must be finite (as surface texels are), and the brightest, tinted and
+/// scaled, within [`limits::MAX_LUMINANCE`] (its largest channel bounds its luminance).
+fn check_dome_texels(
+    path: &std::path::Path,
+    pixels: &[[f32; 3]],
+    tint: [f32; 3],
+    scale: f32,
+) -> Reason<()> {
+    let mut peak = 0.0f64;
+    for p in pixels {
+        if p.iter().any(|v| !v.is_finite()) {
+            return Err(format!(
+                "dome texture {} has non-finite texels",
+                path.display()
+            ));
+        }
+        for c in 0..3 {
+            peak = peak.max(f64::from(p[c]) * f64::from(tint[c]) * f64::from(scale));
+        }
+    }
+    limits::check_luminance(peak).map_err(|e| format!("dome texture {}: {e}", path.display()))
 }
 
 /// The RenderSettings camera, else the first camera, else one framing the scene from +Z.
@@ -861,6 +947,9 @@ fn camera(
             format!("resolution {w}x{h} must be positive"),
         ));
     }
+    limits::check_transform(&cam.to_world, 1.0)
+        .and_then(|()| limits::check_exposure(cam.exposure))
+        .map_err(|r| Error::prim(&desc.source, &cam.prim_path, r))?;
     if !(cam.focal_length > 0.0 && cam.horizontal_aperture > 0.0 && cam.vertical_aperture > 0.0) {
         return Err(Error::prim(
             &desc.source,

@@ -2,8 +2,23 @@
 //! description (`crate::desc`), the builder (`build.rs`) and the immutable render scene with
 //! its ray queries (`render_scene.rs`), and texture footprints at hits (`texcoord.rs`).
 
-internal_modules!(build, render_scene, usd);
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod build;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod build;
+mod limits;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod render_scene;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod render_scene;
 mod texcoord;
+#[cfg(feature = "testing")]
+#[doc(hidden)]
+pub mod usd;
+#[cfg(not(feature = "testing"))]
+pub(crate) mod usd;
 
 pub use build::build;
 pub use render_scene::{Hit, Scene, SurfaceHit};

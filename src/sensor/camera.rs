@@ -17,9 +17,9 @@
 //! light path splatting into pixel j estimates (pixel j's value) / N_pixels, and the film
 //! divides splats by light paths per pixel (pbrt-v4's `splatScale = 1/spp`).
 
+use crate::desc::CameraDesc;
 use crate::geometry::Ray;
 use crate::sampling::warp::concentric_disk;
-use crate::desc::CameraDesc;
 use glam::{Mat4, Quat, Vec3};
 use std::f32::consts::PI;
 

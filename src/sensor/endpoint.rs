@@ -8,10 +8,10 @@
 //! meter's cos θ/π), except for a luminance meter, whose direction is a delta as well, so that
 //! no technique with t ≤ 1 can produce its paths (see `integrator::bidir::mis::SubpathMis::delta_sensor_start`).
 
-use crate::geometry::offset::spawn_ray_to_point;
-use crate::geometry::Ray;
 use super::meter::MeterSensor;
 use super::Camera;
+use crate::geometry::offset::spawn_ray_to_point;
+use crate::geometry::Ray;
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug)]

@@ -62,11 +62,15 @@ impl Meter {
 
     fn new(kind: MeterKind, p: Vec3, dir: Vec3) -> Result<Meter> {
         if !p.is_finite() {
-            return Err(Error::option(format!("the meter position {p} is not finite")));
+            return Err(Error::option(format!(
+                "the meter position {p} is not finite"
+            )));
         }
         let unit = dir.normalize_or_zero();
         if unit == Vec3::ZERO || !unit.is_finite() {
-            return Err(Error::option(format!("the meter direction {dir} has no length")));
+            return Err(Error::option(format!(
+                "the meter direction {dir} has no length"
+            )));
         }
         Ok(Meter { kind, p, dir: unit })
     }

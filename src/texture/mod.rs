@@ -48,9 +48,9 @@ mod mip;
 
 pub use coord::{TexCoord, TextureFilter};
 
+use crate::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
 use crate::error::Reason;
 use crate::imageio;
-use crate::desc::{ColorSpace, TextureChannel, TextureDesc, Wrap};
 use glam::{Affine2, Vec2};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

@@ -69,9 +69,7 @@ pub fn vertex_to_sensor(
         return None;
     }
     let value = y.beta * f * (y.cos_shading(ss.wi) * ss.we_over_pdf);
-    if value.is_black()
-        || sensor_occluded(ctx, y.p, y.p_error, y.ng, &ss, None)
-    {
+    if value.is_black() || sensor_occluded(ctx, y.p, y.p_error, y.ng, &ss, None) {
         return None;
     }
     let weight = if use_mis {
@@ -142,9 +140,7 @@ pub fn origin_to_sensor(
     let cos = o.n.dot(ss.wi).abs();
     let value = le * (cos * ss.we_over_pdf / pos_a);
     let skip = Some(o.light);
-    if value.is_black()
-        || sensor_occluded(ctx, o.p, o.p_error, o.n, &ss, skip)
-    {
+    if value.is_black() || sensor_occluded(ctx, o.p, o.p_error, o.n, &ss, skip) {
         return None;
     }
     let weight = if use_mis {
@@ -211,7 +207,8 @@ pub fn infinite_origin_weight(ctx: &BidirContext, o: &LightOrigin, pdf_dir_w: f3
     if o.delta_dir {
         return 1.0;
     }
-    ctx.mis.origin_to_camera(pdf_dir_w, o.pmf * o.pdf_dir_w, 0.0)
+    ctx.mis
+        .origin_to_camera(pdf_dir_w, o.pmf * o.pdf_dir_w, 0.0)
 }
 
 /// s = 1, t ≥ 2: next-event estimation at camera vertex `z`, one light chosen by power

@@ -153,7 +153,9 @@ mod tests {
         let far = [Vec3::splat(1e30), Vec3::splat(-1e30), Vec3::ZERO];
         grid.build(far.iter().copied(), 1e-6);
         let mut n = 0;
-        grid.query(Vec3::ZERO, |i| n += grid.within(Vec3::ZERO, far[i as usize]) as u32);
+        grid.query(Vec3::ZERO, |i| {
+            n += grid.within(Vec3::ZERO, far[i as usize]) as u32
+        });
         assert_eq!(n, 1);
     }
 }

@@ -143,7 +143,12 @@ impl LightVertexStore {
     /// Merges the light vertices within the radius of irradiance meter `m`'s point, weighted
     /// by MIS against every other technique (`Mis::merge_at_sensor`); `hero_only` as
     /// [`LightVertexStore::merge`].
-    pub fn merge_at_sensor(&self, m: &MeterSensor, camera_hero_only: bool, params: &MergeParams) -> Merged {
+    pub fn merge_at_sensor(
+        &self,
+        m: &MeterSensor,
+        camera_hero_only: bool,
+        params: &MergeParams,
+    ) -> Merged {
         let mut out = Merged::default();
         self.grid.query(m.p, |i| {
             let y = &self.vertices[i as usize];

@@ -94,7 +94,14 @@ impl Mis {
     /// towards y_{i−1}; w_camera = dVCM_z · m(1/η) + dVM_z · m(p←_z(ω_z)), with `pdf_rev` its
     /// density of the camera direction from ω_y.
     #[inline]
-    pub fn merge(&self, dvcm_y: f32, dvm_y: f32, cam: &SubpathMis, pdf_dir: f32, pdf_rev: f32) -> f32 {
+    pub fn merge(
+        &self,
+        dvcm_y: f32,
+        dvm_y: f32,
+        cam: &SubpathMis,
+        pdf_dir: f32,
+        pdf_rev: f32,
+    ) -> f32 {
         let w_light = dvcm_y * self.vc_weight + dvm_y * self.m(pdf_dir);
         let w_camera = cam.dvcm * self.vc_weight + cam.dvm * self.m(pdf_rev);
         weight(w_light + 1.0 + w_camera)

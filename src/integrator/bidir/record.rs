@@ -189,7 +189,8 @@ impl TileAccumulator {
         if odd {
             self.odd_y[k] += f64::from(own[1]);
             let new = &self.splats[first_splat..];
-            self.odd_splats.extend(new.iter().map(|s| (s.pixel, s.xyz[1])));
+            self.odd_splats
+                .extend(new.iter().map(|s| (s.pixel, s.xyz[1])));
         }
         if let Some(st) = &mut self.strategies {
             st.add(k, rec, lambda);

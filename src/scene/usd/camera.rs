@@ -26,6 +26,14 @@ pub(super) fn read_camera(
     if f_stop < 0.0 {
         return Err(ctx.err(prim, "fStop is negative"));
     }
+    let focus_distance = ctx.f32_or(prim, "focusDistance", 0.0)?;
+    if f_stop > 0.0 && focus_distance <= 0.0 {
+        let reason = format!(
+            "fStop = {f_stop} makes a thin lens, which needs focusDistance > 0 (it is \
+             {focus_distance}); use fStop = 0 for a pinhole camera"
+        );
+        return Err(ctx.err(prim, reason));
+    }
     let (clip_near, clip_far) = clipping_range(ctx, prim)?;
     let lens_radius = if f_stop > 0.0 {
         f64::from(focal_length) * 0.1 * mpu / (2.0 * f64::from(f_stop))
@@ -41,7 +49,7 @@ pub(super) fn read_camera(
         clip_near: (clip_near * mpu) as f32,
         clip_far: (clip_far * mpu) as f32,
         f_stop,
-        focus_distance: (f64::from(ctx.f32_or(prim, "focusDistance", 0.0)?.max(0.0)) * mpu) as f32,
+        focus_distance: (f64::from(focus_distance.max(0.0)) * mpu) as f32,
         lens_radius: lens_radius as f32,
         exposure: exposure(ctx, prim)?,
     })
@@ -129,7 +137,8 @@ pub(super) fn read_render_settings(
     let prim = ctx.stage.prim(path);
     let mut desc = settings_of(ctx, &prim)?;
     if let Some(product) = ctx.targets(&prim, "products")?.into_iter().next() {
-        let product = settings_of(ctx, &ctx.stage.prim(product))?;
+        let product_prim = ctx.stage.prim(product);
+        let product = settings_of(ctx, &product_prim)?;
         desc.resolution = product.resolution.or(desc.resolution);
         desc.camera = product.camera.or(desc.camera);
     }
@@ -175,8 +184,56 @@ fn chosen_settings(ctx: &mut Ctx, settings: &[sdf::Path]) -> Result<Option<sdf::
     Ok(settings.first().cloned())
 }
 
+/// The RenderSettings / RenderProduct properties that are read.
+const HONOURED_SETTINGS: [&str; 3] = ["resolution", "camera", "products"];
+
+/// Warns about every authored property of a RenderSettings or RenderProduct prim that is
+/// not read, unless it holds its schema fallback or what the renderer does anyway.
+fn warn_ignored_settings(ctx: &mut Ctx, prim: &usd::Prim) -> Result<()> {
+    for name in ctx.property_names(prim)? {
+        if HONOURED_SETTINGS.contains(&name.as_str()) {
+            continue;
+        }
+        let value = ctx.raw(prim, &name)?;
+        let harmless = match &value {
+            None => ctx.targets(prim, &name)?.is_empty(),
+            Some(v) => matches_behaviour(&name, v),
+        };
+        if !harmless {
+            ctx.warn(prim, format!("{name} is not supported; ignored"));
+        }
+    }
+    Ok(())
+}
+
+/// `true` when `value` of the render setting `name` is what the renderer does anyway (the
+/// schema fallbacks of UsdRenderSettingsBase, RenderSettings and RenderProduct, and motion
+/// blur, which is never rendered).
+fn matches_behaviour(name: &str, value: &sdf::Value) -> bool {
+    let tokens = |v: &sdf::Value| match v {
+        sdf::Value::TokenVec(t) => {
+            let mut t: Vec<String> = t.iter().map(|x| x.as_str().to_string()).collect();
+            t.sort();
+            Some(t)
+        }
+        _ => None,
+    };
+    match name {
+        "pixelAspectRatio" => values::to_f64(value) == Some(1.0),
+        "dataWindowNDC" => values::to_vec4(value, 1.0) == Some([0.0, 0.0, 1.0, 1.0]),
+        "aspectRatioConformPolicy" => values::to_token(value).as_deref() == Some("expandAperture"),
+        "disableMotionBlur" | "instantaneousShutter" => true,
+        "disableDepthOfField" => values::to_bool(value) == Some(false),
+        "includedPurposes" => tokens(value) == Some(vec!["default".into(), "render".into()]),
+        "materialBindingPurposes" => tokens(value) == Some(vec!["".into(), "full".into()]),
+        "productType" => values::to_token(value).as_deref() == Some("raster"),
+        _ => false,
+    }
+}
+
 /// `resolution` and `camera` of a RenderSettings or RenderProduct prim.
-fn settings_of(ctx: &Ctx, prim: &usd::Prim) -> Result<RenderSettingsDesc> {
+fn settings_of(ctx: &mut Ctx, prim: &usd::Prim) -> Result<RenderSettingsDesc> {
+    warn_ignored_settings(ctx, prim)?;
     let resolution = match ctx.vec2(prim, "resolution")? {
         None => None,
         Some([w, h])

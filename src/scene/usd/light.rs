@@ -231,16 +231,73 @@ fn dome_pole(ctx: &Ctx, prim: &usd::Prim) -> Result<DMat4> {
     })
 }
 
+/// The `inputs:` of UsdLux's LightAPI, ShadowAPI and ShapingAPI (every light has them).
+const LIGHT_API_INPUTS: [&str; 20] = [
+    "intensity",
+    "exposure",
+    "color",
+    "enableColorTemperature",
+    "colorTemperature",
+    "normalize",
+    "diffuse",
+    "specular",
+    "shadow:enable",
+    "shadow:color",
+    "shadow:distance",
+    "shadow:falloff",
+    "shadow:falloffGamma",
+    "shaping:focus",
+    "shaping:focusTint",
+    "shaping:cone:angle",
+    "shaping:cone:softness",
+    "shaping:ies:file",
+    "shaping:ies:angleScale",
+    "shaping:ies:normalize",
+];
+
+/// The `inputs:` a light type adds to [`LIGHT_API_INPUTS`].
+fn type_inputs(type_name: &str) -> &'static [&'static str] {
+    match type_name {
+        "RectLight" => &["width", "height", "texture:file"],
+        "DiskLight" => &["radius"],
+        "SphereLight" => &["radius"],
+        "CylinderLight" => &["radius", "length"],
+        "DistantLight" => &["angle"],
+        "DomeLight" | "DomeLight_1" => &["texture:file", "texture:format"],
+        _ => &[],
+    }
+}
+
+/// Warns about `inputs:*` that UsdLux does not define for this prim (a typo renders at the
+/// schema default otherwise), with a "did you mean" one edit away.
+fn warn_unknown_inputs(ctx: &mut Ctx, prim: &usd::Prim, type_name: &str) -> Result<()> {
+    let mut known: Vec<&str> = LIGHT_API_INPUTS.to_vec();
+    known.extend_from_slice(type_inputs(type_name));
+    let what = if type_name.is_empty() {
+        "a light"
+    } else {
+        type_name
+    };
+    vocab::warn_unknown_inputs(ctx, prim, &known, what)
+}
+
 /// Warns about light inputs that are authored but not implemented (shaping on lights it does
-/// not apply to, shadows, non-physical diffuse/specular multipliers, light filters).
+/// not apply to, shadows, non-physical diffuse/specular multipliers, light filters) or that
+/// UsdLux does not define.
 pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result<()> {
+    let type_name = ctx.type_name(prim)?;
+    let light_type = if is_light_type(&type_name) {
+        type_name.as_str()
+    } else {
+        ""
+    };
+    warn_unknown_inputs(ctx, prim, light_type)?;
     let names = ctx.property_names(prim)?;
     let has = |prefix: &str| {
         names
             .iter()
             .any(|n| n.starts_with(prefix) || n.starts_with(&format!("inputs:{prefix}")))
     };
-    let type_name = ctx.type_name(prim)?;
     if has("shaping:") && !SHAPED_TYPES.contains(&type_name.as_str()) {
         ctx.warn(
             prim,

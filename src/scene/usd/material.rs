@@ -210,15 +210,18 @@ fn check_inputs(ctx: &Ctx, shader: &usd::Prim, id: &str, vocabulary: &[&str]) ->
             continue;
         };
         if !vocabulary.contains(&input) {
-            let known = vocabulary
-                .iter()
-                .map(|i| format!("inputs:{i}"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            return Err(ctx.err(
-                shader,
-                format!("unknown input '{name}' for {id} (known: {known})"),
-            ));
+            let reason = match vocab::one_edit_away(input, vocabulary) {
+                Some(k) => format!("unknown input '{name}' for {id}; did you mean inputs:{k}?"),
+                None => {
+                    let known = vocabulary
+                        .iter()
+                        .map(|i| format!("inputs:{i}"))
+                        .collect::<Vec<_>>()
+                        .join(", ");
+                    format!("unknown input '{name}' for {id} (known: {known})")
+                }
+            };
+            return Err(ctx.err(shader, reason));
         }
     }
     Ok(())
@@ -289,7 +292,7 @@ fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDe
         textured: textures.iter().map(|(n, _)| n.clone()).collect(),
         spectral: None,
     };
-    Ok(PreviewSurfaceDesc {
+    let desc = PreviewSurfaceDesc {
         diffuse_color: inputs.rgb("diffuseColor")?.unwrap_or(d.diffuse_color),
         emissive_color: inputs.rgb("emissiveColor")?.unwrap_or(d.emissive_color),
         use_specular_workflow: inputs
@@ -309,24 +312,74 @@ fn preview_surface(ctx: &mut Ctx, shader: &usd::Prim) -> Result<PreviewSurfaceDe
         ior: inputs.positive("ior")?.unwrap_or(d.ior),
         normal: inputs.vec3("normal")?.unwrap_or(d.normal),
         textures,
-    })
+    };
+    check_unit_inputs(ctx, shader, &desc)?;
+    Ok(desc)
 }
 
-/// Warns once per authored UsdPreviewSurface input that is ignored (normal, displacement, ...).
+/// The UsdPreviewSurface inputs defined on [0, 1]: a negative value is an error (a negative
+/// roughness is no mirror), a value above 1 is clamped to 1 with a warning.
+fn check_unit_inputs(ctx: &mut Ctx, shader: &usd::Prim, p: &PreviewSurfaceDesc) -> Result<()> {
+    let inputs = [
+        ("metallic", p.metallic),
+        ("roughness", p.roughness),
+        ("clearcoat", p.clearcoat),
+        ("clearcoatRoughness", p.clearcoat_roughness),
+        ("opacity", p.opacity),
+        ("opacityThreshold", p.opacity_threshold),
+    ];
+    for (name, v) in inputs {
+        if v < 0.0 {
+            let reason =
+                format!("inputs:{name} = {v} is negative; UsdPreviewSurface defines it on [0, 1]");
+            return Err(ctx.err(shader, reason));
+        }
+        if v > 1.0 {
+            let message = format!("inputs:{name} = {v} is above 1; clamped to 1 (UsdPreviewSurface defines it on [0, 1])");
+            ctx.warn(shader, message);
+        }
+    }
+    Ok(())
+}
+
+/// The UsdPreviewSurface inputs of the specification that are not rendered.
+const UNSUPPORTED_PREVIEW_INPUTS: [&str; 2] = ["displacement", "occlusion"];
+
+/// Warns once per authored UsdPreviewSurface input that is ignored: those the specification
+/// defines but the renderer does not model, and unknown ones (with a "did you mean").
 fn warn_unsupported_preview_inputs(ctx: &mut Ctx, shader: &usd::Prim) -> Result<()> {
     for name in ctx.property_names(shader)? {
         let Some(input) = name.strip_prefix("inputs:") else {
             continue;
         };
-        if !PREVIEW_INPUTS.contains(&input) {
+        if UNSUPPORTED_PREVIEW_INPUTS.contains(&input) {
             ctx.warn(
                 shader,
                 format!("UsdPreviewSurface input '{name}' is not supported; ignored"),
             );
         }
     }
-    Ok(())
+    let known: Vec<&str> = PREVIEW_INPUTS
+        .iter()
+        .chain(&UNSUPPORTED_PREVIEW_INPUTS)
+        .copied()
+        .collect();
+    vocab::warn_unknown_inputs(ctx, shader, &known, "UsdPreviewSurface")
 }
+
+/// The inputs of the texture nodes of the UsdPreviewSurface specification.
+const UV_TEXTURE_INPUTS: [&str; 8] = [
+    "file",
+    "st",
+    "wrapS",
+    "wrapT",
+    "fallback",
+    "scale",
+    "bias",
+    "sourceColorSpace",
+];
+const PRIMVAR_READER_INPUTS: [&str; 2] = ["varname", "fallback"];
+const TRANSFORM2D_INPUTS: [&str; 4] = ["in", "rotation", "scale", "translation"];
 
 /// What an input resolves to after following its connections.
 enum Resolved {
@@ -592,6 +645,7 @@ fn texture_input(ctx: &mut Ctx, shader: &usd::Prim, name: &str) -> Result<Option
 
 /// Reads a `UsdUVTexture` node whose output `output` is used.
 fn uv_texture(ctx: &mut Ctx, prim: &usd::Prim, output: &str) -> Result<TextureDesc> {
+    vocab::warn_unknown_inputs(ctx, prim, &UV_TEXTURE_INPUTS, "UsdUVTexture")?;
     let Some(file) = ctx.asset(prim, "inputs:file")? else {
         return Err(ctx.err(prim, "UsdUVTexture has no inputs:file"));
     };
@@ -690,11 +744,14 @@ fn st_source(ctx: &mut Ctx, prim: &usd::Prim) -> Result<(String, Option<Affine2>
         let source = ctx.stage.prim(source);
         match ctx.token(&source, "info:id")?.unwrap_or_default().as_str() {
             "UsdPrimvarReader_float2" => {
+                let what = "UsdPrimvarReader_float2";
+                vocab::warn_unknown_inputs(ctx, &source, &PRIMVAR_READER_INPUTS, what)?;
                 let varname = node_token(ctx, &source, "inputs:varname")?;
                 return Ok((varname.unwrap_or_else(|| "st".into()), transform));
             }
             "UsdTransform2d" => {
                 // This node is applied before the ones found so far (nearer the texture).
+                vocab::warn_unknown_inputs(ctx, &source, &TRANSFORM2D_INPUTS, "UsdTransform2d")?;
                 let t = transform2d(ctx, &source)?;
                 transform = Some(transform.map_or(t, |outer| outer * t));
                 (node, attr) = (source, "inputs:in");

@@ -9,13 +9,24 @@
 //! Layout: [`stage`] opens the stage and reads its metadata, [`values`] is typed attribute
 //! access, [`xform`] composes transforms, and [`mesh`], [`material`], [`light`], [`camera`]
 //! read one kind of prim each; [`vocab`] holds the `spectral:` vocabulary.
+//!
+//! Hostile input: every layer is read through [`resolver`] (regular files only; text layers
+//! checked by [`usda_check`], crate files by [`usdc_check`]), composition arcs are checked by
+//! [`arcs`] before the stage is traversed, and [`guard`] turns any panic left inside openusd
+//! into a one-line error.
 
+mod arcs;
 mod camera;
+mod guard;
 mod light;
+mod lz4;
 mod material;
 mod mesh;
+mod resolver;
 mod shapes;
 mod stage;
+mod usda_check;
+mod usdc_check;
 mod values;
 mod vocab;
 mod xform;
@@ -28,8 +39,9 @@ use openusd::{sdf, usd};
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::desc::{MeshDesc, SceneDescription};
+use crate::desc::{ExtractedAssets, MeshDesc, SceneDescription};
 use crate::error::Result;
+use std::sync::Arc;
 use values::Ctx;
 
 /// Prim types that carry nothing to render themselves (grouping, shading networks read
@@ -58,7 +70,13 @@ const NON_XFORMABLE_TYPES: [&str; 6] = [
 
 /// Reads a .usda/.usdc/.usdz stage (flattened, or with local references) into plain data.
 pub fn load(path: &Path) -> Result<SceneDescription> {
+    guard::catch_panics(path, || read(path))
+}
+
+/// [`load`] without the panic guard.
+fn read(path: &Path) -> Result<SceneDescription> {
     let stage = stage::open(path)?;
+    arcs::check(path, &stage)?;
     let meters_per_unit = stage::meters_per_unit(path, &stage)?;
     let z_up = stage::z_up(path, &stage)?;
     let ctx = Ctx {
@@ -69,6 +87,7 @@ pub fn load(path: &Path) -> Result<SceneDescription> {
         z_up,
         stage_to_world: stage::stage_to_world(meters_per_unit, z_up),
         warnings: Vec::new(),
+        extracted: Arc::new(ExtractedAssets::unique()),
     };
     let mut reader = Reader::new(ctx);
     reader.read_stage()?;
@@ -156,6 +175,7 @@ impl<'s> Reader<'s> {
             camera::read_render_settings(&mut self.ctx, &self.render_settings, &self.desc.cameras)?;
         self.desc.warnings = std::mem::take(&mut self.ctx.warnings);
         self.desc.stage_to_world = self.ctx.stage_to_world;
+        self.desc.extracted = Some(self.ctx.extracted.clone());
         Ok(self.desc)
     }
 
@@ -222,6 +242,11 @@ impl<'s> Reader<'s> {
         } else {
             xform::local_xform(&self.ctx, prim)?.under(parent.local_to_world)
         };
+        if !local_to_world.is_finite() {
+            let reason = "the composed transform overflows (its xformOps multiply past the \
+                          range of a double)";
+            return Err(self.ctx.err(prim, reason));
+        }
         let purpose = self.authored_purpose(prim)?.unwrap_or(parent.purpose);
         let invisible = parent.invisible
             || type_name == "PointInstancer"
@@ -365,10 +390,16 @@ impl<'s> Reader<'s> {
             .children()
             .map_err(|e| self.ctx.usd_err(mesh, "listing children", e))?;
         for subset in children {
-            if self.ctx.type_name(&subset)? != "GeomSubset" || !self.binds_directly(&subset)? {
+            if self.ctx.type_name(&subset)? != "GeomSubset" {
                 continue;
             }
-            if let Some(faces) = self.subset_faces(&subset, face_count)? {
+            // Every subset's indices are checked, bound or not: out-of-range faces mean the
+            // subsets describe another mesh.
+            let faces = self.subset_faces(&subset, face_count)?;
+            if !self.binds_directly(&subset)? {
+                continue;
+            }
+            if let Some(faces) = faces {
                 let group = subsets.len();
                 for face in faces {
                     face_group[face].get_or_insert(group);

@@ -4,7 +4,7 @@ use glam::{DMat4, DVec3, DVec4};
 use openusd::{usd, usda};
 use std::path::Path;
 
-use super::values;
+use super::{resolver, values};
 use crate::error::{Error, Result};
 
 /// `metersPerUnit` when the stage does not author it (USD's fallback: centimetres).
@@ -16,13 +16,18 @@ pub(super) fn open(path: &Path) -> Result<usd::Stage> {
         return Err(Error::io(path, "no such file"));
     }
     if !path.is_file() {
-        return Err(Error::io(path, "not a file"));
+        return Err(Error::io(path, "not a regular file"));
     }
     let absolute = std::fs::canonicalize(path).map_err(|e| Error::io(path, e.to_string()))?;
     let Some(name) = absolute.to_str() else {
         return Err(Error::usd(path, "the path is not valid UTF-8"));
     };
-    usd::Stage::open(name).map_err(|e| Error::usd(path, open_failure(&absolute, &e)))
+    let bytes = std::fs::read(&absolute).map_err(|e| Error::io(path, e.to_string()))?;
+    resolver::check_layer(&bytes).map_err(|e| Error::usd(path, e))?;
+    usd::Stage::builder()
+        .resolver(resolver::CheckedResolver::default())
+        .open(name)
+        .map_err(|e| Error::usd(path, open_failure(&absolute, &e)))
 }
 
 /// Describes why opening failed; for a text layer the parser is re-run to locate the line.

@@ -10,7 +10,9 @@ use openusd::ar::{self, Resolver};
 use openusd::{sdf, usd};
 use std::path::{Path, PathBuf};
 
+use crate::desc::ExtractedAssets;
 use crate::error::{Error, Result};
+use std::sync::Arc;
 
 /// What every reader function needs: the stage, the time to read at, the unit conversion and
 /// the list of warnings being collected.
@@ -27,6 +29,8 @@ pub(super) struct Ctx<'s> {
     /// Stage space (stage units, stage up axis) to world (metres, Y up).
     pub stage_to_world: DMat4,
     pub warnings: Vec<String>,
+    /// Where assets packaged in a `.usdz` are copied for the builder.
+    pub extracted: Arc<ExtractedAssets>,
 }
 
 impl Ctx<'_> {
@@ -37,8 +41,10 @@ impl Ctx<'_> {
 
     /// Records a warning about `prim`.
     pub fn warn(&mut self, prim: &usd::Prim, message: impl AsRef<str>) {
-        self.warnings
-            .push(format!("{}: {}", prim.path().as_str(), message.as_ref()));
+        let warning = format!("{}: {}", prim.path().as_str(), message.as_ref());
+        if !self.warnings.contains(&warning) {
+            self.warnings.push(warning);
+        }
     }
 
     /// Maps an openusd error about `prim` into ours.
@@ -231,7 +237,7 @@ impl Ctx<'_> {
         }
         if let Some(resolved) = asset.resolved_path() {
             if ar::is_package_relative_path(resolved) {
-                let file = extract_packaged(resolved).map_err(|e| {
+                let file = extract_packaged(resolved, &self.extracted.dir).map_err(|e| {
                     self.err(prim, format!("'{name}': extracting '{resolved}': {e}"))
                 })?;
                 return Ok(Some(file));
@@ -264,9 +270,9 @@ pub(super) fn validate_samples(pairs: &[[f64; 2]]) -> std::result::Result<Vec<(f
     Ok(pairs.iter().map(|p| (p[0] as f32, p[1] as f32)).collect())
 }
 
-/// Copies a file packaged in a `.usdz` (`pkg.usdz[tex/sky.exr]`) to a temporary directory
-/// keyed by its content, so that the scene builder can open it as a plain file.
-fn extract_packaged(resolved: &str) -> std::io::Result<PathBuf> {
+/// Copies a file packaged in a `.usdz` (`pkg.usdz[tex/sky.exr]`) into `root`, in a
+/// subdirectory keyed by its content, so that the scene builder can open it as a plain file.
+fn extract_packaged(resolved: &str, root: &Path) -> std::io::Result<PathBuf> {
     use std::hash::{Hash, Hasher};
     let bytes = ar::DefaultResolver::new()
         .open_asset(&ar::ResolvedPath::new(resolved))?
@@ -278,9 +284,7 @@ fn extract_packaged(resolved: &str) -> std::io::Result<PathBuf> {
     let file_name = Path::new(&inner)
         .file_name()
         .map_or("asset".into(), |n| n.to_os_string());
-    let dir = std::env::temp_dir()
-        .join("spectral-render-usdz")
-        .join(format!("{:016x}", hasher.finish()));
+    let dir = root.join(format!("{:016x}", hasher.finish()));
     std::fs::create_dir_all(&dir)?;
     let path = dir.join(file_name);
     std::fs::write(&path, &bytes)?;

@@ -87,3 +87,70 @@ pub(super) fn texturable_inputs(id: &str) -> &'static [&'static str] {
         _ => &[],
     }
 }
+
+/// The entry of `known` one edit (insertion, deletion, substitution or transposition of
+/// adjacent characters) away from `name`, for "did you mean" hints.
+pub(super) fn one_edit_away<'k>(name: &str, known: &[&'k str]) -> Option<&'k str> {
+    known.iter().copied().find(|k| is_one_edit(name, k))
+}
+
+fn is_one_edit(a: &str, b: &str) -> bool {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    if a == b {
+        return false;
+    }
+    let prefix = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let (ra, rb) = (&a[prefix..], &b[prefix..]);
+    match ra.len() as isize - rb.len() as isize {
+        0 => {
+            ra[1..] == rb[1..]
+                || (ra.len() >= 2 && ra[0] == rb[1] && ra[1] == rb[0] && ra[2..] == rb[2..])
+        }
+        1 => ra[1..] == *rb,
+        -1 => *ra == rb[1..],
+        _ => false,
+    }
+}
+
+/// Warns about each authored `inputs:*` of `prim` that is not in `known` (names without the
+/// `inputs:` prefix), with a "did you mean" when one is a single edit away. `what` names the
+/// prim's kind (`SphereLight`, `UsdUVTexture`, …).
+pub(super) fn warn_unknown_inputs(
+    ctx: &mut Ctx,
+    prim: &usd::Prim,
+    known: &[&str],
+    what: &str,
+) -> Result<()> {
+    for name in ctx.property_names(prim)? {
+        let Some(input) = name.strip_prefix("inputs:") else {
+            continue;
+        };
+        if known.contains(&input) || is_spectral(&name) {
+            continue;
+        }
+        let hint = one_edit_away(input, known)
+            .map(|k| format!("; did you mean inputs:{k}?"))
+            .unwrap_or_default();
+        ctx.warn(
+            prim,
+            format!("unknown input '{name}' for {what}, ignored{hint}"),
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_edit() {
+        let known = ["intensity", "exposure", "color"];
+        assert_eq!(one_edit_away("intensty", &known), Some("intensity"));
+        assert_eq!(one_edit_away("intensityy", &known), Some("intensity"));
+        assert_eq!(one_edit_away("intesnity", &known), Some("intensity"));
+        assert_eq!(one_edit_away("colours", &known), None);
+        assert_eq!(one_edit_away("colr", &known), Some("color"));
+        assert_eq!(one_edit_away("color", &known), None);
+    }
+}

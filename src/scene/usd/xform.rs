@@ -105,6 +105,9 @@ fn op_matrix(ctx: &Ctx, prim: &usd::Prim, entry: &str) -> Result<DMat4> {
             ),
         )
     })?;
+    if !matrix.is_finite() {
+        return Err(ctx.err(prim, format!("'{attr}' is not finite (NaN or Inf)")));
+    }
     if !inverted {
         return Ok(matrix);
     }

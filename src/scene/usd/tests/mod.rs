@@ -5,6 +5,7 @@ mod errors;
 mod geometry;
 mod lights;
 mod materials;
+mod robust;
 mod stage;
 
 use std::path::{Path, PathBuf};

@@ -389,6 +389,10 @@ fn usdz_package_with_references_and_texture() {
         std::fs::read(texture).expect("extracted texture"),
         b"notreallyexr\n"
     );
+    // The extracted copy lives as long as the description, not beyond.
+    let texture = texture.clone();
+    drop(desc);
+    assert!(!texture.exists(), "{} left behind", texture.display());
 }
 
 #[test]
