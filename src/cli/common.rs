@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::scene::Scene;
+use crate::session::AutoReport;
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::ValueEnum;
 use std::ffi::OsStr;
@@ -53,8 +54,8 @@ impl ValueEnum for VcmMode {
 /// The flags that set an integrator's settings, as the commands take them.
 #[derive(clap::Args, Debug, Clone)]
 pub struct IntegratorArgs {
-    /// Light-transport algorithm.
-    #[arg(long, default_value = "path", value_parser = named::<Integrator>("integrator"))]
+    /// Light-transport algorithm (auto: chosen from the scene analysis and a short pilot).
+    #[arg(long, default_value = "auto", value_parser = named::<Integrator>("integrator"))]
     pub integrator: Integrator,
     /// MIS heuristic of the integrators that combine techniques (bdpt, vcm).
     #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
@@ -121,6 +122,21 @@ impl IntegratorArgs {
             meter_light_paths: self.vcm_light_paths.unwrap_or(p.meter_light_paths),
             ..p
         }))
+    }
+}
+
+/// Prints what `--integrator auto` chose (`AutoReport::summary`), when it was asked for.
+pub fn print_auto(auto: Option<&AutoReport>) {
+    if let Some(a) = auto {
+        eprintln!("{}", a.summary());
+    }
+}
+
+/// The integrator's name for the EXR metadata: `auto→bdpt` when auto chose it.
+pub fn metadata_name(integrator: &Integrator, auto: Option<&AutoReport>) -> String {
+    match auto {
+        Some(a) => format!("auto→{}", a.choice.name()),
+        None => integrator.name().into(),
     }
 }
 

@@ -17,7 +17,8 @@
 //! line and exit 1; so is a luminance meter asked of light tracing, which cannot estimate it.
 
 use super::common::{
-    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+    clap_message, print_auto, print_report, print_summary, warn_dropped, warn_limits,
+    IntegratorArgs,
 };
 use crate::error::{Error, Result};
 use crate::output::json;
@@ -238,6 +239,7 @@ fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> 
 
 /// Warnings about dropped samples and readings a cap stopped.
 fn warn(run: &MeterRun, opts: &MeterOptions) {
+    print_auto(run.auto.as_ref());
     warn_dropped(run.dropped);
     print_report(&run.report);
     for (cap, what) in [

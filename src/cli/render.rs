@@ -1,7 +1,8 @@
 //! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
 
 use super::common::{
-    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+    clap_message, metadata_name, print_auto, print_report, print_summary, warn_dropped,
+    warn_limits, IntegratorArgs,
 };
 use super::progress::Progress;
 use crate::error::{Error, Result};
@@ -65,7 +66,7 @@ struct RenderArgs {
     preview_exposure: f32,
 }
 
-fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
+pub(super) fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or("expected WxH, e.g. 640x480")?;
@@ -93,6 +94,7 @@ fn run(args: &RenderArgs) -> Result<()> {
     print_summary(&scene);
     warn_limits(&opts.integrator, &scene, true);
     let mut session = ImageSession::new(&scene, &opts)?;
+    print_auto(session.auto());
     let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
     let target = opts.spp.map(u64::from).or(match opts.time_budget {
         Some(_) => None,
@@ -110,7 +112,7 @@ fn run(args: &RenderArgs) -> Result<()> {
         .unwrap_or_else(|| default_output(&args.scene));
     let meta = exr::ExrMetadata {
         spp: out.spp,
-        integrator: opts.integrator.name().into(),
+        integrator: metadata_name(&opts.integrator, out.auto.as_ref()),
         seed: opts.seed,
         wall_time_s: out.wall_time_s,
         version: env!("CARGO_PKG_VERSION").into(),

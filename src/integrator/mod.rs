@@ -11,11 +11,14 @@
 //! - `vcm`: vertex connection and merging, BDPT plus merges with the iteration's light
 //!   vertices;
 //! - `bidir/`: what the bidirectional ones share (vertices, walks, MIS recurrences, the
-//!   light vertex store and its hash grid).
+//!   light vertex store and its hash grid);
+//! - `auto`: the candidates of `--integrator auto` from the scene analysis (its pilot, which
+//!   runs sessions, is `session::auto`).
 //!
 //! Adding an integrator: an arm of [`Integrator`] (its name, capabilities and estimator, all
 //! in this file) and its own module implementing [`Estimator`].
 
+pub mod auto;
 pub mod bdpt;
 pub mod bidir;
 pub mod estimator;
@@ -44,6 +47,10 @@ pub enum Integrator {
     Bdpt { mis: MisHeuristic },
     /// Vertex connection and merging (`vcm.rs`): BDPT plus merges, consistent.
     Vcm(VcmParams),
+    /// One of path, bdpt and vcm, chosen per scene: the analysis narrows the candidates
+    /// (`auto.rs`), a short pilot measures their efficiency (`session::auto`). Resolved
+    /// before a session runs; it has no estimator of its own.
+    Auto { mis: MisHeuristic },
 }
 
 /// What an integrator can and cannot do. Every check and warning about an integrator's
@@ -75,7 +82,7 @@ pub struct Capabilities {
 
 impl Integrator {
     /// Every integrator, with default settings, in the order the CLI lists them.
-    pub const ALL: [Integrator; 4] = [
+    pub const ALL: [Integrator; 5] = [
         Integrator::Path,
         Integrator::Light,
         Integrator::Bdpt {
@@ -88,6 +95,9 @@ impl Integrator {
             alpha: vcm::DEFAULT_ALPHA,
             meter_light_paths: vcm::DEFAULT_METER_LIGHT_PATHS,
         }),
+        Integrator::Auto {
+            mis: MisHeuristic::Power,
+        },
     ];
 
     /// The name the CLI and the EXR metadata use.
@@ -97,6 +107,7 @@ impl Integrator {
             Integrator::Light => "light",
             Integrator::Bdpt { .. } => "bdpt",
             Integrator::Vcm(_) => "vcm",
+            Integrator::Auto { .. } => "auto",
         }
     }
 
@@ -107,6 +118,9 @@ impl Integrator {
             Integrator::Light => "light tracing (light subpaths connected to the sensor)",
             Integrator::Bdpt { .. } => "bidirectional path tracing, all (s, t) with MIS",
             Integrator::Vcm(_) => "vertex connection and merging: BDPT plus merges (consistent)",
+            Integrator::Auto { .. } => {
+                "path, bdpt or vcm, chosen from the scene analysis and a short pilot (the default)"
+            }
         }
     }
 
@@ -120,6 +134,7 @@ impl Integrator {
         match self {
             Integrator::Bdpt { .. } => Integrator::Bdpt { mis },
             Integrator::Vcm(p) => Integrator::Vcm(VcmParams { mis, ..p }),
+            Integrator::Auto { .. } => Integrator::Auto { mis },
             other => other,
         }
     }
@@ -154,6 +169,15 @@ impl Integrator {
             Integrator::Vcm(p) => Capabilities {
                 mis_heuristic: true,
                 unbiased: p.mode == VcmMode::Vc,
+                ..bidirectional
+            },
+            // What the chosen one can do: partial opacity makes the choice path
+            // (`auto.rs`), and vcm may be chosen.
+            Integrator::Auto { .. } => Capabilities {
+                partial_opacity: true,
+                splats: false,
+                mis_heuristic: true,
+                unbiased: false,
                 ..bidirectional
             },
         }
@@ -227,9 +251,14 @@ impl Integrator {
         out
     }
 
-    /// A run of this integrator on `scene`.
-    pub fn estimator<'a>(&self, scene: &'a Scene, settings: Settings) -> Box<dyn Estimator + 'a> {
-        match *self {
+    /// A run of this integrator on `scene`; `Auto` has none (the sessions resolve it to a
+    /// concrete integrator first, `session::auto`).
+    pub fn estimator<'a>(
+        &self,
+        scene: &'a Scene,
+        settings: Settings,
+    ) -> Result<Box<dyn Estimator + 'a>> {
+        Ok(match *self {
             Integrator::Path => Box::new(path::PathEstimator::new(scene, settings)),
             Integrator::Light => Box::new(light_tracer::LightEstimator::new(scene, settings)),
             Integrator::Bdpt { mis } => Box::new(bdpt::BdptEstimator::new(scene, settings, mis)),
@@ -238,7 +267,13 @@ impl Integrator {
                 Box::new(bdpt::BdptEstimator::new(scene, settings, p.mis))
             }
             Integrator::Vcm(p) => Box::new(vcm::VcmEstimator::new(scene, settings, p)),
-        }
+            Integrator::Auto { .. } => {
+                return Err(Error::option(
+                    "--integrator auto has no estimator of its own: it is resolved to path, \
+                     bdpt or vcm before a run (session::auto)",
+                ))
+            }
+        })
     }
 
     fn long_name(&self) -> &'static str {
@@ -247,14 +282,16 @@ impl Integrator {
             Integrator::Light => "light tracing",
             Integrator::Bdpt { .. } => "bidirectional path tracing",
             Integrator::Vcm(_) => "vertex connection and merging",
+            Integrator::Auto { .. } => "the integrator auto chooses",
         }
     }
 
-    /// The names of the integrators that have capability `has`, as "a or b".
+    /// The names of the concrete integrators (not `auto`) that have capability `has`, as
+    /// "a or b".
     pub fn names_with(has: impl Fn(&Capabilities) -> bool) -> String {
         let names: Vec<&str> = Integrator::ALL
             .iter()
-            .filter(|i| has(&i.capabilities()))
+            .filter(|i| !matches!(i, Integrator::Auto { .. }) && has(&i.capabilities()))
             .map(|i| i.name())
             .collect();
         names.join(" or ")
@@ -270,7 +307,11 @@ mod tests {
         for i in Integrator::ALL {
             assert_eq!(Integrator::from_name(i.name()), Some(i));
         }
-        assert_eq!(Integrator::from_name("auto"), None);
+        assert_eq!(Integrator::from_name("magic"), None);
+        assert!(matches!(
+            Integrator::from_name("auto"),
+            Some(Integrator::Auto { .. })
+        ));
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! From the plain [`SceneDescription`] to the render [`Scene`]: spectra resolved and
 //! validated, lights built in absolute units, triangles put behind the BVH, a camera chosen.
 
+use super::analysis::{self, SceneFeatures};
 use super::limits;
 use super::render_scene::{Mesh, Scene, Summary, TriRef};
 use crate::accel::bvh::Bvh;
@@ -94,7 +95,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         warnings,
     };
     let all_opaque = materials.iter().all(Material::is_opaque);
-    Ok(Scene {
+    let mut scene = Scene {
         source: file.clone(),
         meshes,
         tri_refs,
@@ -110,7 +111,11 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         radius,
         summary,
         stage_to_world: desc.stage_to_world,
-    })
+        features: SceneFeatures::default(),
+    };
+    let material_paths: Vec<String> = desc.materials.iter().map(|m| m.prim_path.clone()).collect();
+    scene.features = analysis::analyze(&scene, &material_paths);
+    Ok(scene)
 }
 
 fn indices_where(lights: &[Light], f: impl Fn(&Light) -> bool) -> Vec<u32> {

@@ -1,13 +1,16 @@
 //! Scenes: the USD reader (`usd/`, the only module naming openusd) producing the plain
 //! description (`crate::desc`), the builder (`build.rs`) and the immutable render scene with
-//! its ray queries (`render_scene.rs`), and texture footprints at hits (`texcoord.rs`).
+//! its ray queries (`render_scene.rs`, counted per thread by `ray_count.rs`), texture
+//! footprints at hits (`texcoord.rs`), and what the stage calls for (`analysis/`).
 
+pub mod analysis;
 #[cfg(feature = "testing")]
 #[doc(hidden)]
 pub mod build;
 #[cfg(not(feature = "testing"))]
 pub(crate) mod build;
 mod limits;
+pub mod ray_count;
 #[cfg(feature = "testing")]
 #[doc(hidden)]
 pub mod render_scene;
@@ -20,6 +23,7 @@ pub mod usd;
 #[cfg(not(feature = "testing"))]
 pub(crate) mod usd;
 
+pub use analysis::{Feature, SceneFeatures};
 pub use build::build;
 pub use render_scene::{Hit, Scene, SurfaceHit};
 

@@ -20,6 +20,7 @@
 //! also end at iteration boundaries, and each iteration is prepared (`begin_iteration`) on
 //! the session's threads before its first sample.
 
+use super::auto::AutoReport;
 use super::{pool, PassStats, Progressive};
 use crate::error::Result;
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
@@ -90,6 +91,8 @@ pub struct RenderOutput {
     pub strategies: Option<Vec<StrategyImage>>,
     /// The integrator's report on its settings and resources (`Estimator::report`).
     pub report: Option<String>,
+    /// What `--integrator auto` chose and why (`session::auto`).
+    pub auto: Option<AutoReport>,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -113,6 +116,9 @@ pub struct ImageSession<'a> {
     /// Samples per pixel per chunk.
     chunk: u64,
     target: u64,
+    /// Samples per pixel at which the session pauses (`auto`'s pilot) before its target.
+    pause: Option<u64>,
+    auto: Option<AutoReport>,
     done: u64,
     dropped: u64,
     passes: u32,
@@ -120,7 +126,12 @@ pub struct ImageSession<'a> {
 }
 
 impl<'a> ImageSession<'a> {
+    /// A session of `opts.integrator`; `Integrator::Auto` is resolved first by its pilot
+    /// (`session::auto`), whose winning session this then is.
     pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageSession<'a>> {
+        if let Integrator::Auto { .. } = opts.integrator {
+            return super::auto::image(scene, opts);
+        }
         let strategy_count = if opts.strategies {
             opts.integrator.check_strategies(opts.max_depth)?
         } else {
@@ -137,28 +148,78 @@ impl<'a> ImageSession<'a> {
         Ok(ImageSession {
             scene,
             pool: pool::new(opts.threads)?,
-            estimator: opts.integrator.estimator(scene, settings),
+            estimator: opts.integrator.estimator(scene, settings)?,
             splats,
             tiles: film.tiles(TILE_SIZE),
             film,
             strategy_count,
             strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, opts.max_depth)),
-            chunk: if splats {
-                (SPLAT_CHUNK_SAMPLES / (w * h) as u64).max(1)
-            } else {
-                u64::MAX
-            },
+            chunk: if splats { splat_chunk(w * h) } else { u64::MAX },
             target: match (opts.spp, opts.time_budget) {
                 (Some(n), _) => u64::from(n),
                 (None, Some(_)) => u64::MAX,
                 (None, None) => u64::from(DEFAULT_SPP),
             },
+            pause: None,
+            auto: None,
             done: 0,
             dropped: 0,
             passes: 0,
             start: Instant::now(),
             opts: opts.clone(),
         })
+    }
+
+    /// Pauses the session once it has `samples` per pixel (its steps then return `None`),
+    /// or lifts the pause; at a multiple of [`ImageSession::pause_quantum`] the image stays
+    /// what an unpaused session gives.
+    pub(crate) fn pause_at(&mut self, samples: Option<u64>) {
+        self.pause = samples;
+    }
+
+    /// The samples per pixel a pause of a session of `integrator` on `scene` must be a
+    /// multiple of to leave the image unchanged: a chunk for splatting integrators (their
+    /// splats are merged per pass, so passes cover whole chunks), 1 otherwise (the open
+    /// chunk continues across passes).
+    pub(crate) fn pause_quantum(integrator: &Integrator, scene: &Scene) -> u64 {
+        if integrator.capabilities().splats {
+            splat_chunk(scene.camera.width as usize * scene.camera.height as usize)
+        } else {
+            1
+        }
+    }
+
+    /// Continues a paused session under `time_budget` counted from `clock` (the start of
+    /// `auto`'s pilot, whose time counts), reporting `auto`.
+    pub(crate) fn resume(&mut self, time_budget: Option<f64>, clock: Instant, auto: AutoReport) {
+        self.pause = None;
+        self.opts.time_budget = time_budget;
+        self.start = clock;
+        self.auto = Some(auto);
+    }
+
+    /// Ray queries the session's samples have made so far (`scene::ray_count`): the same for
+    /// the same samples on any machine and thread count.
+    pub fn ray_queries(&self) -> u64 {
+        self.pool
+            .broadcast(|_| crate::scene::ray_count::on_this_thread())
+            .into_iter()
+            .sum()
+    }
+
+    /// Samples per pixel so far.
+    pub fn samples(&self) -> u64 {
+        self.done
+    }
+
+    /// The integrator the session runs (the one `auto` chose, if it was asked for).
+    pub fn integrator(&self) -> Integrator {
+        self.opts.integrator
+    }
+
+    /// What `--integrator auto` chose and why, when it was asked for.
+    pub fn auto(&self) -> Option<&AutoReport> {
+        self.auto.as_ref()
     }
 
     /// The image so far.
@@ -176,6 +237,7 @@ impl<'a> ImageSession<'a> {
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
             report: self.estimator.report(),
+            auto: self.auto.clone(),
         }
     }
 
@@ -185,13 +247,13 @@ impl<'a> ImageSession<'a> {
 
     fn finished(&self) -> bool {
         let elapsed = self.start.elapsed().as_secs_f64();
-        self.done >= self.target
+        self.done >= self.pause.unwrap_or(u64::MAX).min(self.target)
             || (self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t))
     }
 
     /// Samples per pixel of the next pass (see the module docs).
     fn pass_size(&self) -> u64 {
-        let remaining = self.target - self.done;
+        let remaining = self.pause.unwrap_or(u64::MAX).min(self.target) - self.done;
         let elapsed = self.start.elapsed().as_secs_f64();
         let per_sample = elapsed / self.done.max(1) as f64;
         let n = match self.opts.time_budget {
@@ -297,6 +359,11 @@ impl Progressive for ImageSession<'_> {
             variance: self.film.variance_y(self.exposure()),
         })
     }
+}
+
+/// Samples per pixel of a chunk of a splatting integrator on an image of `pixels`.
+fn splat_chunk(pixels: usize) -> u64 {
+    (SPLAT_CHUNK_SAMPLES / pixels.max(1) as u64).max(1)
 }
 
 /// The camera's texture footprint for the render's sample count (unknown under a time

@@ -49,6 +49,7 @@
 //! assert!((reading.value / 1000.0 - 1.0).abs() < 0.02);
 //! ```
 
+use super::auto::AutoReport;
 use super::{pool, PassStats, Progressive};
 use crate::error::Result;
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
@@ -140,6 +141,8 @@ pub struct MeterRun {
     pub wall_time_s: f64,
     /// The integrator's report on its settings and resources (`Estimator::report`).
     pub report: Option<String>,
+    /// What `--integrator auto` chose and why (`session::auto`).
+    pub auto: Option<AutoReport>,
 }
 
 /// Measures every meter to the end (sample count, relative error or time budget).
@@ -179,18 +182,26 @@ pub struct MeterSession<'a> {
     estimator: Box<dyn Estimator + 'a>,
     sensors: Vec<MeterSensor>,
     states: Vec<State>,
+    /// Samples per reading at which the session pauses (`auto`'s pilot).
+    pause: Option<u64>,
+    auto: Option<AutoReport>,
     dropped: u64,
     passes: u32,
     start: Instant,
 }
 
 impl<'a> MeterSession<'a> {
-    /// Refuses meters the integrator cannot estimate (`Integrator::check_meter`).
+    /// Refuses meters the integrator cannot estimate (`Integrator::check_meter`);
+    /// `Integrator::Auto` is resolved first by its pilot (`session::auto`), whose winning
+    /// session this then is.
     pub fn new(
         scene: &'a Scene,
         meters: &[Meter],
         opts: &MeterOptions,
     ) -> Result<MeterSession<'a>> {
+        if let Integrator::Auto { .. } = opts.integrator {
+            return super::auto::meters(scene, meters, opts);
+        }
         for m in meters {
             opts.integrator.check_meter(m.kind)?;
         }
@@ -201,12 +212,14 @@ impl<'a> MeterSession<'a> {
         };
         Ok(MeterSession {
             pool: pool::new(opts.threads)?,
-            estimator: opts.integrator.estimator(scene, settings),
+            estimator: opts.integrator.estimator(scene, settings)?,
             sensors: meters
                 .iter()
                 .map(|m| MeterSensor::new(m, scene.point_error(m.p)))
                 .collect(),
             states: vec![State::default(); meters.len()],
+            pause: None,
+            auto: None,
             dropped: 0,
             passes: 0,
             start: Instant::now(),
@@ -221,7 +234,57 @@ impl<'a> MeterSession<'a> {
             dropped: self.dropped,
             wall_time_s: self.start.elapsed().as_secs_f64(),
             report: self.estimator.report(),
+            auto: self.auto.clone(),
         }
+    }
+
+    /// Pauses every reading once it has `samples` (steps then return `None`), or lifts the
+    /// pause. A pause at [`MeterSession::first_round`] leaves the readings what an unpaused
+    /// session gives.
+    pub(crate) fn pause_at(&mut self, samples: Option<u64>) {
+        self.pause = samples;
+    }
+
+    /// Samples per reading of the first round under a relative-error target (and a multiple
+    /// of the blocks and iterations).
+    pub(crate) fn first_round(&self) -> u64 {
+        self.min_samples_rel().min(self.opts.max_samples)
+    }
+
+    /// Continues a paused session under `time_budget` counted from `clock` (the start of
+    /// `auto`'s pilot, whose time counts), reporting `auto`.
+    pub(crate) fn resume(&mut self, time_budget: Option<f64>, clock: Instant, auto: AutoReport) {
+        self.pause = None;
+        self.opts.time_budget = time_budget;
+        self.start = clock;
+        self.auto = Some(auto);
+        // Readings the pilot's time share stopped go on.
+        for s in self
+            .states
+            .iter_mut()
+            .filter(|s| s.capped == Some(Cap::Time))
+        {
+            s.capped = None;
+            s.finished = false;
+        }
+    }
+
+    /// What `--integrator auto` chose and why, when it was asked for.
+    pub fn auto(&self) -> Option<&AutoReport> {
+        self.auto.as_ref()
+    }
+
+    /// Ray queries the session's samples have made so far (`scene::ray_count`).
+    pub fn ray_queries(&self) -> u64 {
+        self.pool
+            .broadcast(|_| crate::scene::ray_count::on_this_thread())
+            .into_iter()
+            .sum()
+    }
+
+    /// The options the session runs with.
+    pub(crate) fn options(&self) -> &MeterOptions {
+        &self.opts
     }
 }
 
@@ -285,6 +348,11 @@ impl Progressive for MeterSession<'_> {
             .iter_mut()
             .map(|s| next_target(s, opts, min_rel))
             .collect();
+        if let Some(p) = self.pause {
+            for (t, s) in targets.iter_mut().zip(&self.states) {
+                *t = (*t).min(p.max(s.taken));
+            }
+        }
         if !fit_time_budget(&mut self.states, &mut targets, opts, self.start) {
             return None;
         }
