@@ -17,7 +17,8 @@
 //!    the render loop sizes its passes to end near the budget).
 //! 3. For each: RMSE of luminance (XYZ.Y, cd/m²) against the reference, relative RMSE, the
 //!    time actually spent, and the ratio of its MSE and of its MSE × time (the inverse
-//!    efficiency, fair even if the times differ a little) to the first integrator's.
+//!    efficiency, fair even if the times differ a little) to the first integrator's and to
+//!    the best one's. `auto` runs its pilot within its time.
 
 use spectral_render::output::exr;
 use spectral_render::session::{self, RenderOptions};
@@ -212,6 +213,15 @@ fn main() {
         );
         rows.push((name, mse, t));
     }
+    let best = rows
+        .iter()
+        .map(|&(_, mse, t)| mse * t)
+        .fold(f64::INFINITY, f64::min);
+    let relative: Vec<String> = rows
+        .iter()
+        .map(|&(name, mse, t)| format!("{name} {:.2}", mse * t / best))
+        .collect();
+    println!("MSE × time over the best's: {}", relative.join(", "));
     let (first, mse0, t0) = rows[0];
     for &(name, mse, t) in &rows[1..] {
         println!(

@@ -853,7 +853,7 @@ fn meters_agree_through_dispersive_glass() {
             mis: MisHeuristic::Power,
         },
     ] {
-        let est = kind.estimator(&scene, settings);
+        let est = kind.estimator(&scene, settings).unwrap();
         let mut ws = Workspace::new(7, 0);
         let terminated = (0..200u64)
             .filter(|&i| {

@@ -2,8 +2,8 @@
 //! (`integrator::auto`) runs a short session, its efficiency is measured, and the most
 //! efficient one's session goes on to the end.
 //!
-//! **Efficiency** is 1 / (variance × cost per sample) (Veach 1997 §2.4's efficiency of an
-//! estimator, with cost in place of time). For an image the variance is the sum over pixels
+//! **Efficiency** is 1 / (variance × cost per sample), the efficiency ε = 1/(V·T) of PBR 3ed
+//! §13.7 with a cost in place of the time T. For an image the variance is the sum over pixels
 //! of the variance of the pixel's luminance (`PassStats::variance`, from the even and odd
 //! halves of its samples), which is n times the expected squared error of the image after n
 //! samples per pixel, the quantity `tools/equal_time.sh` compares; for meters it is the sum of
@@ -19,7 +19,8 @@
 //! **Pilot size.** Under `--spp N` each candidate takes max(2, N/32) samples per pixel, the
 //! same for all, rounded up to whole chunks of the splatting ones (the image is then
 //! unchanged by the pause), meters max(256, N/32) samples per reading, or under
-//! `--rel-error` the first round; under `--time T` each candidate runs for T/32. The winner's
+//! `--rel-error` the first round; under `--time T` each candidate runs for T/32 (and at least 2
+//! samples per pixel, the fewest that give a variance). The winner's
 //! pilot samples are its first samples (same seed, same sample indices), so its session simply
 //! continues: under `--spp` the result is exactly what the chosen integrator alone gives.
 //! The losers' samples are discarded, which keeps every estimate unbiased. The pilot's time
@@ -102,19 +103,35 @@ impl AutoReport {
         if others.is_empty() {
             return format!("auto: {name} ({})", self.reasons.join("; "));
         }
+        let behind = self.pilot.iter().any(|p| {
+            best.is_some_and(|b| p.integrator != self.choice && p.efficiency > b.efficiency)
+        });
+        let kept = if behind {
+            format!(
+                ", kept as the simpler within {} %",
+                percent(PREFERENCE - 1.0)
+            )
+        } else {
+            String::new()
+        };
         format!(
-            "auto: {name} (efficiency {} on a {} % pilot)",
+            "auto: {name} (efficiency {}{kept} on a {} % pilot)",
             others.join(", "),
             percent(self.pilot_share)
         )
     }
 }
 
+/// A ratio of efficiencies: two decimals near 1, where one would hide which is ahead.
 fn ratio_text(r: f64) -> String {
-    if r.is_finite() {
+    if !r.is_finite() {
+        "∞".into()
+    } else if (0.9..1.2).contains(&r) {
+        format!("{r:.2}")
+    } else if r < 100.0 {
         format!("{r:.1}")
     } else {
-        "∞".into()
+        format!("{r:.0}")
     }
 }
 
@@ -170,11 +187,14 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
             best = Some((session, f64::INFINITY));
             break;
         }
-        if let Some(n) = spp {
-            session.pause_at(Some(pilot_spp(n, quantum)));
-        }
         let start = Instant::now();
-        let last = run_to_pause(&mut session);
+        let last = match spp {
+            Some(n) => {
+                session.pause_at(Some(pilot_spp(n, quantum)));
+                run_to_pause(&mut session)
+            }
+            None => run_timed_pilot(&mut session, o.time_budget),
+        };
         let variance: f64 = last
             .as_ref()
             .map_or(f64::INFINITY, |s| s.variance.iter().sum());
@@ -209,6 +229,17 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
 fn pilot_spp(n: u64, quantum: u64) -> u64 {
     let k = ((n as f64 * PILOT_SHARE).ceil() as u64).max(2);
     k.div_ceil(quantum).saturating_mul(quantum).min(n)
+}
+
+/// The pilot of an image under a time budget: 2 samples per pixel (the fewest that give a
+/// variance), then on until `share` seconds; its last pass.
+fn run_timed_pilot(session: &mut ImageSession, share: Option<f64>) -> Option<PassStats> {
+    session.set_time_budget(None);
+    session.pause_at(Some(2));
+    let first = run_to_pause(session);
+    session.pause_at(None);
+    session.set_time_budget(share);
+    run_to_pause(session).or(first)
 }
 
 /// Steps a session until it pauses or ends; its last pass.

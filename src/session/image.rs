@@ -189,6 +189,11 @@ impl<'a> ImageSession<'a> {
         }
     }
 
+    /// Sets the time budget, counted from the session's start.
+    pub(crate) fn set_time_budget(&mut self, time_budget: Option<f64>) {
+        self.opts.time_budget = time_budget;
+    }
+
     /// Continues a paused session under `time_budget` counted from `clock` (the start of
     /// `auto`'s pilot, whose time counts), reporting `auto`.
     pub(crate) fn resume(&mut self, time_budget: Option<f64>, clock: Instant, auto: AutoReport) {

@@ -382,10 +382,10 @@ fn light_features(f: &mut SceneFeatures, lights: &[LightInfo]) {
         on: n > 1,
         reason: match n {
             0 => "no lights".into(),
-            1 => "one light".into(),
+            1 => format!("one light: {}", all[0]),
             n => format!("{n} lights: next-event estimation picks one by luminous power"),
         },
-        prims: all,
+        prims: if n > 1 { all } else { Vec::new() },
     };
     f.emissive_meshes = feature(
         light_prims(lights, |l| l.kind == "mesh"),
@@ -418,8 +418,9 @@ fn albedo_feature(f: &mut SceneFeatures, materials: &[MaterialInfo]) {
     } else {
         "unbounded".into()
     };
+    let on = rho >= 0.5;
     f.albedo = Feature {
-        on: rho >= 0.5,
+        on,
         reason: format!(
             "largest albedo {rho:.3} ({}): interreflection multiplies light by up to \
              1/(1 − ρ) = {gain}",
@@ -429,13 +430,115 @@ fn albedo_feature(f: &mut SceneFeatures, materials: &[MaterialInfo]) {
                 prims.join(", ")
             }
         ),
-        prims,
+        prims: if on { prims } else { Vec::new() },
     };
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::desc::*;
+    use glam::{Mat4, Vec3};
+
+    /// A square of half-side `half` centred on (x, 0, z) facing +Z, bound to `material`.
+    fn square(name: &str, x: f32, z: f32, half: f32, material: usize) -> MeshDesc {
+        MeshDesc {
+            prim_path: name.into(),
+            positions: vec![
+                Vec3::new(x - half, -half, z),
+                Vec3::new(x + half, -half, z),
+                Vec3::new(x + half, half, z),
+                Vec3::new(x - half, half, z),
+            ],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            material: Some(material),
+            ..Default::default()
+        }
+    }
+
+    fn material(name: &str, kind: MaterialKind) -> MaterialDesc {
+        MaterialDesc {
+            prim_path: name.into(),
+            kind,
+            emission: None,
+            textures: Vec::new(),
+            texcoord: "st".into(),
+        }
+    }
+
+    /// A 4 m floor of albedo 0.5 under a 0.6 m glass pane centred at x = `pane_x`, 0.3 m up,
+    /// and a sphere light of radius `r` 1 m up, seen from above by a camera looking at the
+    /// floor within `view` of its centre.
+    fn glass_over_floor(pane_x: f32, r: f32, view: f32) -> Scene {
+        let mut desc = SceneDescription::default();
+        desc.materials.push(material(
+            "/Looks/Floor",
+            MaterialKind::Diffuse {
+                reflectance: SpectrumDesc::Rgb([0.5; 3]),
+                roughness: 0.0,
+            },
+        ));
+        desc.materials.push(material(
+            "/Looks/Glass",
+            MaterialKind::Dielectric {
+                ior: IorDesc::Constant(1.5),
+                roughness: 0.0,
+                thin: false,
+            },
+        ));
+        desc.meshes.push(square("/Floor", 0.0, 0.0, 2.0, 0));
+        desc.meshes.push(square("/Pane", pane_x, 0.3, 0.3, 1));
+        desc.lights.push(LightDesc {
+            prim_path: "/Bulb".into(),
+            kind: LightKind::Sphere { radius: r },
+            to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)),
+            emission: EmissionDesc::default(),
+            shaping: None,
+        });
+        let half = 18f32.to_radians().tan();
+        desc.cameras.push(CameraDesc {
+            prim_path: "/Camera".into(),
+            to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, view / half)),
+            focal_length: 50.0,
+            horizontal_aperture: 100.0 * half,
+            vertical_aperture: 100.0 * half,
+            clip_near: 0.01,
+            clip_far: 100.0,
+            f_stop: 0.0,
+            focus_distance: 0.0,
+            lens_radius: 0.0,
+            exposure: 0.0,
+        });
+        crate::scene::build(&desc, Some((16, 16))).unwrap()
+    }
+
+    #[test]
+    fn a_small_bulb_over_glass_makes_hard_caustics_and_the_view_decides_sds() {
+        // The camera sees only the pane: specular surfaces fill the view.
+        let f = glass_over_floor(0.0, 0.01, 0.2).features;
+        assert!(f.specular.on && f.caustics.on && f.delta_lights.on && f.hard_caustics);
+        assert_eq!(f.caustics.prims, ["/Pane"]);
+        assert!(f.sds.on && f.seen_specular > 0.99, "{:?}", f.sds);
+        assert_eq!(f.sds.prims, ["/Pane"]);
+        assert_eq!(f.delta_lights.prims, ["/Bulb"]);
+        // The pane off to the side: its caustic is on the floor, no glass in view.
+        let f = glass_over_floor(1.5, 0.01, 0.5).features;
+        assert!(f.caustics.on && f.hard_caustics, "{:?}", f.caustics);
+        assert!(!f.sds.on && f.seen_specular == 0.0, "{:?}", f.sds);
+        // Both in view: the pane covers (0.6 / 4)² of it.
+        let f = glass_over_floor(0.0, 0.01, 2.0).features;
+        assert!(f.sds.on && f.seen_specular > 0.01 && f.seen_specular < 0.05);
+        // A large light: caustics, but not point-like ones.
+        let f = glass_over_floor(0.0, 0.4, 0.2).features;
+        assert!(f.caustics.on && !f.delta_lights.on && !f.hard_caustics);
+        assert!(!f.dispersion.on && !f.opacity.on && !f.textures.on);
+        assert!((f.max_albedo - 1.0).abs() < 1e-3, "glass keeps everything");
+        assert!(
+            f.albedo.on && f.albedo.prims == ["/Looks/Glass"],
+            "{:?}",
+            f.albedo
+        );
+    }
 
     #[test]
     fn the_depth_cap_bound_is_the_geometric_tail() {
