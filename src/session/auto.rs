@@ -27,7 +27,7 @@
 //! counts towards `--time`.
 
 use super::image::{ImageSession, RenderOptions, DEFAULT_SPP};
-use super::meter::{MeterOptions, MeterSession, Stop, BLOCK};
+use super::meter::{MeterOptions, MeterSession, Reading, Stop, BLOCK};
 use super::{PassStats, Progressive};
 use crate::error::{Error, Result};
 use crate::integrator::auto::{candidates, Candidates, Target};
@@ -158,13 +158,17 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
     }
     let clock = Instant::now();
     let Candidates {
-        integrators,
-        reasons,
+        mut integrators,
+        mut reasons,
     } = candidates(&scene.features, Target::Image, mis);
     let spp = opts.spp.map(u64::from).or(match opts.time_budget {
         Some(_) => None,
         None => Some(u64::from(DEFAULT_SPP)),
     });
+    if spp == Some(1) && integrators.len() > 1 {
+        integrators.truncate(1);
+        reasons.push("one sample per pixel is too few to measure a variance: no pilot".into());
+    }
     // Every candidate takes the same samples, whole chunks of every one.
     let quantum = integrators
         .iter()
@@ -202,7 +206,7 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
             integrator,
             session.samples(),
             session.ray_queries(),
-            start,
+            start.elapsed().as_secs_f64(),
             variance,
         );
         if best
@@ -213,7 +217,7 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
         }
         pilot.push(figures);
     }
-    let (mut session, _) = best.expect("at least one candidate");
+    let (mut session, _) = best.ok_or_else(|| Error::option("auto found no candidate"))?;
     let report = AutoReport {
         choice: session.integrator(),
         reasons,
@@ -255,7 +259,7 @@ fn figures(
     integrator: Integrator,
     samples: u64,
     rays: u64,
-    start: Instant,
+    seconds: f64,
     variance: f64,
 ) -> PilotFigures {
     let cost = variance * rays as f64 * cost_per_ray(&integrator);
@@ -263,7 +267,7 @@ fn figures(
         integrator,
         samples,
         rays,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds,
         variance,
         efficiency: if cost > 0.0 {
             1.0 / cost
@@ -290,78 +294,38 @@ pub(super) fn meters<'a>(
         reasons,
     } = candidates(&scene.features, Target::Meters, mis);
     let single = integrators.len() == 1;
-    let mut runs: Vec<(MeterSession<'a>, PassStats, u64, f64)> = Vec::new();
+    let mut runs = Vec::new();
     for integrator in integrators {
-        let mut o = MeterOptions {
+        let o = MeterOptions {
             integrator,
+            time_budget: if single {
+                opts.time_budget
+            } else {
+                opts.time_budget.map(|t| t * PILOT_SHARE)
+            },
             ..opts.clone()
         };
-        if !single {
-            o.time_budget = opts.time_budget.map(|t| t * PILOT_SHARE);
-        }
         let mut session = MeterSession::new(scene, meters, &o)?;
-        if single {
-            let report = AutoReport {
-                choice: integrator,
-                reasons,
-                pilot: Vec::new(),
-                pilot_share: PILOT_SHARE,
+        if !single {
+            let pause = match opts.stop {
+                Stop::Samples(n) => {
+                    let k = ((n as f64 * PILOT_SHARE).ceil() as u64).div_ceil(BLOCK) * BLOCK;
+                    k.max(BLOCK).min(n)
+                }
+                Stop::RelError(_) => session.first_round(),
             };
-            session.resume(opts.time_budget, clock, report);
-            return Ok(session);
+            session.pause_at(Some(pause));
         }
-        let pause = match opts.stop {
-            Stop::Samples(n) => {
-                let k = ((n as f64 * PILOT_SHARE).ceil() as u64).div_ceil(BLOCK) * BLOCK;
-                k.max(BLOCK).min(n)
-            }
-            Stop::RelError(_) => session.first_round(),
-        };
-        session.pause_at(Some(pause));
         let start = Instant::now();
-        let Some(last) = run_to_pause(&mut session) else {
-            continue;
+        let last = if single {
+            None
+        } else {
+            run_to_pause(&mut session)
         };
-        let rays = session.ray_queries();
-        runs.push((session, last, rays, start.elapsed().as_secs_f64()));
+        let seconds = start.elapsed().as_secs_f64();
+        runs.push((session, last, seconds));
     }
-    // Each reading's relative variance, over the candidates' mean value of it.
-    let readings = runs.first().map_or(0, |r| r.1.variance.len());
-    let reference: Vec<f64> = (0..readings)
-        .map(|i| {
-            let values = runs.iter().map(|r| r.0.readings().readings[i].value);
-            values.sum::<f64>() / runs.len() as f64
-        })
-        .collect();
-    let mut pilot = Vec::new();
-    let mut best: Option<(usize, f64)> = None;
-    for (k, (session, last, rays, seconds)) in runs.iter().enumerate() {
-        let variance: f64 = last
-            .variance
-            .iter()
-            .zip(&reference)
-            .filter(|(_, r)| **r != 0.0)
-            .map(|(v, r)| v / (r * r))
-            .sum();
-        let mut f = figures(
-            session.options().integrator,
-            0,
-            *rays,
-            Instant::now(),
-            variance,
-        );
-        f.samples = session.readings().readings.first().map_or(0, |r| r.samples);
-        f.seconds = *seconds;
-        if best.is_none_or(|(_, e)| f.efficiency > e * PREFERENCE) {
-            best = Some((k, f.efficiency));
-        }
-        pilot.push(f);
-    }
-    let Some((winner, _)) = best else {
-        return Err(Error::option(
-            "--integrator auto: no candidate could measure the meters",
-        ));
-    };
+    let (winner, pilot) = pick_meters(&runs);
     let mut session = runs.swap_remove(winner).0;
     let report = AutoReport {
         choice: session.options().integrator,
@@ -371,4 +335,45 @@ pub(super) fn meters<'a>(
     };
     session.resume(opts.time_budget, clock, report);
     Ok(session)
+}
+
+/// The most efficient of the meter pilots `runs` (session, last pass, seconds) and every
+/// one's figures: the variance is the sum over readings of the reading's variance over the
+/// square of its value averaged over the candidates (readings of 0 left out).
+fn pick_meters(runs: &[(MeterSession, Option<PassStats>, f64)]) -> (usize, Vec<PilotFigures>) {
+    let piloted: Vec<_> = runs
+        .iter()
+        .filter_map(|(s, last, t)| last.as_ref().map(|l| (s, l, *t)))
+        .collect();
+    if piloted.len() < runs.len() {
+        return (0, Vec::new());
+    }
+    let readings: Vec<Vec<Reading>> = runs.iter().map(|r| r.0.readings().readings).collect();
+    let reference: Vec<f64> = (0..readings[0].len())
+        .map(|i| readings.iter().map(|r| r[i].value).sum::<f64>() / runs.len() as f64)
+        .collect();
+    let mut pilot = Vec::new();
+    let mut best: Option<(usize, f64)> = None;
+    for (k, (session, last, seconds)) in piloted.into_iter().enumerate() {
+        let variance: f64 = last
+            .variance
+            .iter()
+            .zip(&reference)
+            .filter(|(_, r)| **r != 0.0)
+            .map(|(v, r)| v / (r * r))
+            .sum();
+        let samples = readings[k].first().map_or(0, |r| r.samples);
+        let f = figures(
+            session.options().integrator,
+            samples,
+            session.ray_queries(),
+            seconds,
+            variance,
+        );
+        if best.is_none_or(|(_, e)| f.efficiency > e * PREFERENCE) {
+            best = Some((k, f.efficiency));
+        }
+        pilot.push(f);
+    }
+    (best.map_or(0, |b| b.0), pilot)
 }
