@@ -191,17 +191,35 @@ fn feature(prims: Vec<String>, on: impl FnOnce(&[String]) -> String, off: &str) 
     }
 }
 
-fn prims_where(materials: &[MaterialInfo], f: impl Fn(&MaterialInfo) -> bool) -> Vec<String> {
-    materials
+/// The prims of the `items` for which `keep` holds.
+fn prims_of<T: HasPrim>(items: &[T], keep: impl Fn(&T) -> bool) -> Vec<String> {
+    items
         .iter()
-        .filter(|m| f(m))
-        .map(|m| m.prim.clone())
+        .filter(|i| keep(i))
+        .map(|i| i.prim().to_string())
         .collect()
+}
+
+/// Something the analysis names by its prim.
+trait HasPrim {
+    fn prim(&self) -> &str;
+}
+
+impl HasPrim for MaterialInfo {
+    fn prim(&self) -> &str {
+        &self.prim
+    }
+}
+
+impl HasPrim for LightInfo {
+    fn prim(&self) -> &str {
+        &self.prim
+    }
 }
 
 fn material_features(f: &mut SceneFeatures, materials: &[MaterialInfo]) {
     f.dispersion = feature(
-        prims_where(materials, |m| m.dispersive),
+        prims_of(materials, |m| m.dispersive),
         |p| {
             format!(
                 "{} refracts each wavelength its own way: paths through it carry their hero \
@@ -212,7 +230,7 @@ fn material_features(f: &mut SceneFeatures, materials: &[MaterialInfo]) {
         "no dielectric's IOR varies with wavelength: secondary wavelengths are never terminated",
     );
     f.specular = feature(
-        prims_where(materials, |m| m.lobes.specular_like()),
+        prims_of(materials, |m| m.lobes.specular_like()),
         |p| {
             let lobes: Vec<String> = materials
                 .iter()
@@ -228,12 +246,12 @@ fn material_features(f: &mut SceneFeatures, materials: &[MaterialInfo]) {
         "every lobe is diffuse or glossy: no specular chains",
     );
     f.textures = feature(
-        prims_where(materials, |m| m.textured),
+        prims_of(materials, |m| m.textured),
         |p| format!("materials read textures: {}", p.join(", ")),
         "no material reads a texture",
     );
     f.opacity = feature(
-        prims_where(materials, |m| !m.opaque),
+        prims_of(materials, |m| !m.opaque),
         |p| {
             format!(
                 "partially opaque or cut-out surfaces (UsdPreviewSurface opacity): {}",
@@ -243,7 +261,7 @@ fn material_features(f: &mut SceneFeatures, materials: &[MaterialInfo]) {
         "every surface is opaque",
     );
     f.normal_maps = feature(
-        prims_where(materials, |m| m.normal_map),
+        prims_of(materials, |m| m.normal_map),
         |p| format!("normals perturbed by {}", p.join(", ")),
         "no normal maps",
     );
@@ -335,17 +353,9 @@ fn probe_specular(scene: &Scene) -> (f32, Vec<String>) {
     (hits as f32 / (PROBE_GRID * PROBE_GRID) as f32, seen)
 }
 
-fn light_prims(lights: &[LightInfo], f: impl Fn(&LightInfo) -> bool) -> Vec<String> {
-    lights
-        .iter()
-        .filter(|l| f(l))
-        .map(|l| l.prim.clone())
-        .collect()
-}
-
 fn light_features(f: &mut SceneFeatures, lights: &[LightInfo]) {
     f.delta_lights = feature(
-        light_prims(lights, |l| l.point_like),
+        prims_of(lights, |l| l.point_like),
         |p| {
             let each: Vec<String> = lights
                 .iter()
@@ -362,21 +372,21 @@ fn light_features(f: &mut SceneFeatures, lights: &[LightInfo]) {
         "no point-like light",
     );
     f.infinite_lights = feature(
-        light_prims(lights, |l| l.infinite),
+        prims_of(lights, |l| l.infinite),
         |p| format!("dome or distant lights: {}", p.join(", ")),
         "no dome or distant light",
     );
     f.textured_lights = feature(
-        light_prims(lights, |l| l.textured),
+        prims_of(lights, |l| l.textured),
         |p| format!("emission read from textures: {}", p.join(", ")),
         "no textured emission",
     );
     f.shaped_lights = feature(
-        light_prims(lights, |l| l.shaped),
+        prims_of(lights, |l| l.shaped),
         |p| format!("ShapingAPI (cone, focus or IES): {}", p.join(", ")),
         "no shaped light",
     );
-    let all = light_prims(lights, |_| true);
+    let all = prims_of(lights, |_| true);
     let n = all.len();
     f.multiple_lights = Feature {
         on: n > 1,
@@ -388,7 +398,7 @@ fn light_features(f: &mut SceneFeatures, lights: &[LightInfo]) {
         prims: if n > 1 { all } else { Vec::new() },
     };
     f.emissive_meshes = feature(
-        light_prims(lights, |l| l.kind == "mesh"),
+        prims_of(lights, |l| l.kind == "mesh"),
         |p| format!("emissive meshes: {}", p.join(", ")),
         "no emissive mesh",
     );
@@ -412,7 +422,7 @@ fn camera_feature(f: &mut SceneFeatures, scene: &Scene) {
 
 fn albedo_feature(f: &mut SceneFeatures, materials: &[MaterialInfo]) {
     let rho = f.max_albedo;
-    let prims = prims_where(materials, |m| m.albedo >= rho - 0.005 && rho > 0.0);
+    let prims = prims_of(materials, |m| m.albedo >= rho - 0.005 && rho > 0.0);
     let gain = if rho < 1.0 {
         format!("{:.2}", 1.0 / (1.0 - rho))
     } else {
