@@ -44,10 +44,10 @@ pub const PILOT_SHARE: f64 = 1.0 / 32.0;
 pub const PREFERENCE: f64 = 1.1;
 
 /// The time a ray query of `integrator` costs relative to one of the path tracer, for the
-/// shading, connection and merging work that comes with it. Measured as ns per ray query at
-/// 4 spp on the stages of `scenes/` (`tools/auto_pilot.sh`): bdpt 0.98–1.27 (median 1.07),
-/// vcm 1.02–2.2 (its merges cost most in closed diffuse rooms); the values are round figures
-/// in those ranges (docs/design.md §9).
+/// shading, connection and merging work that comes with it. Measured as ns per ray query on
+/// the stages of `scenes/` and the peers' Cornell box (`tools/bench_auto.sh`,
+/// `examples/auto_pilot.rs`): bdpt 0.76–1.35, vcm 0.89–2.2 (its merges cost most in closed
+/// diffuse rooms); the values are round figures within those ranges (docs/design.md §9).
 pub fn cost_per_ray(integrator: &Integrator) -> f64 {
     match integrator {
         Integrator::Path | Integrator::Light | Integrator::Auto { .. } => 1.0,
