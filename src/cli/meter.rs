@@ -228,7 +228,7 @@ fn run_grid(
 }
 
 /// The meter in world space; a normal or direction that vanishes there is an error.
-fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> {
+pub(super) fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> {
     let p_w = meter::stage_point(m, p);
     match kind {
         MeterKind::Illuminance => Meter::illuminance(p_w, meter::stage_normal(m, d)),
@@ -360,32 +360,44 @@ fn request(a: &MeterArgs) -> Result<Request> {
                     (illuminance), --luminance --at X,Y,Z --dir DX,DY,DZ, or --grid",
         ));
     }
-    let (kind, dirs, flag) = if a.luminance {
-        if !a.normal.is_empty() {
+    let (kind, points) = points(&a.at, &a.normal, &a.dir, a.luminance)?;
+    Ok(Request::Points(kind, points))
+}
+
+/// The meters of `--at` with `--normal` (illuminance) or, with `--luminance`, `--dir`: their
+/// kind and (position, normal or direction) in stage coordinates (also `converge`'s).
+pub(super) fn points(
+    at: &[String],
+    normal: &[String],
+    dir: &[String],
+    luminance: bool,
+) -> Result<(MeterKind, Vec<(DVec3, DVec3)>)> {
+    let (kind, dirs, flag) = if luminance {
+        if !normal.is_empty() {
             return Err(Error::option("--luminance meters take --dir, not --normal"));
         }
-        (MeterKind::Luminance, &a.dir, "--dir")
+        (MeterKind::Luminance, dir, "--dir")
     } else {
-        if !a.dir.is_empty() {
+        if !dir.is_empty() {
             return Err(Error::option(
                 "--dir is for --luminance meters; illuminance meters take --normal",
             ));
         }
-        (MeterKind::Illuminance, &a.normal, "--normal")
+        (MeterKind::Illuminance, normal, "--normal")
     };
-    if dirs.len() != a.at.len() {
+    if dirs.len() != at.len() {
         return Err(Error::option(format!(
             "{} --at but {} {flag}: give one {flag} per --at, in the same order",
-            a.at.len(),
+            at.len(),
             dirs.len()
         )));
     }
-    let points =
-        a.at.iter()
-            .zip(dirs)
-            .map(|(p, d)| Ok((vector("--at", p)?, direction(flag, d)?)))
-            .collect::<Result<Vec<_>>>()?;
-    Ok(Request::Points(kind, points))
+    let points = at
+        .iter()
+        .zip(dirs)
+        .map(|(p, d)| Ok((vector("--at", p)?, direction(flag, d)?)))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((kind, points))
 }
 
 fn grid_request(a: &MeterArgs) -> Result<Request> {

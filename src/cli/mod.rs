@@ -4,6 +4,7 @@
 //! option) with exit code 1.
 
 mod common;
+mod converge;
 mod lights;
 mod meter;
 mod progress;
@@ -17,7 +18,11 @@ use std::process::ExitCode;
 type Command = fn(Vec<OsString>) -> Result<()>;
 
 /// Subcommands by name (each lives in its own file of this module).
-const SUBCOMMANDS: &[(&str, Command)] = &[("lights", lights::main), ("meter", meter::main)];
+const SUBCOMMANDS: &[(&str, Command)] = &[
+    ("converge", converge::main),
+    ("lights", lights::main),
+    ("meter", meter::main),
+];
 
 fn subcommand(name: &str) -> Option<Command> {
     SUBCOMMANDS

@@ -65,7 +65,7 @@ struct RenderArgs {
     preview_exposure: f32,
 }
 
-fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
+pub(super) fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or("expected WxH, e.g. 640x480")?;
@@ -210,6 +210,7 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
         integrator,
         strategies: args.strategies.is_some(),
         filter_textures: !args.no_texture_filtering,
+        ..RenderOptions::default()
     })
 }
 

@@ -99,13 +99,36 @@ pub fn write(
     white_xy: [f32; 2],
     meta: &ExrMetadata,
 ) -> Result<()> {
+    write_with_channels(path, width, height, rgb, xyz, &[], white_xy, meta)
+}
+
+/// [`write()`] with `extra` float32 channels (name, one value per pixel) after the six, e.g.
+/// a reference's `variance.R` (`converge`). Extra values must be finite too.
+#[allow(clippy::too_many_arguments)]
+pub fn write_with_channels(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    extra: &[(&str, Vec<f32>)],
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> Result<()> {
     let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
     check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
     check_finite(width, rgb, xyz).map_err(fail)?;
+    for (name, values) in extra {
+        if values.len() != rgb.len() || !values.iter().all(|v| v.is_finite()) {
+            return Err(fail(format!(
+                "channel {name} needs one finite value per pixel"
+            )));
+        }
+    }
     if !white_xy.iter().all(|c| c.is_finite()) {
         return Err(fail(format!("white point {white_xy:?} is not finite")));
     }
-    let image = build_image(width, height, rgb, xyz, white_xy, meta);
+    let image = build_image(width, height, rgb, xyz, extra, white_xy, meta);
     write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
 }
 
@@ -199,6 +222,7 @@ fn build_image(
     height: usize,
     rgb: &[[f32; 3]],
     xyz: &[[f32; 3]],
+    extra: &[(&str, Vec<f32>)],
     white_xy: [f32; 2],
     meta: &ExrMetadata,
 ) -> FlatImage {
@@ -213,6 +237,10 @@ fn build_image(
     let list: Vec<_> = (0..3)
         .map(|c| channel(CHANNEL_NAMES[c], rgb, c))
         .chain((0..3).map(|c| channel(CHANNEL_NAMES[3 + c], xyz, c)))
+        .chain(extra.iter().map(|(name, values)| AnyChannel {
+            quantize_linearly: false,
+            ..AnyChannel::new(*name, FlatSamples::F32(values.clone()))
+        }))
         .collect();
     let layer = Layer::new(
         (width, height),

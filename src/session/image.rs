@@ -58,7 +58,15 @@ pub struct RenderOptions {
     /// looks every texture up bilinearly at its finest level (pbrt-v4's
     /// `--disable-texture-filtering`; Mitsuba 3's bitmaps).
     pub filter_textures: bool,
+    /// Wavelengths each sample carries: 4 (a hero and 3 rotations, Wilkie et al. 2014) or 1
+    /// (the hero alone: the secondaries are terminated before the sample starts and again
+    /// after it, as a dispersive surface would, so every integrator, VCM's iteration tuples
+    /// included, estimates with the hero only; `converge --wavelengths 1,4`).
+    pub wavelengths: usize,
 }
+
+/// The wavelength counts [`RenderOptions::wavelengths`] may take.
+pub const WAVELENGTH_COUNTS: [usize; 2] = [1, 4];
 
 impl Default for RenderOptions {
     fn default() -> Self {
@@ -71,6 +79,7 @@ impl Default for RenderOptions {
             integrator: Integrator::Path,
             strategies: false,
             filter_textures: true,
+            wavelengths: 4,
         }
     }
 }
@@ -121,6 +130,12 @@ pub struct ImageSession<'a> {
 
 impl<'a> ImageSession<'a> {
     pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageSession<'a>> {
+        if !WAVELENGTH_COUNTS.contains(&opts.wavelengths) {
+            return Err(crate::error::Error::option(format!(
+                "{} wavelengths per sample: 4 (hero sampling) or 1 (the hero alone)",
+                opts.wavelengths
+            )));
+        }
         let strategy_count = if opts.strategies {
             opts.integrator.check_strategies(opts.max_depth)?
         } else {
@@ -227,6 +242,7 @@ impl<'a> ImageSession<'a> {
             seed: self.opts.seed,
             width: self.film.width as u64,
             strategy_count: self.strategy_count,
+            hero_only: self.opts.wavelengths == 1,
         };
         let (film, estimator) = (&self.film, &*self.estimator);
         let max_depth = self.opts.max_depth;
@@ -238,7 +254,11 @@ impl<'a> ImageSession<'a> {
                     |ws, tile| {
                         let acc =
                             TileAccumulator::continuing(film.open_sums(tile), task.strategy_count);
-                        render_tile(estimator, tile, &task, acc, ws)
+                        if task.hero_only {
+                            render_tile::<true>(estimator, tile, &task, acc, ws)
+                        } else {
+                            render_tile::<false>(estimator, tile, &task, acc, ws)
+                        }
                     },
                 )
                 .collect()
@@ -265,12 +285,18 @@ impl<'a> ImageSession<'a> {
     }
 }
 
-impl Progressive for ImageSession<'_> {
-    fn step(&mut self) -> Option<PassStats> {
-        if self.finished() {
-            return None;
-        }
-        let end = self.done + self.pass_size();
+impl ImageSession<'_> {
+    /// Renders on to exactly `n` samples per pixel in one pass, whatever the session's own
+    /// sample count or time budget (snapshots at chosen counts: `converge`); None when `n`
+    /// samples are already done. The image at `n` is the same as after any other passes to
+    /// `n` (chunks and iterations are aligned from sample 0).
+    pub fn step_to(&mut self, n: u64) -> Option<PassStats> {
+        (n > self.done).then(|| self.advance(n))
+    }
+
+    /// Renders samples [done, end) of every pixel, segment by segment (a segment ends at a
+    /// chunk or iteration boundary), and returns the pass's statistics.
+    fn advance(&mut self, end: u64) -> PassStats {
         let iteration = self.estimator.iteration_samples();
         while self.done < end {
             let mut segment_end = (self.done / self.chunk + 1).saturating_mul(self.chunk);
@@ -288,14 +314,24 @@ impl Progressive for ImageSession<'_> {
             self.render_segment(self.done, segment_end.min(end) - self.done);
         }
         self.passes += 1;
-        Some(PassStats {
+        PassStats {
             pass: self.passes,
             samples: self.done,
             target: (self.target != u64::MAX).then_some(self.target),
             wall_time_s: self.start.elapsed().as_secs_f64(),
             dropped: self.dropped,
             variance: self.film.variance_y(self.exposure()),
-        })
+        }
+    }
+}
+
+impl Progressive for ImageSession<'_> {
+    fn step(&mut self) -> Option<PassStats> {
+        if self.finished() {
+            return None;
+        }
+        let end = self.done + self.pass_size();
+        Some(self.advance(end))
     }
 }
 
@@ -326,11 +362,14 @@ struct Segment {
     seed: u64,
     width: u64,
     strategy_count: usize,
+    /// Terminate the secondary wavelengths (`RenderOptions::wavelengths` = 1).
+    hero_only: bool,
 }
 
 /// Renders a tile's samples into `acc`: per-pixel XYZ sums, splats and the number of
-/// non-finite samples dropped.
-fn render_tile(
+/// non-finite samples dropped. `HERO_ONLY`: every sample carries its hero wavelength alone
+/// (a constant, so the 4-wavelength loop has no per-sample test).
+fn render_tile<const HERO_ONLY: bool>(
     estimator: &dyn Estimator,
     tile: &Tile,
     task: &Segment,
@@ -344,11 +383,18 @@ fn render_tile(
             for s in task.first..task.first + task.count {
                 let mut sampler = Sampler::new(task.seed, pixel, s);
                 let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+                if HERO_ONLY {
+                    lambda.terminate_secondary();
+                }
                 let [jx, jy] = sampler.get_2d();
                 let u_lens = sampler.get_2d();
                 let film = [x as f32 + jx, y as f32 + jy];
                 ws.record.clear();
                 estimator.image_sample(film, u_lens, &mut lambda, &mut sampler, ws);
+                if HERO_ONLY {
+                    // VCM replaces the sample's wavelengths by its iteration's tuple.
+                    lambda.terminate_secondary();
+                }
                 acc.add(k, &ws.record, &lambda, s % 2 == 1);
             }
             k += 1;

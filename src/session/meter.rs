@@ -288,8 +288,24 @@ impl Progressive for MeterSession<'_> {
         if !fit_time_budget(&mut self.states, &mut targets, opts, self.start) {
             return None;
         }
+        self.round(&targets)
+    }
+}
+
+impl MeterSession<'_> {
+    /// Samples every reading on to exactly `n` samples in one round, whatever the session's
+    /// own stop and time budget (snapshots at chosen counts: `converge`); None when every
+    /// reading already has `n`. Blocks keep their fixed boundaries, so readings do not depend
+    /// on where the rounds fell.
+    pub fn step_to(&mut self, n: u64) -> Option<PassStats> {
+        let targets: Vec<u64> = self.states.iter().map(|s| s.taken.max(n)).collect();
+        self.round(&targets)
+    }
+
+    /// One round: every reading from its count to its target.
+    fn round(&mut self, targets: &[u64]) -> Option<PassStats> {
         let iteration = self.estimator.iteration_samples();
-        let blocks = blocks(&self.states, &targets, iteration);
+        let blocks = blocks(&self.states, targets, iteration);
         if blocks.is_empty() {
             return None;
         }
