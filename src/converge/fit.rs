@@ -131,8 +131,10 @@ pub struct Summary {
     pub efficiency: Option<f64>,
     /// Efficiency over the best configuration's of the same image or meter (1 for the best).
     pub efficiency_ratio: Option<f64>,
-    /// The last snapshot's remaining bias estimate (images with a known reference noise).
+    /// The last snapshot's remaining bias estimate and its 95 % upper bound (images with a
+    /// known reference noise).
     pub bias: Option<f64>,
+    pub bias_bound: Option<f64>,
 }
 
 /// The rows of each configuration (config, source, meter), in order of first appearance.
@@ -184,6 +186,7 @@ pub fn summarize(rows: &[Row]) -> Vec<Summary> {
                 efficiency: efficiency(&pts),
                 efficiency_ratio: None,
                 bias: g.last().and_then(|r| r.bias_masked),
+                bias_bound: g.last().and_then(|r| r.bias_masked_bound),
             })
         })
         .collect();

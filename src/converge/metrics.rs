@@ -50,6 +50,8 @@ pub struct ImageErrors {
     pub rel_rmse_masked_corrected: Option<f64>,
     /// The relative bias on Y that remains (see the module docs).
     pub bias_masked: Option<f64>,
+    /// Its 95 % upper bound: √max(b² + 1.96 · se(b²), 0), se from the pixels' spread.
+    pub bias_masked_bound: Option<f64>,
 }
 
 impl ImageErrors {
@@ -69,6 +71,8 @@ struct Sum {
     err: f64,
     noise: f64,
     n: u64,
+    /// Σ of the squared per-pixel terms (err − noise), for the standard error.
+    sq: f64,
 }
 
 impl Sum {
@@ -78,6 +82,13 @@ impl Sum {
 
     fn corrected(&self) -> Option<f64> {
         (self.n > 0).then(|| (self.err - self.noise) / self.n as f64)
+    }
+
+    /// The standard error of [`Sum::corrected`] (terms pushed with `sq`).
+    fn corrected_se(&self) -> Option<f64> {
+        let n = self.n as f64;
+        let m = self.corrected()?;
+        (self.n > 1).then(|| ((self.sq / n - m * m).max(0.0) / (n - 1.0)).sqrt())
     }
 }
 
@@ -112,8 +123,13 @@ pub fn image_errors(
         if let (Some(v), Some(own), false) = (var, own_var_y, masked[i]) {
             let r = f64::from(reference.y[i]);
             let d = f64::from(y[i]) - r;
-            bias.err += d * d / (r * r + REL_MSE_OFFSET);
-            bias.noise += (own[i] + f64::from(v.y[i])) / (r * r + REL_MSE_OFFSET);
+            let (e, v) = (
+                d * d / (r * r + REL_MSE_OFFSET),
+                (own[i] + f64::from(v.y[i])) / (r * r + REL_MSE_OFFSET),
+            );
+            bias.err += e;
+            bias.noise += v;
+            bias.sq += (e - v) * (e - v);
             bias.n += 1;
         }
     }
@@ -129,6 +145,9 @@ pub fn image_errors(
         rel_rmse_corrected: known.then(|| all.corrected().map(root)).flatten(),
         rel_rmse_masked_corrected: known.then(|| kept.corrected().map(root)).flatten(),
         bias_masked: own_finite.then(|| bias.corrected().map(root)).flatten(),
+        bias_masked_bound: own_finite
+            .then(|| Some(root(bias.corrected()? + 1.96 * bias.corrected_se()?)))
+            .flatten(),
     }
 }
 

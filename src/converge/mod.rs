@@ -108,6 +108,8 @@ pub struct Row {
     pub rel_rmse_corrected: Option<f64>,
     pub rel_rmse_masked_corrected: Option<f64>,
     pub bias_masked: Option<f64>,
+    /// The 95 % upper bound of `bias_masked`.
+    pub bias_masked_bound: Option<f64>,
     /// The error the configuration is judged by (`ImageErrors::primary`; a meter's relative
     /// error).
     pub error: Option<f64>,
@@ -134,6 +136,7 @@ impl Row {
         self.rel_rmse_corrected = e.rel_rmse_corrected;
         self.rel_rmse_masked_corrected = e.rel_rmse_masked_corrected;
         self.bias_masked = e.bias_masked;
+        self.bias_masked_bound = e.bias_masked_bound;
         self.error = Some(e.primary());
         self
     }

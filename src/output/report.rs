@@ -36,7 +36,7 @@ pub struct Report {
 }
 
 /// The CSV columns, in order (the names of [`Row`]'s fields).
-pub const COLUMNS: [&str; 24] = [
+pub const COLUMNS: [&str; 25] = [
     "config",
     "source",
     "integrator",
@@ -52,6 +52,7 @@ pub const COLUMNS: [&str; 24] = [
     "rel_rmse_corrected",
     "rel_rmse_masked_corrected",
     "bias_masked",
+    "bias_masked_bound",
     "error",
     "meter",
     "value",
@@ -108,6 +109,7 @@ fn field(r: &Row, column: &str) -> String {
         "rel_rmse_corrected" => opt(r.rel_rmse_corrected),
         "rel_rmse_masked_corrected" => opt(r.rel_rmse_masked_corrected),
         "bias_masked" => opt(r.bias_masked),
+        "bias_masked_bound" => opt(r.bias_masked_bound),
         "error" => opt(r.error),
         "meter" => opt(r.meter),
         "value" => opt(r.value),
@@ -202,6 +204,7 @@ fn set(r: &mut Row, name: &str, v: &str) -> std::result::Result<(), String> {
         "rel_rmse_corrected" => r.rel_rmse_corrected = number(v)?,
         "rel_rmse_masked_corrected" => r.rel_rmse_masked_corrected = number(v)?,
         "bias_masked" => r.bias_masked = number(v)?,
+        "bias_masked_bound" => r.bias_masked_bound = number(v)?,
         "error" => r.error = number(v)?,
         "meter" => r.meter = parse_opt(v)?,
         "value" => r.value = number(v)?,
@@ -270,7 +273,7 @@ pub fn markdown(report: &Report) -> String {
         .collect();
     let _ = writeln!(
         s,
-        "| configuration | source | samples | time (s) | samples/s | error | slope | {} | efficiency | bias |",
+        "| configuration | source | samples | time (s) | samples/s | error | slope | {} | efficiency | bias (95 % bound) |",
         targets.join(" | ")
     );
     let _ = writeln!(
@@ -290,7 +293,7 @@ pub fn markdown(report: &Report) -> String {
         let times: Vec<String> = x.time_to.iter().map(|t| seconds(*t)).collect();
         let _ = writeln!(
             s,
-            "| {name} | {} | {} | {} | {:.4} | {} | {slope} | {} | {} | {} |",
+            "| {name} | {} | {} | {} | {:.4e} | {} | {slope} | {} | {} | {} |",
             x.source,
             x.samples,
             seconds(Some(x.time_s)),
@@ -298,7 +301,11 @@ pub fn markdown(report: &Report) -> String {
             percent(x.error),
             times.join(" | "),
             x.efficiency_ratio.map_or("—".into(), |r| format!("{r:.2}")),
-            x.bias.map_or("—".into(), percent),
+            match (x.bias, x.bias_bound) {
+                (Some(b), Some(u)) => format!("{} (≤ {})", percent(b), percent(u)),
+                (Some(b), None) => percent(b),
+                _ => "—".into(),
+            },
         );
     }
     if !report.notes.is_empty() {
