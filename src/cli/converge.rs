@@ -12,7 +12,7 @@
 //! ```
 
 use super::common::{clap_message, named, print_summary};
-use super::meter::{points, world_meter};
+use super::meter::{points, world_meter, PointArgs};
 use super::render::parse_resolution;
 use crate::converge::meters::{self, ReferenceValue};
 use crate::converge::metrics::{image_errors, Reference};
@@ -58,8 +58,8 @@ struct ConvergeArgs {
     /// for this many seconds (default: 10 × --time); it is written to DIR/reference.exr.
     #[arg(long = "reference-time", allow_negative_numbers = true)]
     reference_time: Option<f64>,
-    /// The integrator of the rendered reference (default: the most efficient unbiased one
-    /// in a short pilot run; path for meters).
+    /// The integrator of the rendered reference (default: bdpt where it renders everything
+    /// in the stage, else path; path for meters).
     #[arg(long = "reference-integrator")]
     reference_integrator: Option<String>,
     /// Wavelengths per sample to compare: 4 (hero + 3 rotations) and/or 1 (the hero alone).
@@ -75,18 +75,10 @@ struct ConvergeArgs {
     /// pixel, or per reading).
     #[arg(long = "max-spp")]
     max_spp: Option<u64>,
-    /// Meter position in stage coordinates (repeat; switches to meters, as `meter` takes them).
-    #[arg(long = "at", value_name = "X,Y,Z", allow_hyphen_values = true)]
-    at: Vec<String>,
-    /// Normal of an illuminance meter, one per --at.
-    #[arg(long, value_name = "NX,NY,NZ", allow_hyphen_values = true)]
-    normal: Vec<String>,
-    /// Luminance meters (cd/m²) looking along --dir instead of illuminance.
-    #[arg(long)]
-    luminance: bool,
-    /// Viewing direction of a luminance meter, one per --at.
-    #[arg(long, value_name = "DX,DY,DZ", allow_hyphen_values = true)]
-    dir: Vec<String>,
+    /// Meters (as `meter` takes them): --at X,Y,Z with --normal, or --luminance with --dir;
+    /// --at switches from the image to meters.
+    #[command(flatten)]
+    points: PointArgs,
     /// The meters' reference values (lx or cd/m²), one per --at, instead of a long run.
     #[arg(
         long = "reference-value",
@@ -143,9 +135,9 @@ fn command_line(argv: &[OsString]) -> String {
 fn run(args: &ConvergeArgs, command: String) -> Result<()> {
     check(args)?;
     let named_integrators = integrators(&args.integrators, args.mis)?;
-    let meters_asked = !args.at.is_empty();
+    let meters_asked = !args.points.at.is_empty();
     let points = if meters_asked {
-        Some(points(&args.at, &args.normal, &args.dir, args.luminance)?)
+        Some(points(&args.points)?)
     } else {
         None
     };
@@ -249,7 +241,7 @@ fn check(args: &ConvergeArgs) -> Result<()> {
     if args.max_spp == Some(0) {
         return Err(Error::option("--max-spp must be at least 1"));
     }
-    if args.at.is_empty() {
+    if args.points.at.is_empty() {
         if !args.reference_value.is_empty() {
             return Err(Error::option("--reference-value is for meters (--at …)"));
         }
@@ -259,11 +251,11 @@ fn check(args: &ConvergeArgs) -> Result<()> {
                 "--reference, --peers and --keep-images are for images, not meters",
             ));
         }
-        if !args.reference_value.is_empty() && args.reference_value.len() != args.at.len() {
+        if !args.reference_value.is_empty() && args.reference_value.len() != args.points.at.len() {
             return Err(Error::option(format!(
                 "{} --reference-value for {} --at: give one per meter",
                 args.reference_value.len(),
-                args.at.len()
+                args.points.at.len()
             )));
         }
         if let Some(v) = args.reference_value.iter().find(|v| !positive(v.abs())) {
@@ -352,7 +344,7 @@ fn run_images(
     )?;
     let masked = mask::emitter_mask(scene);
     report.masked_pixels = Some(masked.iter().filter(|&&m| m).count());
-    let reference = image_reference(args, scene, opts, &masked, report)?;
+    let reference = image_reference(args, scene, opts, report)?;
     let images = args.output.join("images");
     if args.keep_images {
         std::fs::create_dir_all(&images)
@@ -362,7 +354,8 @@ fn run_images(
         if !args.keep_images {
             return Ok(());
         }
-        let name = format!("{}_{:06}.exr", c.label.replace(' ', "_"), out.spp);
+        let label = c.label.replace(' ', "_").replace('λ', "wl");
+        let name = format!("{label}_{:06}.exr", out.spp);
         write_snapshot(&images.join(name), args, c, out)
     };
     for c in &configs {
@@ -386,7 +379,6 @@ fn image_reference(
     args: &ConvergeArgs,
     scene: &Scene,
     opts: &RunOptions,
-    masked: &[bool],
     report: &mut Report,
 ) -> Result<Reference> {
     if let Some(path) = &args.reference {
@@ -401,25 +393,18 @@ fn image_reference(
         return Ok(r);
     }
     let time = args.reference_time.unwrap_or(10.0 * args.time);
-    let (integrator, pilot, render_time) = match &args.reference_integrator {
-        Some(n) => (
-            integrators(std::slice::from_ref(n), args.mis)?[0],
-            Vec::new(),
-            time,
+    let (integrator, chosen) = match &args.reference_integrator {
+        Some(n) => (integrators(std::slice::from_ref(n), args.mis)?[0], "named"),
+        None => (
+            reference::default_integrator(scene),
+            "bdpt where it renders everything in the stage, else path",
         ),
-        None => {
-            let candidates = reference::candidates(scene);
-            let pilot_s = 0.1 * time / candidates.len().max(1) as f64;
-            eprintln!("converge: choosing the reference integrator ({pilot_s:.1} s each)");
-            let (best, scores) = reference::pilot(scene, &candidates, pilot_s, opts, masked)?;
-            (best, scores, 0.9 * time)
-        }
     };
     eprintln!(
-        "converge: rendering the reference with {} for {render_time:.0} s",
+        "converge: rendering the reference with {} for {time} s",
         integrator.name()
     );
-    let (r, info) = reference::render(scene, integrator, render_time, opts)?;
+    let (r, info) = reference::render(scene, integrator, time, opts)?;
     let path = args.output.join("reference.exr");
     let meta = exr::ExrMetadata {
         spp: 2 * info.spp_per_half,
@@ -430,15 +415,6 @@ fn image_reference(
         scene: args.scene.display().to_string(),
     };
     reference_file::write(&path, &r, &meta)?;
-    let chosen = if pilot.is_empty() {
-        "named".to_string()
-    } else {
-        let s: Vec<String> = pilot.iter().map(|(n, e)| format!("{n} {e:.3e}")).collect();
-        format!(
-            "chosen by a pilot run, efficiency 1/(V·t): {}",
-            s.join(", ")
-        )
-    };
     let bias = if integrator.capabilities().unbiased {
         "unbiased"
     } else {

@@ -39,18 +39,8 @@ use std::path::{Path, PathBuf};
 struct MeterArgs {
     /// The stage (.usda, .usdc or .usdz).
     scene: PathBuf,
-    /// Meter position in stage coordinates (repeat for several meters).
-    #[arg(long = "at", value_name = "X,Y,Z", allow_hyphen_values = true)]
-    at: Vec<String>,
-    /// Normal of the receiving surface, one per --at (or one for --grid).
-    #[arg(long, value_name = "NX,NY,NZ", allow_hyphen_values = true)]
-    normal: Vec<String>,
-    /// Measure luminance (cd/m²) looking along --dir instead of illuminance.
-    #[arg(long)]
-    luminance: bool,
-    /// Viewing direction of a luminance meter, one per --at.
-    #[arg(long, value_name = "DX,DY,DZ", allow_hyphen_values = true)]
-    dir: Vec<String>,
+    #[command(flatten)]
+    points: PointArgs,
     /// Origin (a corner) of an illuminance grid.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     grid: Option<String>,
@@ -92,6 +82,23 @@ struct MeterArgs {
     json: bool,
     #[command(flatten)]
     integrator: IntegratorArgs,
+}
+
+/// Where meters are and what they measure (`meter` and `converge` take them alike).
+#[derive(clap::Args, Debug, Clone)]
+pub(super) struct PointArgs {
+    /// Meter position in stage coordinates (repeat for several meters).
+    #[arg(long = "at", value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub at: Vec<String>,
+    /// Normal of the receiving surface, one per --at (or one for --grid).
+    #[arg(long, value_name = "NX,NY,NZ", allow_hyphen_values = true)]
+    pub normal: Vec<String>,
+    /// Measure luminance (cd/m²) looking along --dir instead of illuminance.
+    #[arg(long)]
+    pub luminance: bool,
+    /// Viewing direction of a luminance meter, one per --at.
+    #[arg(long, value_name = "DX,DY,DZ", allow_hyphen_values = true)]
+    pub dir: Vec<String>,
 }
 
 /// The grid as given (stage coordinates).
@@ -354,25 +361,26 @@ fn request(a: &MeterArgs) -> Result<Request> {
             )));
         }
     }
-    if a.at.is_empty() {
+    if a.points.at.is_empty() {
         return Err(Error::option(
             "nothing to measure: give --at X,Y,Z with --normal NX,NY,NZ \
                     (illuminance), --luminance --at X,Y,Z --dir DX,DY,DZ, or --grid",
         ));
     }
-    let (kind, points) = points(&a.at, &a.normal, &a.dir, a.luminance)?;
+    let (kind, points) = points(&a.points)?;
     Ok(Request::Points(kind, points))
 }
 
 /// The meters of `--at` with `--normal` (illuminance) or, with `--luminance`, `--dir`: their
 /// kind and (position, normal or direction) in stage coordinates (also `converge`'s).
-pub(super) fn points(
-    at: &[String],
-    normal: &[String],
-    dir: &[String],
-    luminance: bool,
-) -> Result<(MeterKind, Vec<(DVec3, DVec3)>)> {
-    let (kind, dirs, flag) = if luminance {
+pub(super) fn points(p: &PointArgs) -> Result<(MeterKind, Vec<(DVec3, DVec3)>)> {
+    let PointArgs {
+        at,
+        normal,
+        luminance,
+        dir,
+    } = p;
+    let (kind, dirs, flag) = if *luminance {
         if !normal.is_empty() {
             return Err(Error::option("--luminance meters take --dir, not --normal"));
         }
@@ -401,7 +409,7 @@ pub(super) fn points(
 }
 
 fn grid_request(a: &MeterArgs) -> Result<Request> {
-    if !a.at.is_empty() || a.luminance || !a.dir.is_empty() {
+    if !a.points.at.is_empty() || a.points.luminance || !a.points.dir.is_empty() {
         return Err(Error::option(
             "--grid measures illuminance on its own: drop --at, --dir and --luminance",
         ));
@@ -414,7 +422,7 @@ fn grid_request(a: &MeterArgs) -> Result<Request> {
         })
     };
     let (u, v, n) = (need(&a.u, "--u")?, need(&a.v, "--v")?, need(&a.n, "--n")?);
-    let normal = match a.normal.as_slice() {
+    let normal = match a.points.normal.as_slice() {
         [one] => direction("--normal", one)?,
         [] => return Err(Error::option("--grid needs --normal NX,NY,NZ")),
         _ => return Err(Error::option("--grid takes one --normal for all its cells")),

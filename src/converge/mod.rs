@@ -118,7 +118,9 @@ pub struct Row {
     pub value: Option<f64>,
     pub ci95: Option<f64>,
     pub reference: Option<f64>,
+    /// |value − reference| / |reference|.
     pub rel_error: Option<f64>,
+    /// ci95 / |reference|.
     pub rel_ci95: Option<f64>,
     /// Whether value ± ci95 covers the reference.
     pub covered: Option<bool>,

@@ -47,7 +47,8 @@ struct Series {
     points: Vec<(f64, f64)>,
 }
 
-/// The series of `rows`: (time, error) per configuration, with its slope in the label.
+/// The series of `rows`: (time, error) per configuration, with its slope in the label (a
+/// peer's configuration names the renderer, e.g. "mitsuba llvm_ad_spectral").
 fn series(rows: &[Row]) -> Vec<Series> {
     fit::groups(rows)
         .iter()
@@ -60,9 +61,6 @@ fn series(rows: &[Row]) -> Vec<Series> {
             let mut label = g[0].config.clone();
             if let Some(m) = g[0].meter {
                 label += &format!(" meter {m}");
-            }
-            if peer && !label.contains(&g[0].source) {
-                label = format!("{} {label}", g[0].source);
             }
             Series {
                 label: label + &slope,
