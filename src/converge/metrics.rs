@@ -104,10 +104,10 @@ pub fn image_errors(
     let (mut all, mut kept) = (Sum::default(), Sum::default());
     let mut bias = Sum::default();
     let var = reference.variance.as_ref();
-    for i in 0..rgb.len() {
-        for c in 0..3 {
-            let r = f64::from(reference.rgb[i][c]);
-            let d = f64::from(rgb[i][c]) - r;
+    for (i, (px, pr)) in rgb.iter().zip(&reference.rgb).enumerate() {
+        for (c, (&x, &r)) in px.iter().zip(pr).enumerate() {
+            let r = f64::from(r);
+            let d = f64::from(x) - r;
             let den = r * r + REL_MSE_OFFSET;
             let e = d * d / den;
             let v = var.map_or(0.0, |v| f64::from(v.rgb[i][c]) / den);

@@ -74,10 +74,6 @@ pub fn polygon_area(p: &[DVec3]) -> f64 {
         .sum()
 }
 
-/// Sampling target of the integrating sphere: its estimator's per-sample σ is ~0.9 (Russian
-/// roulette over ~10 bounces), so it is held at 0.5 % ≥ 4.08 σ rather than 4.9 σ.
-const REL_SPHERE: f64 = 0.0024;
-
 /// An integrating sphere: a UV sphere of reflectance `rho` around a small isotropic lamp, and
 /// meters on facet centres next to the pole, at 45° and at the equator.
 pub struct IntegratingSphere {
