@@ -10,17 +10,21 @@
 //!   samples' Y per pixel (64 B), and for splatting integrators the splat sums and the odd
 //!   splats' Y (32 B more);
 //! - a pass: the tiles' continued sums (32 B per pixel) and the per-pixel variance (8 B), and
-//!   for splatting integrators the splat lists of one chunk, at most max-depth + 1 splats of
+//!   for splatting integrators the splat lists of one chunk, up to max-depth + 1 splats of
 //!   24 B (with their odd-sample copy) per sample, `max(SPLAT_CHUNK_SAMPLES, pixels)` samples;
 //! - the output: XYZ and RGB as f32, the EXR's channels and their compressed copy (72 B per
 //!   pixel);
 //! - strategy images (`--strategies`): per strategy, f64 weighted and unweighted sums, the
 //!   tiles' copy of them and the f32 images written (96 B per pixel);
 //! - VCM's light vertex store: one light subpath per pixel (images) or
-//!   `meter_light_paths` (meters) of at most max-depth vertices each, held twice while the
-//!   store is rebuilt, with the hash grid's index (a bound: subpaths usually end earlier);
+//!   `meter_light_paths` (meters) of up to max-depth vertices each, held twice while the
+//!   store is rebuilt, with the hash grid's index;
 //! - meters: per meter its sensor, state and reading, and a map cell's share of the CSV,
 //!   JSON and PNG (512 B).
+//!
+//! Path lengths enter as min(max-depth, [`TYPICAL_DEPTH`]): with Russian roulette a path
+//! rarely goes deeper, and a depth cap of 1000 (a furnace test) must not count as a thousand
+//! vertices per path. Within that, the figures are bounds.
 //!
 //! The default limit is what the process holds plus the machine's available memory
 //! (`MemAvailable` of `/proc/meminfo`), or [`FALLBACK_LIMIT`] where that cannot be read.
@@ -35,6 +39,9 @@ use crate::scene::Scene;
 
 /// The limit when the machine's available memory cannot be read.
 pub const FALLBACK_LIMIT: u64 = 8 << 30;
+
+/// The path length counted per path (see the module docs).
+pub const TYPICAL_DEPTH: u32 = 16;
 
 /// Bytes per pixel of the film, a pass and the output (see the module docs).
 const FILM: u64 = 64;
@@ -81,7 +88,7 @@ impl MemoryEstimate {
 pub fn image(scene: &Scene, opts: &RenderOptions) -> MemoryEstimate {
     let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
     let caps = opts.integrator.capabilities();
-    let depth = u64::from(opts.max_depth);
+    let depth = u64::from(opts.max_depth.min(TYPICAL_DEPTH));
     let mut e = MemoryEstimate::default();
     let per_pixel = FILM + if caps.splats { FILM_SPLATS } else { 0 };
     e.add("film", pixels.saturating_mul(per_pixel));
@@ -110,7 +117,7 @@ pub fn meters(meters: usize, opts: &MeterOptions) -> MemoryEstimate {
         Integrator::Vcm(p) => p.meter_light_paths,
         _ => 0,
     };
-    let depth = u64::from(opts.max_depth);
+    let depth = u64::from(opts.max_depth.min(TYPICAL_DEPTH));
     e.add(
         "light vertices",
         light_vertices(&opts.integrator, paths, depth),
