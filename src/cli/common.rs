@@ -71,7 +71,7 @@ pub struct IntegratorArgs {
     pub vcm_alpha: Option<f32>,
     /// Light subpaths VCM stores per iteration of meter readings (default 4096; images
     /// store one per pixel).
-    #[arg(long = "vcm-light-paths")]
+    #[arg(long = "vcm-light-paths", allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
     pub vcm_light_paths: Option<u64>,
 }
 
@@ -234,4 +234,33 @@ pub fn clap_message(e: &clap::Error) -> String {
         lines.join(" ")
     };
     format!("{} (see --help)", first.trim_start_matches("error: "))
+}
+
+/// A value parser for whole numbers of at least `min` whose error says so, negative numbers
+/// included (give the argument `allow_negative_numbers`, or clap suggests `-- -1`).
+pub fn at_least<T: TryFrom<u64>>(
+    min: u64,
+) -> impl Fn(&str) -> std::result::Result<T, String> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        let n: i128 = s
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{s}' is not a whole number"))?;
+        if n < i128::from(min) {
+            return Err(match min {
+                0 => format!("{n} must not be negative"),
+                1 => format!("{n} must be positive (at least 1)"),
+                _ => format!("{n} must be at least {min}"),
+            });
+        }
+        u64::try_from(n)
+            .ok()
+            .and_then(|v| T::try_from(v).ok())
+            .ok_or_else(|| format!("{n} is too large"))
+    }
+}
+
+/// `--max-memory SIZE`: bytes with an optional K, M, G or T (powers of 1024).
+pub fn max_memory(s: &str) -> std::result::Result<u64, String> {
+    crate::session::memory::parse_size(s)
 }

@@ -14,3 +14,4 @@ pub mod json;
 pub(crate) mod json;
 pub mod map;
 pub mod png;
+pub mod target;
