@@ -11,7 +11,7 @@
 //!     [--reference-value V,…] [--seed N] [--threads N] [--resolution WxH] [--max-depth N]
 //! ```
 
-use super::common::{clap_message, named, print_summary};
+use super::common::{clap_message, named, print_summary, Made};
 use super::meter::{points, world_meter, PointArgs};
 use super::render::parse_resolution;
 use crate::converge::meters::{self, ReferenceValue};
@@ -356,7 +356,7 @@ fn run_images(
         }
         let label = c.label.replace(' ', "_").replace('λ', "wl");
         let name = format!("{label}_{:06}.exr", out.spp);
-        write_snapshot(&images.join(name), args, c, out)
+        write_snapshot(&images.join(name), args, scene, c, out)
     };
     for c in &configs {
         eprintln!("converge: {} for {} s", c.label, args.time);
@@ -406,14 +406,16 @@ fn image_reference(
     );
     let (r, info) = reference::render(scene, integrator, time, opts)?;
     let path = args.output.join("reference.exr");
-    let meta = exr::ExrMetadata {
-        spp: 2 * info.spp_per_half,
-        integrator: integrator.name().into(),
+    let meta = Made {
+        stage: &args.scene,
+        scene,
+        integrator: &integrator,
         seed: opts.seed,
+        max_depth: opts.max_depth,
+        spp: 2 * info.spp_per_half,
         wall_time_s: info.time_s,
-        version: env!("CARGO_PKG_VERSION").into(),
-        scene: args.scene.display().to_string(),
-    };
+    }
+    .metadata();
     reference_file::write(&path, &r, &meta)?;
     let bias = if integrator.capabilities().unbiased {
         "unbiased"
@@ -445,15 +447,23 @@ fn check_size(path: &Path, r: &Reference, scene: &Scene) -> Result<()> {
     Ok(())
 }
 
-fn write_snapshot(path: &Path, args: &ConvergeArgs, c: &Config, out: &RenderOutput) -> Result<()> {
-    let meta = exr::ExrMetadata {
-        spp: out.spp,
-        integrator: c.integrator.name().into(),
+fn write_snapshot(
+    path: &Path,
+    args: &ConvergeArgs,
+    scene: &Scene,
+    c: &Config,
+    out: &RenderOutput,
+) -> Result<()> {
+    let meta = Made {
+        stage: &args.scene,
+        scene,
+        integrator: &c.integrator,
         seed: args.seed,
+        max_depth: args.max_depth,
+        spp: out.spp,
         wall_time_s: out.wall_time_s,
-        version: env!("CARGO_PKG_VERSION").into(),
-        scene: args.scene.display().to_string(),
-    };
+    }
+    .metadata();
     let white = spectral::color::white_xy().map(|c| c as f32);
     exr::write(
         path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,

@@ -19,3 +19,4 @@ pub mod plot;
 pub mod png;
 pub mod reference;
 pub mod report;
+pub mod target;

@@ -4,8 +4,13 @@
 //! **Passes.** Under `--spp` the first pass takes one chunk and later ones about
 //! [`PASS_SECONDS`] of work each, so that observers (the progress bar) hear often; under a
 //! time budget passes grow (1, 1, 2, 4, … 64 samples per pixel), each cut to what the
-//! measured rate says still fits in the budget, and the session stops after the pass in which
-//! the budget ran out (equal-time comparisons rely on it ending close to the budget).
+//! measured rate says still fits in the budget and in [`PASS_SECONDS`] (so that interrupts
+//! and checkpoints are heard about once a second), and the session stops after the pass in
+//! which the budget ran out (equal-time comparisons rely on it ending close to the budget).
+//!
+//! **Checkpoints.** [`ImageSession::checkpoint`] is the session's state between passes and
+//! [`ImageSession::resume`] continues one (`session::checkpoint`); since an image depends on
+//! the seed and the sample count only, a resumed render equals the uninterrupted one.
 //!
 //! **Chunks.** Light tracing and BDPT splat: each tile returns its splat list, merged in tile
 //! order, so images stay bit-identical for any thread count. Splat lists are bounded by
@@ -20,8 +25,9 @@
 //! also end at iteration boundaries, and each iteration is prepared (`begin_iteration`) on
 //! the session's threads before its first sample.
 
+use super::checkpoint::{self, Checkpoint};
 use super::{pool, PassStats, Progressive};
-use crate::error::Result;
+use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
@@ -39,6 +45,9 @@ const TILE_SIZE: usize = 16;
 pub const SPLAT_CHUNK_SAMPLES: u64 = 1 << 18;
 /// Samples per pixel when neither a count nor a time budget is given.
 pub const DEFAULT_SPP: u32 = 64;
+/// The most samples per pixel a render takes (a time budget stops there too): the EXR
+/// records the count as a 32-bit int.
+pub const MAX_SPP: u64 = i32::MAX as u64;
 /// Aimed-at duration of a pass under a sample count.
 pub const PASS_SECONDS: f64 = 1.0;
 
@@ -63,6 +72,9 @@ pub struct RenderOptions {
     /// after it, as a dispersive surface would, so every integrator, VCM's iteration tuples
     /// included, estimates with the hero only; `converge --wavelengths 1,4`).
     pub wavelengths: usize,
+    /// Refuse to start when the estimated memory (`session::memory`) and what the process
+    /// holds exceed this many bytes; None: the machine's available memory.
+    pub max_memory: Option<u64>,
 }
 
 /// The wavelength counts [`RenderOptions::wavelengths`] may take.
@@ -80,6 +92,7 @@ impl Default for RenderOptions {
             strategies: false,
             filter_textures: true,
             wavelengths: 4,
+            max_memory: None,
         }
     }
 }
@@ -126,6 +139,8 @@ pub struct ImageSession<'a> {
     dropped: u64,
     passes: u32,
     start: Instant,
+    /// Seconds spent before this session started (a resumed checkpoint's).
+    prior_s: f64,
 }
 
 impl<'a> ImageSession<'a> {
@@ -141,6 +156,11 @@ impl<'a> ImageSession<'a> {
         } else {
             0
         };
+        super::memory::check(
+            "the render",
+            &super::memory::image(scene, opts),
+            opts.max_memory,
+        )?;
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h);
         let settings = Settings {
@@ -165,15 +185,55 @@ impl<'a> ImageSession<'a> {
             },
             target: match (opts.spp, opts.time_budget) {
                 (Some(n), _) => u64::from(n),
-                (None, Some(_)) => u64::MAX,
+                (None, Some(_)) => MAX_SPP,
                 (None, None) => u64::from(DEFAULT_SPP),
             },
             done: 0,
             dropped: 0,
             passes: 0,
             start: Instant::now(),
+            prior_s: 0.0,
             opts: opts.clone(),
         })
+    }
+
+    /// The session's state under its run's identity (`session::checkpoint`).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            identity: checkpoint::identity(self.scene, &self.opts),
+            samples: self.done,
+            dropped: self.dropped,
+            wall_time_s: self.elapsed(),
+            film: self.film.state(),
+            strategies: self.strategy_films.as_ref().map(StrategyFilms::sums),
+        }
+    }
+
+    /// Continues from `c`, a checkpoint of the same run (identity checked), before any pass.
+    pub fn resume(&mut self, c: Checkpoint) -> Reason<()> {
+        c.check_identity(&checkpoint::identity(self.scene, &self.opts))?;
+        if self.done > 0 {
+            return Err("a session resumes only before its first pass".into());
+        }
+        let film = Film::from_state(c.film)?;
+        if (film.width, film.height) != (self.film.width, self.film.height) {
+            return Err("the checkpoint's film has another size".into());
+        }
+        match (&mut self.strategy_films, c.strategies) {
+            (Some(sf), Some(sums)) => sf.restore(sums)?,
+            (None, None) => {}
+            _ => return Err("the checkpoint's strategy images do not match".into()),
+        }
+        self.film = film;
+        self.done = c.samples;
+        self.dropped = c.dropped;
+        self.prior_s = c.wall_time_s;
+        Ok(())
+    }
+
+    /// Wall-clock seconds of the render, a resumed checkpoint's included.
+    fn elapsed(&self) -> f64 {
+        self.prior_s + self.start.elapsed().as_secs_f64()
     }
 
     /// The image so far.
@@ -187,7 +247,7 @@ impl<'a> ImageSession<'a> {
             xyz,
             rgb,
             spp: self.done,
-            wall_time_s: self.start.elapsed().as_secs_f64(),
+            wall_time_s: self.elapsed(),
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
             report: self.estimator.report(),
@@ -199,7 +259,7 @@ impl<'a> ImageSession<'a> {
     }
 
     fn finished(&self) -> bool {
-        let elapsed = self.start.elapsed().as_secs_f64();
+        let elapsed = self.elapsed();
         self.done >= self.target
             || (self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t))
     }
@@ -207,13 +267,14 @@ impl<'a> ImageSession<'a> {
     /// Samples per pixel of the next pass (see the module docs).
     fn pass_size(&self) -> u64 {
         let remaining = self.target - self.done;
-        let elapsed = self.start.elapsed().as_secs_f64();
+        let elapsed = self.elapsed();
         let per_sample = elapsed / self.done.max(1) as f64;
         let n = match self.opts.time_budget {
             Some(budget) => {
                 let mut n = self.done.clamp(1, 64);
                 if self.done > 0 && elapsed > 0.0 {
-                    n = n.min(((budget - elapsed) / per_sample).max(1.0) as u64);
+                    let left = (budget - elapsed).min(PASS_SECONDS);
+                    n = n.min((left / per_sample).max(1.0) as u64);
                 }
                 n
             }
@@ -317,8 +378,9 @@ impl ImageSession<'_> {
         PassStats {
             pass: self.passes,
             samples: self.done,
-            target: (self.target != u64::MAX).then_some(self.target),
-            wall_time_s: self.start.elapsed().as_secs_f64(),
+            target: (self.opts.time_budget.is_none() || self.opts.spp.is_some())
+                .then_some(self.target),
+            wall_time_s: self.elapsed(),
             dropped: self.dropped,
             variance: self.film.variance_y(self.exposure()),
         }
