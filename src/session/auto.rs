@@ -16,16 +16,17 @@
 //! earlier one to be chosen: the candidates come in order of simplicity (path before bdpt
 //! before vcm), and the pilot's figures are estimates.
 //!
-//! **Pilot size.** Under `--spp N` each candidate takes max(2, N/32) samples per pixel, the
-//! same for all, rounded up to whole chunks of the splatting ones (the image is then
-//! unchanged by the pause), meters max(256, N/32) samples per reading, or under
-//! `--rel-error` the first round; under `--time T` each candidate runs for T/32 (and at least 2
-//! samples per pixel, the fewest that give a variance). The winner's
+//! **Pilot size.** Under `--spp N` each candidate takes max(2, N/32) samples per pixel in one
+//! pass (`step_to`), the same for all, rounded up to whole chunks of the splatting ones (so
+//! that the pass boundary leaves their image unchanged); meters max(256, N/32) samples per
+//! reading, or under `--rel-error` the first round; under `--time T` each candidate runs for
+//! T/32 (and at least 2 samples per pixel, the fewest that give a variance). The winner's
 //! pilot samples are its first samples (same seed, same sample indices), so its session simply
 //! continues: under `--spp` the result is exactly what the chosen integrator alone gives.
 //! The losers' samples are discarded, which keeps every estimate unbiased. The pilot's time
 //! counts towards `--time`.
 
+use super::checkpoint::{self, Checkpoint};
 use super::image::{ImageSession, RenderOptions, DEFAULT_SPP};
 use super::meter::{MeterOptions, MeterSession, Reading, Stop, BLOCK};
 use super::{PassStats, Progressive};
@@ -144,8 +145,8 @@ fn percent(share: f64) -> String {
     }
 }
 
-/// Resolves `opts.integrator` = auto for an image: the winner's session, paused where its
-/// pilot ended and resumed towards `opts`' target.
+/// Resolves `opts.integrator` = auto for an image: the winner's session, which goes on from
+/// where its pilot ended towards `opts`' target.
 pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageSession<'a>> {
     let Integrator::Auto { mis } = opts.integrator else {
         return ImageSession::new(scene, opts);
@@ -193,11 +194,8 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
         }
         let start = Instant::now();
         let last = match spp {
-            Some(n) => {
-                session.pause_at(Some(pilot_spp(n, quantum)));
-                run_to_pause(&mut session)
-            }
-            None => run_timed_pilot(&mut session, o.time_budget),
+            Some(n) => session.step_to(pilot_spp(n, quantum)),
+            None => timed_pilot(&mut session),
         };
         let variance: f64 = last
             .as_ref()
@@ -224,8 +222,33 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
         pilot,
         pilot_share: PILOT_SHARE,
     };
-    session.resume(opts.time_budget, clock, report);
+    session.continue_after_pilot(opts.time_budget, clock, report);
     Ok(session)
+}
+
+/// `opts` for continuing checkpoint `c`: with `--integrator auto`, the candidate the
+/// checkpoint was rendered with (its identity names the integrator auto chose), so that a
+/// resumed run takes no pilot and ends bit for bit where the uninterrupted one does. The
+/// candidate whose run differs least from the checkpoint's is taken, so that
+/// `ImageSession::resume` names any remaining difference. Otherwise `opts` as they are.
+pub fn for_checkpoint(scene: &Scene, opts: &RenderOptions, c: &Checkpoint) -> RenderOptions {
+    let Integrator::Auto { mis } = opts.integrator else {
+        return opts.clone();
+    };
+    let Candidates { integrators, .. } = candidates(&scene.features, Target::Image, mis);
+    let differences = |o: &RenderOptions| {
+        let here = checkpoint::identity(scene, o);
+        let there = |k: &String| c.identity.iter().find(|(key, _)| key == k).map(|p| &p.1);
+        here.iter().filter(|(k, v)| there(k) != Some(v)).count()
+    };
+    integrators
+        .into_iter()
+        .map(|integrator| RenderOptions {
+            integrator,
+            ..opts.clone()
+        })
+        .min_by_key(differences)
+        .unwrap_or_else(|| opts.clone())
 }
 
 /// Samples per pixel of each candidate's pilot under `--spp n`: max(2, n/32) rounded up to a
@@ -235,20 +258,11 @@ fn pilot_spp(n: u64, quantum: u64) -> u64 {
     k.div_ceil(quantum).saturating_mul(quantum).min(n)
 }
 
-/// The pilot of an image under a time budget: 2 samples per pixel (the fewest that give a
-/// variance), then on until `share` seconds; its last pass.
-fn run_timed_pilot(session: &mut ImageSession, share: Option<f64>) -> Option<PassStats> {
-    session.set_time_budget(None);
-    session.pause_at(Some(2));
-    let first = run_to_pause(session);
-    session.pause_at(None);
-    session.set_time_budget(share);
-    run_to_pause(session).or(first)
-}
-
-/// Steps a session until it pauses or ends; its last pass.
-fn run_to_pause(session: &mut dyn Progressive) -> Option<PassStats> {
-    let mut last = None;
+/// The pilot of an image session whose time budget is the pilot's share: 2 samples per
+/// pixel (the fewest that give a variance), then passes until the share is spent; its last
+/// pass.
+fn timed_pilot(session: &mut ImageSession) -> Option<PassStats> {
+    let mut last = session.step_to(2);
     while let Some(s) = session.step() {
         last = Some(s);
     }
@@ -298,15 +312,13 @@ pub(super) fn meters<'a>(
     for integrator in integrators {
         let o = MeterOptions {
             integrator,
-            time_budget: if single {
-                opts.time_budget
-            } else {
-                opts.time_budget.map(|t| t * PILOT_SHARE)
-            },
             ..opts.clone()
         };
         let mut session = MeterSession::new(scene, meters, &o)?;
-        if !single {
+        let start = Instant::now();
+        let last = if single {
+            None
+        } else {
             let pause = match opts.stop {
                 Stop::Samples(n) => {
                     let k = ((n as f64 * PILOT_SHARE).ceil() as u64).div_ceil(BLOCK) * BLOCK;
@@ -314,13 +326,7 @@ pub(super) fn meters<'a>(
                 }
                 Stop::RelError(_) => session.first_round(),
             };
-            session.pause_at(Some(pause));
-        }
-        let start = Instant::now();
-        let last = if single {
-            None
-        } else {
-            run_to_pause(&mut session)
+            session.step_to(pause)
         };
         let seconds = start.elapsed().as_secs_f64();
         runs.push((session, last, seconds));
@@ -333,7 +339,7 @@ pub(super) fn meters<'a>(
         pilot,
         pilot_share: PILOT_SHARE,
     };
-    session.resume(opts.time_budget, clock, report);
+    session.continue_after_pilot(opts.time_budget, clock, report);
     Ok(session)
 }
 

@@ -11,7 +11,9 @@
 //! and the number of threads.
 
 pub mod auto;
+pub mod checkpoint;
 pub mod image;
+pub mod memory;
 pub mod meter;
 mod pool;
 
