@@ -17,7 +17,8 @@
 //! line and exit 1; so is a luminance meter asked of light tracing, which cannot estimate it.
 
 use super::common::{
-    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+    clap_message, print_report, print_summary, warn_depth_cut, warn_dropped, warn_limits,
+    IntegratorArgs,
 };
 use crate::error::{Error, Result};
 use crate::output::json;
@@ -84,9 +85,9 @@ struct MeterArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// Maximum number of scattering events (as for rendering).
-    #[arg(long = "max-depth", default_value_t = 7)]
-    max_depth: u32,
+    /// Maximum number of scattering events (as for rendering; default unlimited).
+    #[arg(long = "max-depth")]
+    max_depth: Option<u32>,
     /// Print the readings as JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -239,6 +240,7 @@ fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> 
 /// Warnings about dropped samples and readings a cap stopped.
 fn warn(run: &MeterRun, opts: &MeterOptions) {
     warn_dropped(run.dropped);
+    warn_meter_depth_cut(&run.readings);
     print_report(&run.report);
     for (cap, what) in [
         (Cap::Samples, "the sample cap (--max-spp)"),
@@ -256,6 +258,22 @@ fn warn(run: &MeterRun, opts: &MeterOptions) {
             };
             eprintln!("warning: {k} readings were stopped by {what} {target}");
         }
+    }
+}
+
+/// What the depth cap cut: of the one reading, or of the reading it cut most.
+fn warn_meter_depth_cut(readings: &[Reading]) {
+    let cut = readings
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.depth_cut.map(|c| (i, c)))
+        .max_by(|a, b| a.1.fraction.total_cmp(&b.1.fraction));
+    if let Some((i, c)) = cut {
+        let what = match readings.len() {
+            1 => "the reading".to_string(),
+            n => format!("reading {} (the largest cut of the {n} readings)", i + 1),
+        };
+        warn_depth_cut(Some(&c), &what);
     }
 }
 

@@ -1,7 +1,8 @@
 //! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
 
 use super::common::{
-    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+    clap_message, print_report, print_summary, warn_depth_cut, warn_dropped, warn_limits,
+    IntegratorArgs,
 };
 use super::progress::Progress;
 use crate::error::{Error, Result};
@@ -41,8 +42,9 @@ struct RenderArgs {
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
     /// Maximum number of scattering events (pbrt's maxdepth; Mitsuba's max_depth − 1).
-    #[arg(long = "max-depth", default_value_t = 7)]
-    max_depth: u32,
+    /// Default: unlimited (Russian roulette ends paths); a cap that cuts light says how much.
+    #[arg(long = "max-depth")]
+    max_depth: Option<u32>,
     #[command(flatten)]
     integrator: IntegratorArgs,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
@@ -103,6 +105,7 @@ fn run(args: &RenderArgs) -> Result<()> {
     progress.finish();
     let out = session.output();
     warn_dropped(out.dropped_samples);
+    warn_depth_cut(out.depth_cut.as_ref(), "the image's mean luminance");
     print_report(&out.report);
     let path = args
         .output

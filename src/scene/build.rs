@@ -94,12 +94,14 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         warnings,
     };
     let all_opaque = materials.iter().all(Material::is_opaque);
+    let dispersive = materials.iter().any(Material::is_dispersive);
     Ok(Scene {
         source: file.clone(),
         meshes,
         tri_refs,
         bvh,
         all_opaque,
+        dispersive,
         materials,
         lights,
         light_sampler,

@@ -20,10 +20,11 @@
 //! also end at iteration boundaries, and each iteration is prepared (`begin_iteration`) on
 //! the session's threads before its first sample.
 
-use super::{pool, PassStats, Progressive};
+use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::Result;
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
+use crate::integrator::cut::{depth_cap, BatchedRatio};
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -34,9 +35,17 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 const TILE_SIZE: usize = 16;
-/// Samples per chunk of a splatting integrator (bounds the splat lists held at once: at most
-/// max-depth + 1 splats of 16 bytes per sample).
+/// Samples per chunk of a splatting integrator at depth caps up to 7 (bounds the splat lists
+/// held at once: at most max-depth + 1 splats of 16 bytes per sample).
 pub const SPLAT_CHUNK_SAMPLES: u64 = 1 << 18;
+/// Splats a chunk may hold at most (8 per sample of [`SPLAT_CHUNK_SAMPLES`]: 32 MiB): deeper
+/// caps make chunks smaller ([`splat_chunk_samples`]), down to one sample per pixel.
+pub const SPLATS_PER_CHUNK: u64 = SPLAT_CHUNK_SAMPLES * 8;
+
+/// Samples over the image per chunk of a splatting integrator with depth cap `cap`.
+pub fn splat_chunk_samples(cap: u32) -> u64 {
+    (SPLATS_PER_CHUNK / (u64::from(cap) + 1)).clamp(1, SPLAT_CHUNK_SAMPLES)
+}
 /// Samples per pixel when neither a count nor a time budget is given.
 pub const DEFAULT_SPP: u32 = 64;
 /// Aimed-at duration of a pass under a sample count.
@@ -49,7 +58,10 @@ pub struct RenderOptions {
     pub time_budget: Option<f64>,
     pub seed: u64,
     pub threads: Option<usize>,
-    pub max_depth: u32,
+    /// Maximum scattering events (pbrt's maxdepth); None: unlimited — Russian roulette ends
+    /// paths, behind the safety cap `SAFETY_DEPTH`. Whatever the cap, the output says what
+    /// it cut when a path reached it ([`RenderOutput::depth_cut`]).
+    pub max_depth: Option<u32>,
     /// The light-transport algorithm and its settings.
     pub integrator: Integrator,
     /// Record the per-(s, t) decomposition (`Capabilities::strategy_images`).
@@ -67,7 +79,7 @@ impl Default for RenderOptions {
             time_budget: None,
             seed: 0,
             threads: None,
-            max_depth: 7,
+            max_depth: None,
             integrator: Integrator::Path,
             strategies: false,
             filter_textures: true,
@@ -90,6 +102,8 @@ pub struct RenderOutput {
     pub strategies: Option<Vec<StrategyImage>>,
     /// The integrator's report on its settings and resources (`Estimator::report`).
     pub report: Option<String>,
+    /// What the depth cap cut of the image's mean luminance, when a path reached it.
+    pub depth_cut: Option<DepthCut>,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -112,6 +126,10 @@ pub struct ImageSession<'a> {
     strategy_films: Option<StrategyFilms>,
     /// Samples per pixel per chunk.
     chunk: u64,
+    /// The effective depth cap.
+    cap: u32,
+    /// The samples' luminance within and past the cap, merged in tile order.
+    cut: BatchedRatio,
     target: u64,
     done: u64,
     dropped: u64,
@@ -126,10 +144,11 @@ impl<'a> ImageSession<'a> {
         } else {
             0
         };
+        let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h);
         let settings = Settings {
-            max_depth: opts.max_depth,
+            max_depth: cap,
             filter: texture_filter(opts),
             meters: false,
         };
@@ -142,12 +161,14 @@ impl<'a> ImageSession<'a> {
             tiles: film.tiles(TILE_SIZE),
             film,
             strategy_count,
-            strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, opts.max_depth)),
+            strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, cap)),
             chunk: if splats {
-                (SPLAT_CHUNK_SAMPLES / (w * h) as u64).max(1)
+                (splat_chunk_samples(cap) / (w * h) as u64).max(1)
             } else {
                 u64::MAX
             },
+            cap,
+            cut: BatchedRatio::default(),
             target: match (opts.spp, opts.time_budget) {
                 (Some(n), _) => u64::from(n),
                 (None, Some(_)) => u64::MAX,
@@ -176,6 +197,12 @@ impl<'a> ImageSession<'a> {
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
             report: self.estimator.report(),
+            depth_cut: DepthCut::new(
+                self.opts.max_depth,
+                &self.cut.sums(),
+                self.cut.capped,
+                self.cut.limited,
+            ),
         }
     }
 
@@ -229,7 +256,7 @@ impl<'a> ImageSession<'a> {
             strategy_count: self.strategy_count,
         };
         let (film, estimator) = (&self.film, &*self.estimator);
-        let max_depth = self.opts.max_depth;
+        let max_depth = self.cap;
         let results: Vec<TileAccumulator> = self.pool.install(|| {
             self.tiles
                 .par_iter()
@@ -246,6 +273,7 @@ impl<'a> ImageSession<'a> {
         for (tile, r) in self.tiles.iter().zip(results) {
             self.film.store_tile(tile, &r.sums, &r.odd_y, count);
             self.film.add_splats(&r.splats, &r.odd_splats);
+            self.cut.merge(&r.cut);
             if let (Some(sf), Some(st)) = (&mut self.strategy_films, &r.strategies) {
                 sf.merge_tile(tile, st);
             }
@@ -349,7 +377,7 @@ fn render_tile(
                 let film = [x as f32 + jx, y as f32 + jy];
                 ws.record.clear();
                 estimator.image_sample(film, u_lens, &mut lambda, &mut sampler, ws);
-                acc.add(k, &ws.record, &lambda, s % 2 == 1);
+                acc.add(k, &ws.record, &lambda, s);
             }
             k += 1;
         }

@@ -10,10 +10,12 @@
 //! seed and each reading's sample count (blocks of fixed boundaries), whatever the pass sizes
 //! and the number of threads.
 
+pub mod depth_cut;
 pub mod image;
 pub mod meter;
 mod pool;
 
+pub use depth_cut::DepthCut;
 pub use image::{render, ImageSession, RenderOptions, RenderOutput, DEFAULT_SPP};
 pub use meter::{measure, Cap, MeterOptions, MeterRun, MeterSession, Reading, Stop};
 

@@ -15,7 +15,7 @@ use crate::geometry::Ray;
 use crate::light::emit::{LightLeSample, SceneSphere};
 use crate::light::{LightHit, LightSampleContext};
 use crate::sampling::Sampler;
-use crate::scene::{Hit, Scene};
+use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::{Sensor, SensorRay};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use crate::texture::TextureFilter;
@@ -62,18 +62,37 @@ impl<'a> BidirContext<'a> {
 }
 
 /// A light subpath: its origin y_0 and its non-specular scattering vertices y_1, y_2, …
-/// (specular ones cannot be connected to and are not stored).
+/// (specular ones cannot be connected to and are not stored), and where the depth cap
+/// stopped it, if it did.
 #[derive(Clone, Debug, Default)]
 pub struct LightSubpath {
     pub origin: Option<LightOrigin>,
     pub vertices: Vec<PathVertex>,
+    pub capped: Option<CappedSubpath>,
 }
 
 impl LightSubpath {
     pub fn clear(&mut self) {
         self.origin = None;
         self.vertices.clear();
+        self.capped = None;
     }
+}
+
+/// Where the depth cap stopped a light subpath: the walk as it arrived and the vertex it
+/// would have scattered at next (light tracing continues it past the cap, `cut.rs`).
+#[derive(Clone, Copy, Debug)]
+pub struct CappedSubpath {
+    pub walk: Walk,
+    pub at: CapVertex,
+}
+
+/// The vertex at the cap: y_{max_depth}, built (and stored if not specular), or, with a cap
+/// of 0, the first hit, not yet a vertex.
+#[derive(Clone, Copy, Debug)]
+pub enum CapVertex {
+    Built(PathVertex),
+    Hit(SurfaceHit),
 }
 
 /// The state carried from one vertex of a subpath to the next.
@@ -259,6 +278,8 @@ pub fn trace_light_subpath(
         }
         walk.arrive(&ctx.mis, si.p, si.ng);
         if walk.depth > ctx.max_depth {
+            let at = CapVertex::Hit(si);
+            path.capped = Some(CappedSubpath { walk, at });
             return;
         }
         let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
@@ -266,9 +287,12 @@ pub fn trace_light_subpath(
         if !bsdf.is_specular() {
             path.vertices.push(v);
         }
-        if walk.depth >= ctx.max_depth
-            || !walk.scatter(&ctx.mis, &v, TransportMode::Importance, sampler)
-        {
+        if walk.depth >= ctx.max_depth {
+            let at = CapVertex::Built(v);
+            path.capped = Some(CappedSubpath { walk, at });
+            return;
+        }
+        if !walk.scatter(&ctx.mis, &v, TransportMode::Importance, sampler) {
             return;
         }
     }
