@@ -166,6 +166,8 @@ const REL_SPHERE: f64 = 0.0024;
 /// An integrating sphere: a UV sphere of reflectance `rho` around a small isotropic lamp, and
 /// meters on facet centres next to the pole, at 45° and at the equator.
 struct IntegratingSphere {
+    /// The stage's text and the scene built from it.
+    text: String,
     scene: Scene,
     meters: Vec<Meter>,
     /// The exact illuminance at each meter.
@@ -224,6 +226,7 @@ fn integrating_sphere(rho: f64) -> IntegratingSphere {
         "the reference is not uniform"
     );
     IntegratingSphere {
+        text: s,
         scene,
         meters: points
             .iter()
@@ -235,7 +238,8 @@ fn integrating_sphere(rho: f64) -> IntegratingSphere {
     }
 }
 
-/// Measures meters `which` of `case` with `kind` and checks them against the exact values.
+/// Measures meters `which` of `case` with `kind` at the default depth (unlimited) and checks
+/// them against the exact values; the safety cap must never act.
 fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Integrator) {
     let meters: Vec<Meter> = which.iter().map(|&i| case.meters[i]).collect();
     let stop = Stop::RelError(REL_SPHERE);
@@ -259,6 +263,7 @@ fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Int
             "facet {i}: too noisy"
         );
         assert!(rel.abs() < TOL, "facet {i}: {} vs exact {exact}", r.value);
+        assert_eq!(r.depth_cut, None, "facet {i}: the safety cap acted");
     }
 }
 
@@ -266,6 +271,87 @@ fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Int
 fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
     let case = integrating_sphere(0.9);
     check_integrating_sphere(&case, &[0, 1, 2], Integrator::Path);
+}
+
+/// The case of a silently biased default: at ρ = 0.9 a cap of 7 bounces cuts the
+/// light of every path with 8 or more, ρ'⁸/(1 − ρ') of Φ/A (ρ' = ρ(1 − f), the lamp's
+/// absorption f as in [`integrating_sphere`]), about 43 % of the reading (the 48 % is
+/// ρ⁷: Mitsuba's max_depth 7 is our 6). The reading then says so: the reported fraction
+/// matches that deficit within its ci95 — widened by the reference's own uniformity bound,
+/// 0.5 % of the reflected light, which the exact values already carry — and so does the
+/// deficit of the reading itself. The command line warns with the same figure.
+#[test]
+fn integrating_sphere_under_max_depth_7_reports_the_light_it_cut() {
+    let rho = 0.9;
+    let case = integrating_sphere(rho);
+    let meters = [case.meters[2]];
+    // The cut is estimated from the 1/8 of the capped paths that are continued: its interval
+    // is ~7× the reading's, hence the sample count.
+    let stop = Stop::Samples(1 << 18);
+    let r = read_with(&case.scene, &meters, stop, 1, Some(7), Integrator::Path)[0];
+    let cut = r
+        .depth_cut
+        .expect("a cap of 7 acts in an integrating sphere");
+    let exact = case.exact[2];
+    let flux_over_area = case.mean_e * (1.0 - rho * (1.0 - 0.02f64 * 0.02));
+    let rho_eff = rho * (1.0 - 0.02f64 * 0.02);
+    let cut_exact = flux_over_area * rho_eff.powi(8) / (1.0 - rho_eff) / exact;
+    let model = 0.005 * cut_exact;
+    let measured = 1.0 - r.value / exact;
+    let measured_ci = r.ci95 / exact;
+    eprintln!(
+        "max-depth 7: cut {:.4} ± {:.4} (exact {cut_exact:.4} ± {model:.4}); reading {:.4} low ± {measured_ci:.4}; {} paths capped",
+        cut.fraction, cut.ci95, measured, cut.capped
+    );
+    assert!(cut.user && cut.max_depth == 7 && !cut.lower_bound);
+    assert!(cut.ci95 < 0.01, "too noisy to judge: ±{}", cut.ci95);
+    assert!(
+        (cut.fraction - cut_exact).abs() <= cut.ci95 + model,
+        "reported {} ± {} vs exact {cut_exact}",
+        cut.fraction,
+        cut.ci95
+    );
+    assert!(
+        (measured - cut_exact).abs() <= measured_ci + model,
+        "the capped reading is {measured} low, exact {cut_exact}"
+    );
+    // The command line's warning and JSON.
+    let dir = common::temp_dir("sphere-cli");
+    common::write(&dir, "sphere.usda", &case.text);
+    let m = meters[0];
+    let (p, n) = (
+        format!("{},{},{}", m.p.x, m.p.y, m.p.z),
+        format!("{},{},{}", m.dir.x, m.dir.y, m.dir.z),
+    );
+    let args = [
+        "meter",
+        "sphere.usda",
+        "--at",
+        &p,
+        "--normal",
+        &n,
+        "--max-depth",
+        "7",
+        "--spp",
+        "8192",
+        "--json",
+    ];
+    let o = common::spectral_render(&args, &dir);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let err = common::stderr(&o);
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("warning: --max-depth 7 cut "))
+        .unwrap_or_else(|| panic!("no warning in {err}"));
+    let json: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    let c = &json["meters"][0]["depth_cut"];
+    let (f, h) = (c["fraction"].as_f64().unwrap(), c["ci95"].as_f64().unwrap());
+    eprintln!("{line}");
+    assert!(line.contains(&format!("{:.1} %", 100.0 * f)), "{line}");
+    assert!(
+        (f - cut_exact).abs() <= h + model,
+        "CLI: {f} ± {h} vs {cut_exact}"
+    );
 }
 
 /// The integrating sphere with light tracing and BDPT. Both cost O(path length) and

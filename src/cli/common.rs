@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::integrator::cut;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
-use crate::scene::Scene;
+use crate::scene::{Machinery, Scene};
 use crate::session::DepthCut;
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::ValueEnum;
@@ -123,6 +123,21 @@ impl IntegratorArgs {
             meter_light_paths: self.vcm_light_paths.unwrap_or(p.meter_light_paths),
             ..p
         }))
+    }
+}
+
+/// Machinery the scene does not need, forced on: a hidden flag for the tests and
+/// `tools/bench_pruning.sh`, which show that it changes only time (`scene::machinery`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct MachineryArgs {
+    /// Keep machinery the scene does not need: all, lobes, light-table, dispersion.
+    #[arg(long = "force-machinery", hide = true, value_name = "LIST", value_parser = Machinery::parse)]
+    pub force_machinery: Option<Machinery>,
+}
+
+impl MachineryArgs {
+    pub fn machinery(&self) -> Machinery {
+        self.force_machinery.unwrap_or_default()
     }
 }
 

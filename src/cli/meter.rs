@@ -18,7 +18,7 @@
 
 use super::common::{
     clap_message, print_report, print_summary, warn_depth_cut, warn_dropped, warn_limits,
-    IntegratorArgs,
+    IntegratorArgs, MachineryArgs,
 };
 use crate::error::{Error, Result};
 use crate::output::json;
@@ -93,6 +93,8 @@ struct MeterArgs {
     json: bool,
     #[command(flatten)]
     integrator: IntegratorArgs,
+    #[command(flatten)]
+    machinery: MachineryArgs,
 }
 
 /// The grid as given (stage coordinates).
@@ -132,7 +134,7 @@ fn run(args: &MeterArgs) -> Result<()> {
     if let Request::Points(kind, _) = &request {
         opts.integrator.check_meter(*kind)?;
     }
-    let scene = scene::load(&args.scene, Some((1, 1)))?;
+    let scene = scene::load_with(&args.scene, Some((1, 1)), args.machinery.machinery())?;
     print_summary(&scene);
     warn_limits(&opts.integrator, &scene, false);
     match request {
@@ -298,6 +300,22 @@ struct ReadingJson {
     /// Under --rel-error: false when a cap stopped the reading.
     #[serde(skip_serializing_if = "Option::is_none")]
     converged: Option<bool>,
+    /// What the depth cap cut of the reading, when a path reached it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    depth_cut: Option<DepthCutJson>,
+}
+
+/// `session::DepthCut` in the JSON: the cap, whether the user set it, the fraction of the
+/// reading it cut with its ci95, the paths that reached it, and whether the fraction is a
+/// lower bound.
+#[derive(Serialize)]
+struct DepthCutJson {
+    max_depth: u32,
+    user: bool,
+    fraction: f64,
+    ci95: f64,
+    capped_paths: u64,
+    lower_bound: bool,
 }
 
 fn json_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading, rel: bool) -> ReadingJson {
@@ -316,6 +334,14 @@ fn json_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading, rel: bool) -> Re
         ci95: r.ci95,
         samples: r.samples,
         converged: rel.then_some(r.capped.is_none()),
+        depth_cut: r.depth_cut.map(|c| DepthCutJson {
+            max_depth: c.max_depth,
+            user: c.user,
+            fraction: c.fraction,
+            ci95: c.ci95,
+            capped_paths: c.capped,
+            lower_bound: c.lower_bound,
+        }),
     }
 }
 

@@ -2,7 +2,7 @@
 
 use super::common::{
     clap_message, print_report, print_summary, warn_depth_cut, warn_dropped, warn_limits,
-    IntegratorArgs,
+    IntegratorArgs, MachineryArgs,
 };
 use super::progress::Progress;
 use crate::error::{Error, Result};
@@ -47,6 +47,8 @@ struct RenderArgs {
     max_depth: Option<u32>,
     #[command(flatten)]
     integrator: IntegratorArgs,
+    #[command(flatten)]
+    machinery: MachineryArgs,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
     strategies: Option<PathBuf>,
@@ -91,7 +93,7 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
 
 fn run(args: &RenderArgs) -> Result<()> {
     let opts = options(args)?;
-    let scene = scene::load(&args.scene, args.resolution)?;
+    let scene = scene::load_with(&args.scene, args.resolution, args.machinery.machinery())?;
     print_summary(&scene);
     warn_limits(&opts.integrator, &scene, true);
     let mut session = ImageSession::new(&scene, &opts)?;

@@ -99,6 +99,20 @@ impl PathIntegrator {
         self.li_from(scene, ray, t_max, None, lambda, sampler, None)
     }
 
+    /// [`li`](Self::li) that also continues a capped path past the cap into `cut`.
+    #[cfg(any(test, feature = "testing"))]
+    pub fn li_cut(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        lambda: &SampledWavelengths,
+        sampler: &mut Sampler,
+        cut: &mut CutSample,
+    ) -> SampledSpectrum {
+        self.li_from(scene, ray, t_max, None, lambda, sampler, Some(cut))
+    }
+
     /// [`li`](Self::li) for a ray whose direction was sampled at vertex `prev` (None: a camera
     /// ray), so that emitters it finds are MIS-weighted against light sampling at that vertex.
     /// The light meters (`integrator::meter`) start paths here from their sensor point. With

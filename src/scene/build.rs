@@ -2,6 +2,7 @@
 //! validated, lights built in absolute units, triangles put behind the BVH, a camera chosen.
 
 use super::limits;
+use super::machinery::Machinery;
 use super::render_scene::{Mesh, Scene, Summary, TriRef};
 use crate::accel::bvh::Bvh;
 use crate::bxdf::TrowbridgeReitz;
@@ -17,7 +18,7 @@ use crate::light::shaping::Shaping;
 use crate::light::EmissiveTexture;
 use crate::light::*;
 use crate::material::normal_map::Tangents;
-use crate::material::preview::PreviewTextures;
+use crate::material::preview::{PreviewLobes, PreviewTextures};
 use crate::material::{
     AlphaTexture, ColorInput, FloatInput, Material, PlasticMaterial, PreviewMaterial,
 };
@@ -35,7 +36,17 @@ use std::sync::Arc;
 /// Image width when neither RenderSettings nor the command line gives a resolution.
 const DEFAULT_WIDTH: u32 = 640;
 
+/// The render scene of `desc`; `resolution` overrides RenderSettings.
 pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<Scene> {
+    build_with(desc, resolution, Machinery::default())
+}
+
+/// [`build`] with the pieces of `machinery` kept where the scene does not need them.
+pub fn build_with(
+    desc: &SceneDescription,
+    resolution: Option<(u32, u32)>,
+    machinery: Machinery,
+) -> Result<Scene> {
     let file = &desc.source;
     let mut warnings = desc.warnings.clone();
     let mut textures = TextureCache::default();
@@ -47,6 +58,13 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
                 .map_err(|r| Error::prim(file, &m.prim_path, r))
         })
         .collect::<Result<Vec<_>>>()?;
+    if machinery.all_lobes {
+        for m in &mut materials {
+            if let Material::Preview(p) = m {
+                p.lobes = PreviewLobes::Full;
+            }
+        }
+    }
     let emissive = emissive_textures(desc, &mut textures)?;
     let default_material = materials.len() as u32;
     materials.push(Material::Diffuse {
@@ -82,7 +100,11 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         );
     }
     let camera = camera(desc, resolution, center, radius)?;
-    let light_sampler = LightSampler::new(&lights, radius);
+    let light_sampler = if machinery.light_table {
+        LightSampler::table(&lights, radius)
+    } else {
+        LightSampler::new(&lights, radius)
+    };
     let infinite_lights = indices_where(&lights, Light::is_infinite);
     let shape_lights = indices_where(&lights, Light::is_analytic_shape);
     let summary = Summary {
@@ -94,7 +116,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         warnings,
     };
     let all_opaque = materials.iter().all(Material::is_opaque);
-    let dispersive = materials.iter().any(Material::is_dispersive);
+    let dispersive = machinery.dispersion_checks || materials.iter().any(Material::is_dispersive);
     Ok(Scene {
         source: file.clone(),
         meshes,
