@@ -49,6 +49,7 @@ pub fn build_with(
 ) -> Result<Scene> {
     let file = &desc.source;
     let mut warnings = desc.warnings.clone();
+    warn_clamped_temperatures(desc, &mut warnings);
     let mut textures = TextureCache::default();
     let mut materials = desc
         .materials
@@ -135,6 +136,29 @@ pub fn build_with(
         summary,
         stage_to_world: desc.stage_to_world,
     })
+}
+
+/// A colour temperature outside the range its tint is defined for is clamped to it
+/// (`emission::color_temperature_rgb`): said in the load summary rather than silently.
+fn warn_clamped_temperatures(desc: &SceneDescription, warnings: &mut Vec<String>) {
+    let lights = desc.lights.iter().map(|l| (&l.prim_path, &l.emission));
+    let meshes = desc
+        .meshes
+        .iter()
+        .filter_map(|m| m.light.as_ref().map(|e| (&m.prim_path, e)));
+    for (path, e) in lights.chain(meshes) {
+        let Some(k) = e.color_temperature else {
+            continue;
+        };
+        let (lo, hi) = emission::COLOR_TEMPERATURE_RANGE;
+        if !(lo..=hi).contains(&k) {
+            warnings.push(format!(
+                "{path}: inputs:colorTemperature {k} K is outside {lo}–{hi} K; the tint of \
+                 {} K is used",
+                k.clamp(lo, hi)
+            ));
+        }
+    }
 }
 
 fn indices_where(lights: &[Light], f: impl Fn(&Light) -> bool) -> Vec<u32> {
@@ -999,5 +1023,33 @@ fn default_camera(center: Vec3, radius: f32) -> CameraDesc {
         focus_distance: 0.0,
         lens_radius: 0.0,
         exposure: 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_clamped_colour_temperature_is_named_in_the_summary() {
+        let bulb = |name: &str, k: f32| LightDesc {
+            prim_path: name.into(),
+            kind: LightKind::Sphere { radius: 0.05 },
+            to_world: Mat4::IDENTITY,
+            emission: EmissionDesc {
+                intensity: 10.0,
+                color_temperature: Some(k),
+                ..Default::default()
+            },
+            shaping: None,
+        };
+        let mut desc = SceneDescription::default();
+        desc.lights = vec![bulb("/Warm", 2700.0), bulb("/Blue", 20000.0)];
+        let w = build(&desc, Some((1, 1))).unwrap().summary.warnings;
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with("/Blue: inputs:colorTemperature 20000 K"),
+            "{w:?}"
+        );
     }
 }
