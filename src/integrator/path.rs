@@ -200,6 +200,7 @@ impl PathIntegrator {
         lambda: &SampledWavelengths,
         ext: &mut Sampler,
     ) -> (SampledSpectrum, bool) {
+        // Only the arriving ray's direction is read at `si` (wo = −d).
         let mut st = PathState::new(Ray::new(si.p + wo, -wo), f32::INFINITY, None);
         st.depth = depth;
         self.continue_past_cap(scene, si, &st, lambda, ext)
