@@ -88,10 +88,7 @@ fn continue_past_cap(
         walk.arrive(&ctx.mis, si.p, si.ng);
         v = vertex_to_sensor_at(ctx, &si, &walk, &mut lambda_ext, ext, &mut sum);
     };
-    if lambda_ext.secondary_terminated() && !lambda.secondary_terminated() {
-        sum = sum * lambda.pdf().safe_div(lambda_ext.pdf());
-    }
-    (sum, limited)
+    (lambda.rebase(sum, &lambda_ext), limited)
 }
 
 /// The light subpath's vertex at `si` (the walk arrived there), its connection to the sensor

@@ -138,21 +138,14 @@ impl PathIntegrator {
         } else {
             self.walk::<false>(scene, &mut st, self.max_depth, &mut lambda, sampler, &mut l)
         };
-        let rescale = |x: SampledSpectrum, lambda: &SampledWavelengths| {
-            if lambda.secondary_terminated() && !lambda_in.secondary_terminated() {
-                x * lambda_in.pdf().safe_div(lambda.pdf())
-            } else {
-                x
-            }
-        };
         if let (Some(si), Some(cut)) = (capped, cut) {
             cut.capped += 1;
             if let Some(mut ext) = continuation(sampler) {
                 let (c, limited) = self.continue_past_cap(scene, &si, &st, &lambda, &mut ext);
-                cut.add(rescale(c, &lambda), 1.0, limited);
+                cut.add(lambda_in.rebase(c, &lambda), 1.0, limited);
             }
         }
-        rescale(l, &lambda)
+        lambda_in.rebase(l, &lambda)
     }
 
     /// The light a path capped at vertex `si` (its state `st`, its wavelengths `lambda`) would
@@ -181,10 +174,7 @@ impl PathIntegrator {
                     .walk::<false>(scene, &mut st, limit, &mut lambda_ext, ext, &mut l)
                     .is_some()
         };
-        if lambda_ext.secondary_terminated() && !lambda.secondary_terminated() {
-            l = l * lambda.pdf().safe_div(lambda_ext.pdf());
-        }
-        (l, limited)
+        (lambda.rebase(l, &lambda_ext), limited)
     }
 
     /// The light beyond the cap of a path capped at vertex `si`, reached along `-wo` with
