@@ -20,8 +20,8 @@
 use super::bidir::connect::vertex_to_sensor;
 use super::bidir::vertex::bsdf_at;
 use super::bidir::{
-    splat_light_subpath, trace_light_subpath, BidirContext, CapVertex, CappedSubpath, Mis,
-    PathVertex, Walk, Workspace,
+    splat_light_subpath, trace_light_subpath, BidirContext, CappedSubpath, Mis, PathVertex, Walk,
+    Workspace,
 };
 use super::cut::{continuation, continuation_limit};
 use super::{Estimator, MisHeuristic, Settings};
@@ -59,8 +59,9 @@ impl LightTracer {
 }
 
 /// The light a light subpath stopped by the depth cap at `capped` would have brought to the
-/// sensor beyond it: the walk continued on `ext`, each further vertex connected to the sensor
-/// (`cut.rs`). Relative to `lambda`'s pdfs; true when the continuation reached its own limit.
+/// sensor beyond it: the walk continued on `ext`, each vertex beyond the cap connected to the
+/// sensor (`cut.rs`). Relative to `lambda`'s pdfs; true when the continuation reached its own
+/// limit.
 fn continue_past_cap(
     ctx: &BidirContext,
     capped: &CappedSubpath,
@@ -71,10 +72,16 @@ fn continue_past_cap(
     let mut walk = capped.walk;
     let mut sum = SampledSpectrum::ZERO;
     let limit = continuation_limit(ctx.max_depth);
-    let mut v = match capped.at {
-        CapVertex::Built(v) => v,
-        CapVertex::Hit(si) => vertex_to_sensor_at(ctx, &si, &walk, &mut lambda_ext, ext, &mut sum),
-    };
+    let connect = !capped.within_cap;
+    let mut v = vertex_at(
+        ctx,
+        &capped.si,
+        &walk,
+        &mut lambda_ext,
+        ext,
+        connect,
+        &mut sum,
+    );
     let limited = loop {
         if walk.depth >= limit {
             break true;
@@ -86,24 +93,25 @@ fn continue_past_cap(
             break false;
         };
         walk.arrive(&ctx.mis, si.p, si.ng);
-        v = vertex_to_sensor_at(ctx, &si, &walk, &mut lambda_ext, ext, &mut sum);
+        v = vertex_at(ctx, &si, &walk, &mut lambda_ext, ext, true, &mut sum);
     };
     (lambda.rebase(sum, &lambda_ext), limited)
 }
 
-/// The light subpath's vertex at `si` (the walk arrived there), its connection to the sensor
-/// added to `sum` unless it is specular.
-fn vertex_to_sensor_at(
+/// The light subpath's vertex at `si` (the walk arrived there); with `connect`, its
+/// connection to the sensor is added to `sum` unless it is specular.
+fn vertex_at(
     ctx: &BidirContext,
     si: &SurfaceHit,
     walk: &Walk,
     lambda: &mut SampledWavelengths,
     sampler: &mut Sampler,
+    connect: bool,
     sum: &mut SampledSpectrum,
 ) -> PathVertex {
     let bsdf = bsdf_at(ctx.scene, si, ctx.filter, lambda);
     let v = PathVertex::new(si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
-    if !bsdf.is_specular() {
+    if connect && !bsdf.is_specular() {
         if let Some(sc) = vertex_to_sensor(ctx, &v, sampler.get_2d(), false) {
             *sum += sc.c.weighted;
         }

@@ -1043,8 +1043,10 @@ mod tests {
             },
             shaping: None,
         };
-        let mut desc = SceneDescription::default();
-        desc.lights = vec![bulb("/Warm", 2700.0), bulb("/Blue", 20000.0)];
+        let desc = SceneDescription {
+            lights: vec![bulb("/Warm", 2700.0), bulb("/Blue", 20000.0)],
+            ..Default::default()
+        };
         let w = build(&desc, Some((1, 1))).unwrap().summary.warnings;
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(

@@ -79,20 +79,15 @@ impl LightSubpath {
     }
 }
 
-/// Where the depth cap stopped a light subpath: the walk as it arrived and the vertex it
-/// would have scattered at next (light tracing continues it past the cap, `cut.rs`).
+/// Where the depth cap stopped a light subpath: the walk as it arrived at the surface `si`
+/// (light tracing continues it past the cap, `cut.rs`).
 #[derive(Clone, Copy, Debug)]
 pub struct CappedSubpath {
     pub walk: Walk,
-    pub at: CapVertex,
-}
-
-/// The vertex at the cap: y_{max_depth}, built (and stored if not specular), or, with a cap
-/// of 0, the first hit, not yet a vertex.
-#[derive(Clone, Copy, Debug)]
-pub enum CapVertex {
-    Built(PathVertex),
-    Hit(SurfaceHit),
+    pub si: SurfaceHit,
+    /// The vertex at `si` is y_{max_depth}, part of the subpath; false with a cap of 0, where
+    /// the first hit already lies beyond it.
+    pub within_cap: bool,
 }
 
 /// The state carried from one vertex of a subpath to the next.
@@ -278,8 +273,12 @@ pub fn trace_light_subpath(
         }
         walk.arrive(&ctx.mis, si.p, si.ng);
         if walk.depth > ctx.max_depth {
-            let at = CapVertex::Hit(si);
-            path.capped = Some(CappedSubpath { walk, at });
+            let within_cap = false;
+            path.capped = Some(CappedSubpath {
+                walk,
+                si,
+                within_cap,
+            });
             return;
         }
         let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
@@ -288,8 +287,12 @@ pub fn trace_light_subpath(
             path.vertices.push(v);
         }
         if walk.depth >= ctx.max_depth {
-            let at = CapVertex::Built(v);
-            path.capped = Some(CappedSubpath { walk, at });
+            let within_cap = true;
+            path.capped = Some(CappedSubpath {
+                walk,
+                si,
+                within_cap,
+            });
             return;
         }
         if !walk.scatter(&ctx.mis, &v, TransportMode::Importance, sampler) {
