@@ -17,7 +17,11 @@
 //!    the render loop sizes its passes to end near the budget).
 //! 3. For each: RMSE of luminance (XYZ.Y, cd/m²) against the reference, relative RMSE, the
 //!    time actually spent, and the ratio of its MSE and of its MSE × time (the inverse
-//!    efficiency, fair even if the times differ a little) to the first integrator's.
+//!    efficiency, fair even if the times differ a little) to the first integrator's. The
+//!    process's CPU time of each render (user + system, from `/proc/self/stat`) is printed
+//!    too, with the ratio of MSE × CPU time: on a machine shared with other work, the wall
+//!    budget buys an integrator fewer samples when the load rises, and its CPU time says how
+//!    much computing it actually got.
 
 use spectral_render::output::exr;
 use spectral_render::session::{self, RenderOptions};
@@ -94,14 +98,34 @@ fn parse() -> Result<Args, String> {
     Ok(a)
 }
 
-/// Luminance per pixel and wall time of one render.
+/// CPU seconds (user + system) this process has used so far, from `/proc/self/stat` (fields
+/// 14 and 15, in clock ticks of USER_HZ = 100 on Linux); 0 where it cannot be read.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // The command name (field 2) may hold spaces; the fields after it follow its ')'.
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|f| f.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    // After ')': state is field 3, so utime (14) and stime (15) are at 11 and 12.
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+/// One render: luminance per pixel, wall time, samples per pixel and CPU seconds.
 fn render_y(
     scene: &spectral_render::scene::Scene,
     args: &Args,
     integrator: Integrator,
     seconds: f64,
     seed: u64,
-) -> (Vec<f64>, f64, u64) {
+) -> (Vec<f64>, f64, u64, f64) {
+    let cpu0 = cpu_seconds();
     let opts = RenderOptions {
         time_budget: Some(seconds),
         seed,
@@ -113,7 +137,7 @@ fn render_y(
     let out = session::render(scene, &opts).expect("render");
     assert_eq!(out.dropped_samples, 0, "non-finite samples");
     let y = out.xyz.iter().map(|p| p[1] as f64).collect();
-    (y, out.wall_time_s, out.spp)
+    (y, out.wall_time_s, out.spp, cpu_seconds() - cpu0)
 }
 
 /// The reference luminance and the per-pixel variance of its noise.
@@ -131,8 +155,8 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
     }
     let half = 0.5 * args.reference_time;
     let kind = args.reference_integrator;
-    let (a, ta, sa) = render_y(scene, args, kind, half, 1001);
-    let (b, tb, sb) = render_y(scene, args, kind, half, 1002);
+    let (a, ta, sa, _) = render_y(scene, args, kind, half, 1001);
+    let (b, tb, sb, _) = render_y(scene, args, kind, half, 1002);
     eprintln!(
         "reference: {} {} + {} spp in {:.0} + {:.0} s",
         kind.name(),
@@ -156,6 +180,7 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
             wall_time_s: ta + tb,
             version: env!("CARGO_PKG_VERSION").into(),
             scene: args.stage.display().to_string(),
+            ..Default::default()
         };
         let white = spectral_render::spectral::color::white_xy().map(|c| c as f32);
         let write = |p: &PathBuf, v: &[f64]| {
@@ -191,13 +216,13 @@ fn main() {
         noise_floor.sqrt()
     );
     println!(
-        "{:>6} {:>8} {:>7} {:>12} {:>9}",
-        "", "time s", "spp", "RMSE cd/m²", "relRMSE"
+        "{:>6} {:>8} {:>8} {:>7} {:>12} {:>9}",
+        "", "time s", "cpu s", "spp", "RMSE cd/m²", "relRMSE"
     );
     let mut rows = Vec::new();
     for &kind in &args.integrators {
         let name = kind.name();
-        let (y, t, spp) = render_y(&scene, &args, kind, args.time, 7);
+        let (y, t, spp, cpu) = render_y(&scene, &args, kind, args.time, 7);
         let mse = y
             .iter()
             .zip(&reference)
@@ -207,18 +232,19 @@ fn main() {
             - noise_floor;
         let rmse = mse.max(0.0).sqrt();
         println!(
-            "{name:>6} {t:8.1} {spp:7} {rmse:12.4e} {:9.4}",
+            "{name:>6} {t:8.1} {cpu:8.1} {spp:7} {rmse:12.4e} {:9.4}",
             rmse / ref_mean
         );
-        rows.push((name, mse, t));
+        rows.push((name, mse, t, cpu));
     }
-    let (first, mse0, t0) = rows[0];
-    for &(name, mse, t) in &rows[1..] {
+    let (first, mse0, t0, cpu0) = rows[0];
+    for &(name, mse, t, cpu) in &rows[1..] {
         println!(
-            "equal time: MSE({first})/MSE({name}) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}",
+            "equal time: MSE({first})/MSE({name}) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}; CPU-normalised (MSE × CPU time) = {:.2}",
             mse0 / mse,
             (mse0 / mse).sqrt(),
-            (mse0 * t0) / (mse * t)
+            (mse0 * t0) / (mse * t),
+            (mse0 * cpu0) / (mse * cpu)
         );
     }
 }

@@ -135,6 +135,7 @@ pub fn build_with(
         radius,
         summary,
         stage_to_world: desc.stage_to_world,
+        content_hash: desc.content_hash,
     })
 }
 

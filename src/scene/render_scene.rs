@@ -103,6 +103,8 @@ pub struct Scene {
     pub dispersive: bool,
     /// Stage space to world space (see `SceneDescription::stage_to_world`).
     pub stage_to_world: DMat4,
+    /// The hash of the stage's layers (`SceneDescription::content_hash`).
+    pub content_hash: u64,
 }
 
 impl Scene {
