@@ -131,7 +131,7 @@ fn render_y(
         time_budget: Some(seconds),
         seed,
         threads: args.threads,
-        max_depth: args.max_depth,
+        max_depth: Some(args.max_depth),
         integrator,
         ..Default::default()
     };

@@ -20,8 +20,15 @@ fn stage(name: &str) -> PathBuf {
 
 /// `info --json` on a stage: the document, checked for the shape.
 fn info(path: &Path) -> serde_json::Value {
+    info_with(path, &[])
+}
+
+/// `info --json` with more options.
+fn info_with(path: &Path, options: &[&str]) -> serde_json::Value {
     let dir = temp_dir("auto-info");
-    let o = spectral_render(&["info", path.to_str().unwrap(), "--json"], &dir);
+    let mut args = vec!["info", path.to_str().unwrap(), "--json"];
+    args.extend_from_slice(options);
+    let o = spectral_render(&args, &dir);
     assert!(o.status.success(), "{}", stderr(&o));
     let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     let keys: Vec<&String> = doc.as_object().unwrap().keys().collect();
@@ -85,8 +92,15 @@ fn cornell_boxes_have_no_caustics_and_the_pilot_chooses() {
         if let Some(c) = expected {
             assert_eq!(choice(&doc), c, "{}: {doc}", path.display());
         }
-        // ρ_max = 0.74 (the white walls' luminous albedo): the default cap of 7 cuts at
-        // most ρ^7 / (1 − ρ) of the direct light.
+        // No cap by default: only the safety cap's ρ^1024 / (1 − ρ), nothing.
+        assert!(doc["max_depth"]["value"].is_null(), "{doc}");
+        let bound = doc["max_depth"]["bound_cut"].as_f64().unwrap();
+        assert!(bound < 1e-100, "{doc}");
+        // ρ_max = 0.74 (the white walls' luminous albedo): a cap of 7 cuts at most
+        // ρ^7 / (1 − ρ) of the direct light.
+        let small = ["--max-depth", "7", "--resolution", "32x32", "--spp", "4"];
+        let doc = info_with(&path, &small);
+        assert_eq!(doc["max_depth"]["value"], 7, "{doc}");
         let bound = doc["max_depth"]["bound_cut"].as_f64().unwrap();
         assert!(bound > 0.3 && bound < 0.7, "{doc}");
     }
@@ -182,9 +196,10 @@ fn auto_is_its_choice(path: &Path, res: (u32, u32), spp: u32, expected: &str) {
 
 #[test]
 fn auto_renders_exactly_what_its_choice_renders() {
-    // bdpt wins here (chunks of 54 spp at 80 × 60: a pilot of 54, then 10 more).
+    // bdpt wins here. At the default unlimited depth a splatting chunk is one sample per
+    // pixel at these sizes (`splat_chunk_samples`): a pilot of 2, then 62 more.
     auto_is_its_choice(&stage("gap.usda"), (80, 60), 64, "bdpt");
-    // path wins here (chunks of 9 spp at 240 × 120: a pilot of 9, then 23 more).
+    // path wins here (a pilot of 2, then 30 more; bdpt's pilot finds no light at all).
     auto_is_its_choice(&stage("prism.usda"), (240, 120), 32, "path");
 }
 
@@ -260,7 +275,7 @@ fn the_command_line_says_what_auto_chose_and_records_it() {
         "features:",
         "caustics",
         "integrator: ",
-        "max depth 7",
+        "max depth: unlimited",
         "expected cost",
     ] {
         assert!(text.contains(needle), "{needle} not in {text}");

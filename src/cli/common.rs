@@ -3,11 +3,12 @@
 //! wrong name says which names there are), the one-line load summary, and warnings.
 
 use crate::error::{Error, Result};
+use crate::integrator::cut;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::exr::ExrMetadata;
-use crate::scene::Scene;
-use crate::session::AutoReport;
+use crate::scene::{Machinery, Scene};
+use crate::session::{AutoReport, DepthCut};
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::ValueEnum;
 use std::ffi::OsStr;
@@ -142,6 +143,21 @@ pub fn metadata_name(integrator: &Integrator, auto: Option<&AutoReport>) -> Stri
     }
 }
 
+/// Machinery the scene does not need, forced on: a hidden flag for the tests and
+/// `tools/bench_pruning.sh`, which show that it changes only time (`scene::machinery`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct MachineryArgs {
+    /// Keep machinery the scene does not need: all, lobes, light-table, dispersion.
+    #[arg(long = "force-machinery", hide = true, value_name = "LIST", value_parser = Machinery::parse)]
+    pub force_machinery: Option<Machinery>,
+}
+
+impl MachineryArgs {
+    pub fn machinery(&self) -> Machinery {
+        self.force_machinery.unwrap_or_default()
+    }
+}
+
 /// Prints the integrator's report (`Estimator::report`) as a note.
 pub fn print_report(report: &Option<String>) {
     if let Some(r) = report {
@@ -229,6 +245,64 @@ pub fn warn_limits(integrator: &Integrator, scene: &Scene, images: bool) {
     }
 }
 
+/// Warns about what a depth cap cut of `what` ("the image's mean luminance", "the reading"),
+/// when a path reached it (`session::DepthCut`).
+pub fn warn_depth_cut(cut: Option<&DepthCut>, what: &str) {
+    if let Some(c) = cut {
+        eprintln!("warning: {}", depth_cut_message(c, what));
+    }
+}
+
+/// The line [`warn_depth_cut`] prints.
+pub fn depth_cut_message(c: &DepthCut, what: &str) -> String {
+    let amount = format!(
+        "{}{} ± {} of {what}",
+        if c.lower_bound { "at least " } else { "" },
+        percent(c.fraction),
+        percent(c.ci95)
+    );
+    if c.user {
+        format!(
+            "--max-depth {} cut {amount} ({} paths reached it; estimated by continuing a \
+             random {} of them past it)",
+            c.max_depth,
+            c.capped,
+            fraction_name(cut::Q)
+        )
+    } else {
+        format!(
+            "{} paths reached the safety cap of {} bounces (no --max-depth was given), which \
+             cut {amount}: Russian roulette does not end paths whose throughput does not \
+             fall (reflectances of 1)",
+            c.capped, c.max_depth
+        )
+    }
+}
+
+/// A fraction as a percentage with a precision that shows small values.
+fn percent(x: f64) -> String {
+    let p = 100.0 * x;
+    if !p.is_finite() {
+        return "? %".into();
+    }
+    if p.abs() >= 0.1 || p == 0.0 {
+        return format!("{p:.1} %");
+    }
+    // Two significant digits.
+    let decimals = (1.0 - p.abs().log10().floor()).min(12.0) as usize;
+    format!("{p:.decimals$} %")
+}
+
+/// "1/8" for q = 0.125.
+fn fraction_name(q: f32) -> String {
+    let inv = 1.0 / q;
+    if inv.fract() == 0.0 {
+        format!("1/{inv}")
+    } else {
+        format!("{:.1} %", 100.0 * q)
+    }
+}
+
 /// Warns about samples dropped for a non-finite value.
 pub fn warn_dropped(dropped: u64) {
     if dropped > 0 {
@@ -291,7 +365,7 @@ pub struct Made<'a> {
     pub scene: &'a Scene,
     pub integrator: &'a Integrator,
     pub seed: u64,
-    pub max_depth: u32,
+    pub max_depth: Option<u32>,
     pub spp: u64,
     pub wall_time_s: f64,
 }

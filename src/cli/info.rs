@@ -22,6 +22,7 @@
 
 use super::common::{clap_message, print_summary};
 use crate::error::{Error, Result};
+use crate::integrator::cut::SAFETY_DEPTH;
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::json;
 use crate::scene::{self, Scene, SceneFeatures};
@@ -56,7 +57,7 @@ struct InfoArgs {
     /// Image size WxH, overriding RenderSettings.
     #[arg(long, value_parser = super::render::parse_resolution)]
     resolution: Option<(u32, u32)>,
-    /// The depth cap to report on (default: the render's).
+    /// The depth cap to report on (default: the render's, unlimited).
     #[arg(long = "max-depth")]
     max_depth: Option<u32>,
 }
@@ -76,12 +77,12 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
     }
     let scene = scene::load(&args.scene, args.resolution)?;
     print_summary(&scene);
-    let depth = args.max_depth.or(default_max_depth());
+    let depth = args.max_depth;
     let opts = RenderOptions {
         spp: Some(args.spp.unwrap_or(DEFAULT_SPP)),
         seed: args.seed,
         threads: args.threads,
-        max_depth: depth.unwrap_or(u32::MAX),
+        max_depth: depth,
         integrator: Integrator::Auto {
             mis: MisHeuristic::Power,
         },
@@ -95,11 +96,6 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
     };
     print!("{out}");
     Ok(())
-}
-
-/// The render's default depth cap (`None`: unlimited).
-fn default_max_depth() -> Option<u32> {
-    Some(RenderOptions::default().max_depth)
 }
 
 /// What a render of `opts` would cost: seconds per sample per pixel and ray queries per
@@ -178,12 +174,10 @@ struct MaxDepthJson {
     bound_cut: Option<f64>,
 }
 
-/// What a cap of `depth` cuts at most (0 without a cap, `None` without a bound).
+/// What a cap of `depth` cuts at most (`None` without a bound); without a cap, what the
+/// safety cap ([`SAFETY_DEPTH`]) cuts at most, which a render reports if it is ever reached.
 fn bound_cut(f: &SceneFeatures, depth: Option<u32>) -> Option<f64> {
-    match depth {
-        None => Some(0.0),
-        Some(d) => f.bound_cut(d),
-    }
+    f.bound_cut(depth.unwrap_or(SAFETY_DEPTH))
 }
 
 fn document(f: &SceneFeatures, auto: &AutoReport, depth: Option<u32>) -> Result<String> {
@@ -250,7 +244,16 @@ fn text(scene: &Scene, auto: &AutoReport, depth: Option<u32>, cost: &Cost) -> St
         let _ = writeln!(s, "  {r}");
     }
     let _ = match (depth, bound_cut(f, depth)) {
-        (None, _) => writeln!(s, "max depth: unlimited"),
+        (None, Some(b)) => writeln!(
+            s,
+            "max depth: unlimited (Russian roulette; the safety cap of {SAFETY_DEPTH} cuts at \
+             most {b:.3e}, and a render says so if it is reached)"
+        ),
+        (None, None) => writeln!(
+            s,
+            "max depth: unlimited (Russian roulette; a lossless material, ρ_max = 1: a render \
+             says what the safety cap of {SAFETY_DEPTH} cut if it is reached)"
+        ),
         (Some(d), Some(b)) => writeln!(
             s,
             "max depth {d}: cuts at most {:.3e} of the light arriving directly \

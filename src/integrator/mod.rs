@@ -21,6 +21,7 @@
 pub mod auto;
 pub mod bdpt;
 pub mod bidir;
+pub mod cut;
 pub mod estimator;
 pub mod light_tracer;
 pub mod meter;
@@ -210,21 +211,27 @@ impl Integrator {
         }))
     }
 
-    /// The number of strategy images for `max_depth`, or why there are none.
-    pub fn check_strategies(&self, max_depth: u32) -> Result<usize> {
+    /// The number of strategy images for `max_depth` (None: unlimited), or why there are
+    /// none.
+    pub fn check_strategies(&self, max_depth: Option<u32>) -> Result<usize> {
         if !self.capabilities().strategy_images {
             let others = Integrator::names_with(|c| c.strategy_images);
             return Err(Error::option(format!(
                 "strategy images need --integrator {others}"
             )));
         }
-        if max_depth > bidir::strategies::MAX_DEPTH {
-            return Err(Error::option(format!(
+        match max_depth {
+            Some(d) if d <= bidir::strategies::MAX_DEPTH => Ok(bidir::strategies::count(d)),
+            Some(_) => Err(Error::option(format!(
                 "strategy images need --max-depth {} or less",
                 bidir::strategies::MAX_DEPTH
-            )));
+            ))),
+            None => Err(Error::option(format!(
+                "strategy images need --max-depth {} or less (one image per technique and \
+                 depth; the default depth is unlimited)",
+                bidir::strategies::MAX_DEPTH
+            ))),
         }
-        Ok(bidir::strategies::count(max_depth))
     }
 
     /// What this integrator will not render in `scene` as the scene describes it, one line
@@ -330,12 +337,13 @@ mod tests {
 
     #[test]
     fn strategy_images_are_bdpt_only() {
-        assert!(Integrator::Path.check_strategies(5).is_err());
+        assert!(Integrator::Path.check_strategies(Some(5)).is_err());
         let bdpt = Integrator::ALL[2];
-        assert_eq!(bdpt.check_strategies(2).unwrap(), 9);
+        assert_eq!(bdpt.check_strategies(Some(2)).unwrap(), 9);
         assert!(bdpt
-            .check_strategies(bidir::strategies::MAX_DEPTH + 1)
+            .check_strategies(Some(bidir::strategies::MAX_DEPTH + 1))
             .is_err());
+        assert!(bdpt.check_strategies(None).is_err());
     }
 
     #[test]

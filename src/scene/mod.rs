@@ -10,6 +10,7 @@ pub mod build;
 #[cfg(not(feature = "testing"))]
 pub(crate) mod build;
 mod limits;
+pub mod machinery;
 pub mod ray_count;
 #[cfg(feature = "testing")]
 #[doc(hidden)]
@@ -24,7 +25,8 @@ pub mod usd;
 pub(crate) mod usd;
 
 pub use analysis::{Feature, SceneFeatures};
-pub use build::build;
+pub use build::{build, build_with};
+pub use machinery::Machinery;
 pub use render_scene::{Hit, Scene, SurfaceHit};
 
 use crate::error::Result;
@@ -32,6 +34,15 @@ use std::path::Path;
 
 /// Reads a stage and builds the render scene; `resolution` overrides RenderSettings.
 pub fn load(path: &Path, resolution: Option<(u32, u32)>) -> Result<Scene> {
+    load_with(path, resolution, Machinery::default())
+}
+
+/// [`load`] with the pieces of `machinery` forced on where the scene does not need them.
+pub fn load_with(
+    path: &Path,
+    resolution: Option<(u32, u32)>,
+    machinery: Machinery,
+) -> Result<Scene> {
     let desc = usd::load(path)?;
-    build(&desc, resolution)
+    build_with(&desc, resolution, machinery)
 }

@@ -98,6 +98,10 @@ pub struct Scene {
     pub summary: Summary,
     /// True when no material has an opacity below 1 (shadow rays then need no pass-through).
     pub all_opaque: bool,
+    /// True when a material refracts wavelengths apart (`Material::is_dispersive`): only then
+    /// do the integrators check at each vertex whether to terminate the secondary
+    /// wavelengths.
+    pub dispersive: bool,
     /// Stage space to world space (see `SceneDescription::stage_to_world`).
     pub stage_to_world: DMat4,
     /// The hash of the stage's layers (`SceneDescription::content_hash`).

@@ -173,7 +173,7 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
     // Every candidate takes the same samples, whole chunks of every one.
     let quantum = integrators
         .iter()
-        .map(|i| ImageSession::pause_quantum(i, scene))
+        .map(|i| ImageSession::pause_quantum(i, scene, opts.max_depth))
         .max()
         .unwrap_or(1);
     let mut best: Option<(ImageSession<'a>, f64)> = None;
@@ -197,9 +197,11 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
             Some(n) => session.step_to(pilot_spp(n, quantum)),
             None => timed_pilot(&mut session),
         };
-        let variance: f64 = last
-            .as_ref()
-            .map_or(f64::INFINITY, |s| s.variance.iter().sum());
+        let variance = found_light(
+            &session,
+            last.as_ref()
+                .map_or(f64::INFINITY, |s| s.variance.iter().sum()),
+        );
         let figures = figures(
             integrator,
             session.samples(),
@@ -224,6 +226,18 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
     };
     session.continue_after_pilot(opts.time_budget, clock, report);
     Ok(session)
+}
+
+/// The pilot's `variance`, or infinity when it is 0 because the pilot found no light at all
+/// (a black image: a distant beam through a prism, which light subpaths rarely reach in a few
+/// samples per pixel): such a pilot measured nothing, and must not win as noiseless.
+fn found_light(session: &ImageSession, variance: f64) -> f64 {
+    let black = variance == 0.0 && session.output().xyz.iter().all(|p| p[1] == 0.0);
+    if black {
+        f64::INFINITY
+    } else {
+        variance
+    }
 }
 
 /// `opts` for continuing checkpoint `c`: with `--integrator auto`, the candidate the

@@ -12,12 +12,14 @@
 
 pub mod auto;
 pub mod checkpoint;
+pub mod depth_cut;
 pub mod image;
 pub mod memory;
 pub mod meter;
 mod pool;
 
 pub use auto::{AutoReport, PilotFigures};
+pub use depth_cut::DepthCut;
 pub use image::{render, ImageSession, RenderOptions, RenderOutput, DEFAULT_SPP};
 pub use meter::{measure, Cap, MeterOptions, MeterRun, MeterSession, Reading, Stop};
 
