@@ -7,9 +7,13 @@
 //! 1. picks the iteration's radius r_k = r_0 (k + 1)^((α−1)/2) (eq. 25; Knaus and Zwicker
 //!    2011), η_VCM = π r_k² N_L and the MIS factors ([`Mis::vcm`]), and its wavelengths;
 //! 2. traces N_L light subpaths (one per pixel for images, [`VcmParams::meter_light_paths`]
-//!    for meters) and keeps their non-specular vertices in the store, with a hash grid;
-//! 3. the camera (or meter) samples trace their own light subpath for connections (as BDPT),
-//!    then their camera subpath, connecting and merging at every non-specular vertex.
+//!    for meters) and keeps them in the store (`bidir/store.rs`): their non-specular vertices
+//!    with a hash grid for merging, and each subpath whole for connections;
+//! 3. the camera samples trace their camera subpath, connecting to the stored light subpath
+//!    of their pixel (splats t = 1 included, n_VC = 1) and merging with every stored vertex
+//!    within the radius at every non-specular camera vertex: one light subpath per camera
+//!    sample serves both, as in SmallVCM. Meter samples (64 per reading and iteration against
+//!    4096 stored subpaths) trace a light subpath of their own for connections, as BDPT.
 //!
 //! **Wavelengths.** A merge may only combine vertices that carry the same wavelengths, so an
 //! iteration shares one hero tuple, and the tuples of successive iterations are stratified:
@@ -29,8 +33,7 @@
 
 use super::bdpt::{BdptIntegrator, Techniques};
 use super::bidir::{
-    trace_light_subpath, BidirContext, LightSubpath, LightVertexStore, MergeParams, MergeVertex,
-    Mis, MisHeuristic, Workspace,
+    trace_light_subpath, BidirContext, LightVertexStore, MergeParams, Mis, MisHeuristic, Workspace,
 };
 use super::{Estimator, Iteration, Settings};
 use crate::sampling::Sampler;
@@ -38,7 +41,6 @@ use crate::scene::{Hit, Scene};
 use crate::sensor::meter::MeterSensor;
 use crate::sensor::Sensor;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
-use rayon::prelude::*;
 use std::f32::consts::PI;
 
 /// What VCM does at a camera vertex.
@@ -101,8 +103,8 @@ pub const METER_ITERATION_SAMPLES: u64 = 64;
 pub const METER_RADIUS_FACTOR: f32 = 0.003;
 /// r_0 of images in pixel footprints at the first hit (median over the image).
 pub const IMAGE_RADIUS_FOOTPRINTS: f32 = 1.5;
-/// Light subpaths traced per parallel task when filling the store.
-const STORE_CHUNK: u64 = 4096;
+/// Light subpaths traced per parallel task when filling the store (one batch of the store).
+const STORE_CHUNK: u64 = 1024;
 /// Offsets the store's sampler streams from the samples' own.
 const STORE_STREAM: u64 = 0x5643_4d5f_4c49_4748;
 
@@ -140,6 +142,8 @@ pub struct VcmEstimator<'a> {
     r0: f32,
     /// N_L: light subpaths per iteration.
     light_paths: u64,
+    /// Image width in pixels (camera sample j = y · width + x connects to light subpath j).
+    width: u64,
     meters: bool,
     // The current iteration:
     ctx: BidirContext<'a>,
@@ -169,6 +173,7 @@ impl<'a> VcmEstimator<'a> {
             settings,
             r0,
             light_paths,
+            width: u64::from(scene.camera.width),
             meters,
             ctx,
             lambda: SampledWavelengths::sample_visible(0.0),
@@ -183,11 +188,24 @@ impl<'a> VcmEstimator<'a> {
         est
     }
 
-    fn techniques(&self) -> Techniques<'_> {
+    /// The iteration's techniques; `light_given` when the sample's light subpath for
+    /// connections is the stored one already in its workspace.
+    fn techniques(&self, light_given: bool) -> Techniques<'_> {
         Techniques {
             connect: self.params.mode != VcmMode::Vm,
+            light_given,
             merge: Some((&self.store, self.merge)),
         }
+    }
+
+    /// The light subpath of the image sample at raster position `film`: the stored one of
+    /// its pixel, rebuilt into `ws.light` (`lambda` terminated as it was).
+    fn stored_subpath(&self, film: [f32; 2], lambda: &mut SampledWavelengths, ws: &mut Workspace) {
+        let (w, n) = (self.width.max(1), self.light_paths);
+        let x = (film[0].max(0.0) as u64).min(w - 1);
+        let j = ((film[1].max(0.0) as u64) * w + x).min(n.saturating_sub(1));
+        self.store
+            .subpath(j, self.ctx.scene, self.ctx.filter, lambda, &mut ws.light);
     }
 
     /// The MIS factors and kernel normalisation of iteration `k`.
@@ -205,24 +223,14 @@ impl<'a> VcmEstimator<'a> {
 
     /// Traces the iteration's light subpaths into the store, in parallel, in a fixed order.
     fn fill_store(&mut self, seed: u64, k: u64, radius: f32) {
-        let ctx = self.ctx;
-        let lambda = self.lambda;
-        let n = self.light_paths;
-        let chunks: Vec<Vec<MergeVertex>> = (0..n.div_ceil(STORE_CHUNK))
-            .into_par_iter()
-            .map_init(LightSubpath::default, |path, c| {
-                let mut out = Vec::new();
-                for j in c * STORE_CHUNK..((c + 1) * STORE_CHUNK).min(n) {
-                    let mut sampler = Sampler::new(seed ^ STORE_STREAM, j, k);
-                    let mut l = lambda;
-                    trace_light_subpath(&ctx, &mut l, &mut sampler, path);
-                    let hero = l.secondary_terminated();
-                    out.extend(path.vertices.iter().map(|v| MergeVertex::new(v, hero)));
-                }
-                out
-            })
-            .collect();
-        self.store.rebuild(chunks.into_iter().flatten(), radius);
+        let (ctx, lambda) = (self.ctx, self.lambda);
+        self.store
+            .fill(self.light_paths, STORE_CHUNK, radius, |j, path| {
+                let mut sampler = Sampler::new(seed ^ STORE_STREAM, j, k);
+                let mut l = lambda;
+                trace_light_subpath(&ctx, &mut l, &mut sampler, path);
+                l.secondary_terminated()
+            });
     }
 }
 
@@ -246,7 +254,7 @@ impl Estimator for VcmEstimator<'_> {
             self.params.alpha,
             self.light_paths,
             mb(self.store.peak_bytes),
-            std::mem::size_of::<MergeVertex>()
+            LightVertexStore::BYTES_PER_VERTEX
         ))
     }
 
@@ -266,7 +274,11 @@ impl Estimator for VcmEstimator<'_> {
         ws: &mut Workspace,
     ) {
         *lambda = self.lambda;
-        let tech = self.techniques();
+        let connect = self.params.mode != VcmMode::Vm;
+        if connect {
+            self.stored_subpath(film, lambda, ws);
+        }
+        let tech = self.techniques(connect);
         BdptIntegrator.sample_with(&tech, &self.ctx, film, u_lens, lambda, sampler, ws);
     }
 
@@ -284,7 +296,7 @@ impl Estimator for VcmEstimator<'_> {
         ctx.sensor_merges = !meter.delta_direction();
         ws.record.clear();
         let u = sampler.get_2d();
-        let tech = self.techniques();
+        let tech = self.techniques(false);
         BdptIntegrator.sample_with(&tech, &ctx, [0.0; 2], u, lambda, sampler, ws);
         if ctx.sensor_merges {
             let m = self
@@ -339,11 +351,16 @@ fn default_radius(scene: &Scene, meters: bool) -> f32 {
 mod tests {
     use super::*;
     use crate::desc::*;
+    use crate::integrator::bidir::LightSubpath;
     use crate::texture::TextureFilter;
     use glam::{Mat4, Vec3};
 
     /// A 1 m² floor under a small sphere light, seen by the default camera at 8 × 8.
     fn floor_scene() -> Scene {
+        crate::scene::build(&floor_desc(), Some((8, 8))).unwrap()
+    }
+
+    fn floor_desc() -> SceneDescription {
         let mut desc = SceneDescription::default();
         desc.meshes.push(MeshDesc {
             prim_path: "/Floor".into(),
@@ -366,7 +383,64 @@ mod tests {
             },
             shaping: None,
         });
-        crate::scene::build(&desc, Some((8, 8))).unwrap()
+        desc
+    }
+
+    #[test]
+    fn stored_subpaths_rebuild_as_traced_bit_for_bit() {
+        // The floor of rough BK7 (non-specular and dispersive): stored vertices on it have
+        // terminated their subpath's secondary wavelengths.
+        let mut desc = floor_desc();
+        desc.materials.push(MaterialDesc {
+            prim_path: "/Glass".into(),
+            kind: MaterialKind::Dielectric {
+                ior: IorDesc::Glass("BK7".into()),
+                roughness: 0.3,
+                thin: false,
+            },
+            emission: None,
+            textures: Vec::new(),
+            texcoord: "st".into(),
+        });
+        desc.meshes[0].material = Some(0);
+        let scene = crate::scene::build(&desc, Some((8, 8))).unwrap();
+        let settings = Settings {
+            max_depth: 5,
+            filter: TextureFilter::Finest,
+            meters: false,
+        };
+        let mut est = VcmEstimator::new(&scene, settings, VcmParams::default());
+        est.begin_iteration(Iteration { seed: 5, index: 3 });
+        let mut traced = LightSubpath::default();
+        let mut rebuilt = LightSubpath::default();
+        let (mut stored_vertices, mut dispersed) = (0, 0);
+        for j in 0..64 {
+            let mut sampler = Sampler::new(5 ^ STORE_STREAM, j, 3);
+            let mut l = est.lambda;
+            trace_light_subpath(&est.ctx, &mut l, &mut sampler, &mut traced);
+            let mut l2 = est.lambda;
+            let hero_only =
+                est.store
+                    .subpath(j, &scene, TextureFilter::Finest, &mut l2, &mut rebuilt);
+            assert_eq!(hero_only, l.secondary_terminated());
+            dispersed += u32::from(hero_only);
+            assert_eq!(format!("{l:?}"), format!("{l2:?}"));
+            assert_eq!(
+                format!("{:?}", traced.origin),
+                format!("{:?}", rebuilt.origin)
+            );
+            assert_eq!(
+                format!("{:?}", traced.vertices),
+                format!("{:?}", rebuilt.vertices)
+            );
+            stored_vertices += rebuilt.vertices.len();
+        }
+        assert!(
+            stored_vertices >= 5 && dispersed >= 5,
+            "{stored_vertices} {dispersed}"
+        );
+        assert_eq!(est.store.subpaths(), 64);
+        assert!(est.store.vertices.len() >= stored_vertices);
     }
 
     #[test]

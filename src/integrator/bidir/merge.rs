@@ -9,8 +9,8 @@
 //! ω_y the direction back along y's light subpath and N_L the light subpaths stored this
 //! iteration. No cosine: the density of the light subpath's arrival per area carries it.
 //!
-//! The store ([`LightVertexStore`]) keeps what merging needs of every non-specular light
-//! vertex of the iteration in [`MergeVertex`] (60 bytes), and a hash grid over them.
+//! The store ([`LightVertexStore`], `store.rs`) keeps what merging needs of every non-specular
+//! light vertex of the iteration in [`MergeVertex`] (60 bytes), and a hash grid over them.
 //!
 //! **At an irradiance meter.** A meter lying on a surface also merges at its own point z_0:
 //! the light vertices within r of it estimate the irradiance there directly,
@@ -20,9 +20,8 @@
 //! surface the vertices landed on (within r of an edge, vertices of another surface count as
 //! if on the meter's).
 
-use super::hashgrid::HashGrid;
 use super::mis::{Mis, SubpathMis};
-use super::PathVertex;
+use super::{LightVertexStore, PathVertex};
 use crate::bxdf::TransportMode;
 use crate::sensor::meter::MeterSensor;
 use crate::spectral::SampledSpectrum;
@@ -63,16 +62,6 @@ impl MergeVertex {
     }
 }
 
-/// The light vertices of one iteration and their hash grid, reused from iteration to
-/// iteration.
-#[derive(Clone, Debug, Default)]
-pub struct LightVertexStore {
-    pub vertices: Vec<MergeVertex>,
-    grid: HashGrid,
-    /// The largest number of bytes the store has held.
-    pub peak_bytes: usize,
-}
-
 /// What one merge search found: contributions relative to the camera subpath's wavelengths,
 /// and those that may only count on the hero wavelength (light vertices whose subpath
 /// terminated the secondary wavelengths, met by a camera subpath that has not).
@@ -93,19 +82,6 @@ pub struct MergeParams {
 }
 
 impl LightVertexStore {
-    /// Replaces the vertices by `vertices` and rebuilds the grid for radius `radius`.
-    pub fn rebuild(&mut self, vertices: impl IntoIterator<Item = MergeVertex>, radius: f32) {
-        self.vertices.clear();
-        self.vertices.extend(vertices);
-        self.grid.build(self.vertices.iter().map(|v| v.p), radius);
-        self.peak_bytes = self.peak_bytes.max(self.bytes());
-    }
-
-    /// Bytes held now (vertices and grid).
-    pub fn bytes(&self) -> usize {
-        self.vertices.capacity() * std::mem::size_of::<MergeVertex>() + self.grid.bytes()
-    }
-
     /// Merges camera vertex `z` (non-specular; its walk's MIS in `cam`) with every stored
     /// light vertex within the radius whose full path stays within the depth limit
     /// (i + j − 1 scattering events for y_i ≈ z_j), weighted by MIS

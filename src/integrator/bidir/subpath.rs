@@ -15,7 +15,7 @@ use crate::geometry::Ray;
 use crate::light::emit::{LightLeSample, SceneSphere};
 use crate::light::{LightHit, LightSampleContext};
 use crate::sampling::Sampler;
-use crate::scene::{Hit, Scene};
+use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::{Sensor, SensorRay};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use crate::texture::TextureFilter;
@@ -62,17 +62,20 @@ impl<'a> BidirContext<'a> {
 }
 
 /// A light subpath: its origin y_0 and its non-specular scattering vertices y_1, y_2, …
-/// (specular ones cannot be connected to and are not stored).
+/// (specular ones cannot be connected to and are not stored), with the surface hit of each
+/// (what VCM's store keeps to rebuild them, `store.rs`).
 #[derive(Clone, Debug, Default)]
 pub struct LightSubpath {
     pub origin: Option<LightOrigin>,
     pub vertices: Vec<PathVertex>,
+    pub hits: Vec<SurfaceHit>,
 }
 
 impl LightSubpath {
     pub fn clear(&mut self) {
         self.origin = None;
         self.vertices.clear();
+        self.hits.clear();
     }
 }
 
@@ -265,6 +268,7 @@ pub fn trace_light_subpath(
         let v = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
         if !bsdf.is_specular() {
             path.vertices.push(v);
+            path.hits.push(si);
         }
         if walk.depth >= ctx.max_depth
             || !walk.scatter(&ctx.mis, &v, TransportMode::Importance, sampler)
