@@ -87,6 +87,7 @@ impl Integrator {
             radius: None,
             alpha: vcm::DEFAULT_ALPHA,
             meter_light_paths: vcm::DEFAULT_METER_LIGHT_PATHS,
+            wavelengths: vcm::VcmWavelengths::PerIteration,
         }),
     ];
 

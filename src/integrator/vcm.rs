@@ -32,15 +32,20 @@
 //! variance of the merges grows as 1/r_k² (α < 1 trades them, eq. 25).
 
 use super::bdpt::{BdptIntegrator, Techniques};
+use super::bidir::store::Traced;
+use super::bidir::vertex::bsdf_at;
 use super::bidir::{
     trace_light_subpath, BidirContext, LightVertexStore, MergeParams, Mis, MisHeuristic, Workspace,
 };
 use super::{Estimator, Iteration, Settings};
+use crate::bxdf::TransportMode;
+use crate::geometry::offset::spawn_ray;
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene};
 use crate::sensor::meter::MeterSensor;
 use crate::sensor::Sensor;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
+use crate::texture::TextureFilter;
 use std::f32::consts::PI;
 
 /// What VCM does at a camera vertex.
@@ -79,6 +84,9 @@ pub struct VcmParams {
     pub alpha: f32,
     /// Light subpaths an iteration stores for meters.
     pub meter_light_paths: u64,
+    /// How camera samples and light subpaths choose their wavelengths (a test option: the
+    /// measured alternative to the default, docs/design.md "### VCM").
+    pub wavelengths: VcmWavelengths,
 }
 
 impl Default for VcmParams {
@@ -89,8 +97,26 @@ impl Default for VcmParams {
             radius: None,
             alpha: DEFAULT_ALPHA,
             meter_light_paths: DEFAULT_METER_LIGHT_PATHS,
+            wavelengths: VcmWavelengths::PerIteration,
         }
     }
+}
+
+/// The wavelength tuples of VCM's samples. A merge may only combine vertices carrying the
+/// same wavelengths; the two ways to arrange that:
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum VcmWavelengths {
+    /// One tuple per iteration, shared by all its samples and light subpaths, the heroes of
+    /// successive iterations stratified ([`iteration_u`]). Every stored vertex can merge.
+    #[default]
+    PerIteration,
+    /// A tuple per light subpath, shared by the camera sample connected to it; a merge counts
+    /// only when the camera's hero and the light vertex's hero fall in the same of B_k
+    /// equal-probability bins of the hero's primary sample u, B_k = ⌈B · (k + 1)^((1−α)/2)⌉
+    /// in iteration k (bins narrowing as r_k shrinks, so the spectral blur vanishes with the
+    /// spatial one), with η_VCM = π r_k² N_L / B_k and the kernel normalised by it. Images
+    /// only: meters keep one tuple per iteration.
+    PerSample { bins: u32 },
 }
 
 /// α of Georgiev et al. 2012 (their eq. 25 and §6).
@@ -116,16 +142,32 @@ pub fn radius(r0: f32, alpha: f32, k: u64) -> f32 {
     (r0 * shrink).max(r0 * (1.0 / 1_048_576.0))
 }
 
-/// The hero-wavelength sample of iteration `k`: the radical inverse of k in base 2, shifted
-/// by the seed (Cranley–Patterson rotation), in [0, 1).
+/// The hero-wavelength sample of iteration `k`, u_k = (q_k + ρ₄(k)) / 4, shifted by the seed
+/// (Cranley–Patterson rotation), in [0, 1); ρ₄ is the base-4 radical inverse and q_k the sum
+/// of k's base-4 digits mod 4. A tuple's N = 4 lanes sit a quarter apart
+/// (`SampledWavelengths::sample_visible`), so the tuple is fixed by u mod 1/4 = ρ₄(k)/4:
+/// distinct in every iteration and stratified over them (the base-2 radical inverse of k
+/// alone repeats each tuple in 4 successive iterations, as a rotation of its lanes, leaving a
+/// pixel a quarter as many wavelength samples as iterations). The hero's quarter q_k makes
+/// the heroes alone stratified too — the first 4^m iterations put one hero in each of 4^m
+/// strata of [0, 1) (for k < 4^m, fixing k's first m − 1 digits fixes u's digits after the
+/// first, and the last digit then runs q_k over all quarters) — for paths through dispersive
+/// glass, which keep their hero alone.
 pub fn iteration_u(seed: u64, k: u64) -> f32 {
     let shift = (splitmix(seed) >> 40) as f64 / (1u64 << 24) as f64;
-    ((radical_inverse_2(k) + shift).fract() as f32).min(1.0 - f32::EPSILON)
+    ((iteration_u_unshifted(k) + shift).fract() as f32).min(1.0 - f32::EPSILON)
 }
 
-/// The base-2 radical inverse (van der Corput) of k.
-fn radical_inverse_2(k: u64) -> f64 {
-    k.reverse_bits() as f64 * (1.0 / 18_446_744_073_709_551_616.0)
+/// u_k of [`iteration_u`] before the seed's shift.
+fn iteration_u_unshifted(k: u64) -> f64 {
+    let (mut rest, mut digits, mut inverse, mut scale) = (k, 0u64, 0.0f64, 0.25f64);
+    while rest > 0 {
+        digits += rest & 3;
+        inverse += (rest & 3) as f64 * scale;
+        rest >>= 2;
+        scale *= 0.25;
+    }
+    ((digits & 3) as f64 + inverse) * 0.25
 }
 
 fn splitmix(x: u64) -> u64 {
@@ -148,6 +190,8 @@ pub struct VcmEstimator<'a> {
     // The current iteration:
     ctx: BidirContext<'a>,
     lambda: SampledWavelengths,
+    /// B_k of [`VcmWavelengths::PerSample`] (1 for one tuple per iteration).
+    bins: u32,
     store: LightVertexStore,
     merge: MergeParams,
 }
@@ -155,8 +199,11 @@ pub struct VcmEstimator<'a> {
 impl<'a> VcmEstimator<'a> {
     /// `settings.meters` selects the meter form (the store's size, the radius from the
     /// scene's extent, iterations of [`METER_ITERATION_SAMPLES`]).
-    pub fn new(scene: &'a Scene, settings: Settings, params: VcmParams) -> Self {
+    pub fn new(scene: &'a Scene, settings: Settings, mut params: VcmParams) -> Self {
         let meters = settings.meters;
+        if meters {
+            params.wavelengths = VcmWavelengths::PerIteration;
+        }
         let light_paths = if meters {
             params.meter_light_paths.max(1)
         } else {
@@ -177,61 +224,91 @@ impl<'a> VcmEstimator<'a> {
             meters,
             ctx,
             lambda: SampledWavelengths::sample_visible(0.0),
+            bins: 1,
             store: LightVertexStore::default(),
             merge: MergeParams {
                 mis: ctx.mis,
                 normalization: 0.0,
                 max_depth: settings.max_depth,
+                key: 0,
             },
         };
         est.set_radius(0);
         est
     }
 
-    /// The iteration's techniques; `light_given` when the sample's light subpath for
-    /// connections is the stored one already in its workspace.
-    fn techniques(&self, light_given: bool) -> Techniques<'_> {
+    /// The iteration's techniques for a camera sample of merge key `key`; `light_given` when
+    /// the sample's light subpath for connections is the stored one already in its
+    /// workspace.
+    fn techniques(&self, light_given: bool, key: u32) -> Techniques<'_> {
         Techniques {
             connect: self.params.mode != VcmMode::Vm,
             light_given,
-            merge: Some((&self.store, self.merge)),
+            merge: Some((&self.store, MergeParams { key, ..self.merge })),
         }
     }
 
-    /// The light subpath of the image sample at raster position `film`: the stored one of
-    /// its pixel, rebuilt into `ws.light` (`lambda` terminated as it was).
-    fn stored_subpath(&self, film: [f32; 2], lambda: &mut SampledWavelengths, ws: &mut Workspace) {
+    /// The stored light subpath of the image sample at raster position `film`: j = y · width
+    /// + x of its pixel.
+    fn pixel_subpath(&self, film: [f32; 2]) -> u64 {
         let (w, n) = (self.width.max(1), self.light_paths);
         let x = (film[0].max(0.0) as u64).min(w - 1);
-        let j = ((film[1].max(0.0) as u64) * w + x).min(n.saturating_sub(1));
-        self.store
-            .subpath(j, self.ctx.scene, self.ctx.filter, lambda, &mut ws.light);
+        ((film[1].max(0.0) as u64) * w + x).min(n.saturating_sub(1))
     }
 
-    /// The MIS factors and kernel normalisation of iteration `k`.
+    /// The MIS factors and kernel normalisation of iteration `k`: η_VCM = π r_k² N_L / B_k
+    /// [tech. rep. (20)] (B_k = 1 with one tuple per iteration).
     fn set_radius(&mut self, k: u64) {
+        self.bins = match self.params.wavelengths {
+            VcmWavelengths::PerIteration => 1,
+            VcmWavelengths::PerSample { bins } => hero_bins(bins, self.params.alpha, k),
+        };
         let r = radius(self.r0, self.params.alpha, k);
-        let area = PI * r * r * self.light_paths as f32;
+        let area = PI * r * r * self.light_paths as f32 / self.bins as f32;
         let connect = self.params.mode != VcmMode::Vm;
         self.ctx.mis = Mis::vcm(self.params.mis, area, connect, true);
         self.merge = MergeParams {
             mis: self.ctx.mis,
             normalization: 1.0 / area,
             max_depth: self.settings.max_depth,
+            key: 0,
         };
     }
 
-    /// Traces the iteration's light subpaths into the store, in parallel, in a fixed order.
+    /// Traces the iteration's light subpaths into the store, in parallel, in a fixed order:
+    /// all with the iteration's wavelengths, or subpath j with its own (per-sample tuples:
+    /// the iteration's stratified hero sequence shifted by a hash of j, so that every pixel's
+    /// heroes are stratified over the iterations and neighbouring pixels' are independent),
+    /// its merge key the bin of its hero.
     fn fill_store(&mut self, seed: u64, k: u64, radius: f32) {
-        let (ctx, lambda) = (self.ctx, self.lambda);
+        let (ctx, lambda, bins) = (self.ctx, self.lambda, self.bins);
+        let per_sample = self.params.wavelengths != VcmWavelengths::PerIteration;
         self.store
             .fill(self.light_paths, STORE_CHUNK, radius, |j, path| {
                 let mut sampler = Sampler::new(seed ^ STORE_STREAM, j, k);
+                let (lambda, key) = if per_sample {
+                    let u = iteration_u(seed ^ splitmix(j ^ STORE_STREAM), k);
+                    let bin = ((u * bins as f32) as u32).min(bins - 1);
+                    (SampledWavelengths::sample_visible(u), bin)
+                } else {
+                    (lambda, 0)
+                };
                 let mut l = lambda;
                 trace_light_subpath(&ctx, &mut l, &mut sampler, path);
-                l.secondary_terminated()
+                Traced {
+                    lambda,
+                    hero_only: l.secondary_terminated(),
+                    key,
+                }
             });
     }
+}
+
+/// B_k of [`VcmWavelengths::PerSample`]: ⌈B (k + 1)^((1−α)/2)⌉, growing as r_0 / r_k, at most
+/// 2^16.
+pub fn hero_bins(bins: u32, alpha: f32, k: u64) -> u32 {
+    let grow = (k as f64 + 1.0).powf((1.0 - f64::from(alpha)) * 0.5);
+    (f64::from(bins.max(1)) * grow).ceil().min(65_536.0) as u32
 }
 
 impl Estimator for VcmEstimator<'_> {
@@ -273,12 +350,24 @@ impl Estimator for VcmEstimator<'_> {
         sampler: &mut Sampler,
         ws: &mut Workspace,
     ) {
-        *lambda = self.lambda;
+        // The camera sample takes the wavelengths of its pixel's light subpath, terminated as
+        // its trace left them when it connects to it.
+        let j = self.pixel_subpath(film);
+        let traced = self.store.traced(j).unwrap_or(Traced {
+            lambda: self.lambda,
+            hero_only: false,
+            key: 0,
+        });
+        *lambda = traced.lambda;
         let connect = self.params.mode != VcmMode::Vm;
         if connect {
-            self.stored_subpath(film, lambda, ws);
+            if traced.hero_only {
+                lambda.terminate_secondary();
+            }
+            let (scene, filter) = (self.ctx.scene, self.ctx.filter);
+            self.store.subpath(j, scene, filter, lambda, &mut ws.light);
         }
-        let tech = self.techniques(connect);
+        let tech = self.techniques(connect, traced.key);
         BdptIntegrator.sample_with(&tech, &self.ctx, film, u_lens, lambda, sampler, ws);
     }
 
@@ -296,7 +385,7 @@ impl Estimator for VcmEstimator<'_> {
         ctx.sensor_merges = !meter.delta_direction();
         ws.record.clear();
         let u = sampler.get_2d();
-        let tech = self.techniques(false);
+        let tech = self.techniques(false, 0);
         BdptIntegrator.sample_with(&tech, &ctx, [0.0; 2], u, lambda, sampler, ws);
         if ctx.sensor_merges {
             let m = self
@@ -311,9 +400,11 @@ impl Estimator for VcmEstimator<'_> {
 }
 
 /// r_0: for images [`IMAGE_RADIUS_FOOTPRINTS`] × the median pixel footprint where camera rays
-/// through a grid of pixel centres first hit the scene (the distance times the angle between
-/// neighbouring pixels' rays); for meters, or when no ray hits, [`METER_RADIUS_FACTOR`] × the
-/// scene's bounding radius.
+/// through a grid of pixel centres first meet a non-specular surface — where merges happen —
+/// (the distance travelled times the angle between neighbouring pixels' rays, following
+/// specular reflections and refractions: a floor seen in a planar mirror has the footprint of
+/// its distance through the mirror); for meters, or when no ray meets one,
+/// [`METER_RADIUS_FACTOR`] × the scene's bounding radius.
 fn default_radius(scene: &Scene, meters: bool) -> f32 {
     let extent = (METER_RADIUS_FACTOR * scene.radius).max(1e-6);
     if meters {
@@ -327,12 +418,8 @@ fn default_radius(scene: &Scene, meters: bool) -> f32 {
             let film = [(i as f32 + 0.5) / 32.0 * w, (j as f32 + 0.5) / 32.0 * h];
             let (ray, t_max) = cam.generate_ray(film, [0.5, 0.5]);
             let (next, _) = cam.generate_ray([film[0] + 1.0, film[1]], [0.5, 0.5]);
-            let Some(hit) = scene.intersect(&ray, t_max) else {
+            let Some(t) = distance_to_non_specular(scene, ray, t_max) else {
                 continue;
-            };
-            let t = match hit {
-                Hit::Surface(si) => si.t,
-                Hit::Light { hit, .. } => hit.t,
             };
             let angle = ray.d.angle_between(next.d);
             if (t * angle).is_finite() && t * angle > 0.0 {
@@ -347,12 +434,43 @@ fn default_radius(scene: &Scene, meters: bool) -> f32 {
     IMAGE_RADIUS_FOOTPRINTS * footprints[footprints.len() / 2]
 }
 
+/// Specular bounces [`distance_to_non_specular`] follows before giving up on a ray.
+const MAX_SPECULAR_BOUNCES: u32 = 8;
+
+/// The distance a camera ray travels to the first non-specular surface (or light) it meets,
+/// through up to [`MAX_SPECULAR_BOUNCES`] specular vertices, each continued along the more
+/// likely of its lobes at mid-spectrum wavelengths; None when the ray escapes or the chain
+/// goes on.
+fn distance_to_non_specular(
+    scene: &Scene,
+    mut ray: crate::geometry::Ray,
+    t_max: f32,
+) -> Option<f32> {
+    let mut lambda = SampledWavelengths::sample_visible(0.5);
+    let mut travelled = 0.0;
+    let mut t_max = t_max;
+    for _ in 0..=MAX_SPECULAR_BOUNCES {
+        let si = match scene.intersect(&ray, t_max)? {
+            Hit::Surface(si) => si,
+            Hit::Light { hit, .. } => return Some(travelled + hit.t),
+        };
+        travelled += si.t;
+        let bsdf = bsdf_at(scene, &si, TextureFilter::Finest, &mut lambda);
+        if !bsdf.is_specular() {
+            return Some(travelled);
+        }
+        let bs = bsdf.sample_f(-ray.d, 0.5, [0.5, 0.5], TransportMode::Radiance)?;
+        ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
+        t_max = f32::INFINITY;
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::desc::*;
     use crate::integrator::bidir::LightSubpath;
-    use crate::texture::TextureFilter;
     use glam::{Mat4, Vec3};
 
     /// A 1 m² floor under a small sphere light, seen by the default camera at 8 × 8.
@@ -418,10 +536,14 @@ mod tests {
             let mut sampler = Sampler::new(5 ^ STORE_STREAM, j, 3);
             let mut l = est.lambda;
             trace_light_subpath(&est.ctx, &mut l, &mut sampler, &mut traced);
-            let mut l2 = est.lambda;
-            let hero_only =
-                est.store
-                    .subpath(j, &scene, TextureFilter::Finest, &mut l2, &mut rebuilt);
+            let report = est.store.traced(j).unwrap();
+            let hero_only = report.hero_only;
+            let mut l2 = report.lambda;
+            if hero_only {
+                l2.terminate_secondary();
+            }
+            est.store
+                .subpath(j, &scene, TextureFilter::Finest, &mut l2, &mut rebuilt);
             assert_eq!(hero_only, l.secondary_terminated());
             dispersed += u32::from(hero_only);
             assert_eq!(format!("{l:?}"), format!("{l2:?}"));
@@ -491,13 +613,24 @@ mod tests {
 
     #[test]
     fn iteration_wavelengths_are_stratified() {
-        // The first 2^m iterations put one hero sample in each of 2^m strata of [0, 1).
-        let mut strata = [0u32; 16];
-        for k in 0..16 {
-            let u = iteration_u(3, k);
-            assert!((0.0..1.0).contains(&u), "{u}");
-            strata[(u * 16.0) as usize] += 1;
+        for m in 1..=4u32 {
+            let n = 4u64.pow(m);
+            // The first 4^m iterations put one hero in each of 4^m strata of [0, 1), and their
+            // tuples (fixed by u mod 1/4, the lanes being a quarter apart) one in each of 4^m
+            // strata of [0, 1/4): no tuple repeats.
+            let mut heroes = vec![0u32; n as usize];
+            let mut tuples = vec![0u32; n as usize];
+            for k in 0..n {
+                let u = iteration_u_unshifted(k);
+                heroes[(u * n as f64) as usize] += 1;
+                tuples[((u % 0.25) * 4.0 * n as f64) as usize] += 1;
+            }
+            assert!(heroes.iter().all(|&c| c == 1), "{m}: {heroes:?}");
+            assert!(tuples.iter().all(|&c| c == 1), "{m}: {tuples:?}");
         }
-        assert!(strata.iter().all(|&n| n == 1), "{strata:?}");
+        for k in [0, 1, 17, 1 << 40, u64::MAX] {
+            let u = iteration_u(3, k);
+            assert!((0.0..1.0).contains(&u), "{k}: {u}");
+        }
     }
 }

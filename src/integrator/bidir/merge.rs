@@ -76,9 +76,12 @@ pub struct Merged {
 pub struct MergeParams {
     /// m(1/η_VCM) and the heuristic (the `Mis` of the iteration).
     pub mis: Mis,
-    /// 1 / (π r² N_L) [tech. rep. (21)].
+    /// 1 / η_VCM: 1 / (π r² N_L) [tech. rep. (21)], or with per-sample wavelength tuples
+    /// B / (π r² N_L), only the N_L / B light subpaths of the camera's bin merging (`vcm.rs`).
     pub normalization: f32,
     pub max_depth: u32,
+    /// The camera sample's hero-wavelength bin: merges use light vertices of this key only.
+    pub key: u32,
 }
 
 impl LightVertexStore {
@@ -94,7 +97,7 @@ impl LightVertexStore {
         params: &MergeParams,
     ) -> Merged {
         let mut out = Merged::default();
-        self.grid.query(z.p, |i| {
+        self.grid.query(z.p, params.key, |i| {
             let y = &self.vertices[i as usize];
             if !self.grid.within(z.p, y.p) || y.depth + z.depth > params.max_depth + 1 {
                 return;
@@ -126,7 +129,7 @@ impl LightVertexStore {
         params: &MergeParams,
     ) -> Merged {
         let mut out = Merged::default();
-        self.grid.query(m.p, |i| {
+        self.grid.query(m.p, params.key, |i| {
             let y = &self.vertices[i as usize];
             let cos = m.dir.dot(y.wo);
             if !self.grid.within(m.p, y.p)
@@ -157,9 +160,18 @@ pub fn sensor_merge_weight(mis: &Mis, m: &MeterSensor, y: &MergeVertex) -> f32 {
 
 /// The MIS weight of merging camera vertex `z` (its walk's MIS `cam`) with light vertex `y`
 /// [tech. rep. (38), (39)]: the camera BSDF's density of ω_y (the light side's technique one
-/// vertex longer) and of ω_z from ω_y (the camera side's) enter `Mis::merge`.
+/// vertex longer) and of ω_z from ω_y (the camera side's) enter `Mis::merge`, each only where
+/// its dVM factor is not 0 (the camera's first vertex has none: no merge precedes it), so
+/// that a merge at z_1 evaluates one density, not two.
 pub fn merge_weight(mis: &Mis, z: &PathVertex, cam: &SubpathMis, y: &MergeVertex) -> f32 {
-    let pdf_dir = z.bsdf.pdf(z.wo, y.wo, TransportMode::Radiance);
-    let pdf_rev = z.bsdf.pdf(y.wo, z.wo, TransportMode::Importance);
+    let pdf = |wo, wi, mode, factor: f32| {
+        if factor == 0.0 {
+            0.0
+        } else {
+            z.bsdf.pdf(wo, wi, mode)
+        }
+    };
+    let pdf_dir = pdf(z.wo, y.wo, TransportMode::Radiance, y.dvm);
+    let pdf_rev = pdf(y.wo, z.wo, TransportMode::Importance, cam.dvm);
     mis.merge(y.dvcm, y.dvm, cam, pdf_dir, pdf_rev)
 }

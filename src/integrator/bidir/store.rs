@@ -30,14 +30,25 @@ pub struct VertexHit {
     pub dvc: f32,
 }
 
+/// What tracing a light subpath into the store reports besides its vertices.
+#[derive(Clone, Copy, Debug)]
+pub struct Traced {
+    /// The wavelengths the subpath was traced with.
+    pub lambda: SampledWavelengths,
+    /// The trace terminated their secondary wavelengths (dispersion).
+    pub hero_only: bool,
+    /// The key a merge must match to use its vertices (its hero-wavelength bin; 0 when the
+    /// iteration shares one tuple).
+    pub key: u32,
+}
+
 /// One stored light subpath.
 #[derive(Clone, Copy, Debug)]
 struct StoredSubpath {
     origin: Option<LightOrigin>,
     /// One past its last vertex in its batch.
     end: u32,
-    /// The subpath terminated its secondary wavelengths (dispersion).
-    hero_only: bool,
+    traced: Traced,
 }
 
 /// Light subpaths traced by one parallel task, whole.
@@ -55,8 +66,9 @@ impl SubpathBatch {
         self.hits.clear();
     }
 
-    fn push(&mut self, path: &LightSubpath, hero_only: bool) {
+    fn push(&mut self, path: &LightSubpath, traced: Traced) {
         debug_assert_eq!(path.vertices.len(), path.hits.len());
+        let hero_only = traced.hero_only;
         for (v, hit) in path.vertices.iter().zip(&path.hits) {
             self.vertices.push(MergeVertex::new(v, hero_only));
             self.hits.push(VertexHit {
@@ -67,7 +79,7 @@ impl SubpathBatch {
         self.paths.push(StoredSubpath {
             origin: path.origin,
             end: self.vertices.len() as u32,
-            hero_only,
+            traced,
         });
     }
 
@@ -82,8 +94,9 @@ impl SubpathBatch {
 /// reused from iteration to iteration.
 #[derive(Clone, Debug, Default)]
 pub struct LightVertexStore {
-    /// Every stored vertex, in subpath order (the grid indexes this).
+    /// Every stored vertex, in subpath order (the grid indexes this), and its key.
     pub vertices: Vec<MergeVertex>,
+    keys: Vec<u32>,
     pub(super) grid: HashGrid,
     batches: Vec<SubpathBatch>,
     /// Subpaths per batch (all but the last batch hold this many).
@@ -93,12 +106,18 @@ pub struct LightVertexStore {
 }
 
 impl LightVertexStore {
-    /// Traces light subpaths 0 … n − 1 with `trace(j, buffer)` (which fills the buffer and
-    /// returns whether the subpath terminated its secondary wavelengths), in parallel batches
-    /// of `batch_size` in a fixed order, keeps them, and rebuilds the grid for `radius`.
+    /// Bytes per stored light vertex: its merge vertex (in its batch and in the grid's
+    /// array), its [`VertexHit`], its key (in the store and the grid) and its grid index.
+    pub const BYTES_PER_VERTEX: usize = 2 * std::mem::size_of::<MergeVertex>()
+        + std::mem::size_of::<VertexHit>()
+        + 3 * std::mem::size_of::<u32>();
+
+    /// Traces light subpaths 0 … n − 1 with `trace(j, buffer)` (which fills the buffer), in
+    /// parallel batches of `batch_size` in a fixed order, keeps them, and rebuilds the grid
+    /// for `radius`.
     pub fn fill<F>(&mut self, n: u64, batch_size: u64, radius: f32, trace: F)
     where
-        F: Fn(u64, &mut LightSubpath) -> bool + Sync,
+        F: Fn(u64, &mut LightSubpath) -> Traced + Sync,
     {
         let batch_size = batch_size.max(1);
         let count = n.div_ceil(batch_size) as usize;
@@ -110,31 +129,35 @@ impl LightVertexStore {
                 batch.clear();
                 let first = c as u64 * batch_size;
                 for j in first..(first + batch_size).min(n) {
-                    let hero_only = trace(j, path);
-                    batch.push(path, hero_only);
+                    let traced = trace(j, path);
+                    batch.push(path, traced);
                 }
             },
         );
         self.vertices.clear();
+        self.keys.clear();
         for b in &self.batches {
             self.vertices.extend_from_slice(&b.vertices);
+            let mut start = 0;
+            for path in &b.paths {
+                let count = (path.end - start) as usize;
+                self.keys
+                    .extend(std::iter::repeat_n(path.traced.key, count));
+                start = path.end;
+            }
         }
-        self.grid.build(self.vertices.iter().map(|v| v.p), radius);
+        let points = self.vertices.iter().zip(&self.keys).map(|(v, k)| (v.p, *k));
+        self.grid.build(points, radius);
         self.peak_bytes = self.peak_bytes.max(self.bytes());
     }
 
     /// Bytes held now (vertices, subpaths and grid).
     pub fn bytes(&self) -> usize {
         self.vertices.capacity() * std::mem::size_of::<MergeVertex>()
+            + self.keys.capacity() * std::mem::size_of::<u32>()
             + self.batches.iter().map(SubpathBatch::bytes).sum::<usize>()
             + self.grid.bytes()
     }
-
-    /// Bytes per stored light vertex: its merge vertex (in its batch and in the grid's
-    /// array), its [`VertexHit`] and its grid index.
-    pub const BYTES_PER_VERTEX: usize = 2 * std::mem::size_of::<MergeVertex>()
-        + std::mem::size_of::<VertexHit>()
-        + std::mem::size_of::<u32>();
 
     /// Light subpaths stored.
     #[cfg(test)]
@@ -142,11 +165,16 @@ impl LightVertexStore {
         self.batches.iter().map(|b| b.paths.len() as u64).sum()
     }
 
+    /// What tracing stored light subpath `j` reported (its wavelengths and key); None for a
+    /// `j` not stored.
+    pub fn traced(&self, j: u64) -> Option<Traced> {
+        let (b, i) = self.locate(j)?;
+        Some(self.batches[b].paths[i].traced)
+    }
+
     /// Rebuilds stored light subpath `j` into `out` as it was traced: its origin and its
-    /// vertices with their BSDFs for `lambda` (the iteration's wavelengths, whose secondary
-    /// wavelengths the caller has terminated if the subpath did: see the return value).
-    /// Returns whether the subpath terminated its secondary wavelengths; `out` is left empty
-    /// for a `j` not stored.
+    /// vertices with their BSDFs for `lambda` (its wavelengths, [`Self::traced`], terminated
+    /// as the trace left them); `out` is left empty for a `j` not stored.
     pub fn subpath(
         &self,
         j: u64,
@@ -154,26 +182,17 @@ impl LightVertexStore {
         filter: TextureFilter,
         lambda: &mut SampledWavelengths,
         out: &mut LightSubpath,
-    ) -> bool {
+    ) {
         out.clear();
-        let (c, i) = (j / self.batch_size.max(1), j % self.batch_size.max(1));
-        let Some(b) = self.batches.get(c as usize) else {
-            return false;
+        let Some((b, i)) = self.locate(j) else {
+            return;
         };
-        let Some(path) = b.paths.get(i as usize) else {
-            return false;
-        };
-        let start = if i == 0 {
-            0
-        } else {
-            b.paths[i as usize - 1].end
-        };
-        if path.hero_only {
-            lambda.terminate_secondary();
-        }
+        let batch = &self.batches[b];
+        let start = if i == 0 { 0 } else { batch.paths[i - 1].end };
+        let path = &batch.paths[i];
         out.origin = path.origin;
         for k in start as usize..path.end as usize {
-            let (m, h) = (&b.vertices[k], &b.hits[k]);
+            let (m, h) = (&batch.vertices[k], &batch.hits[k]);
             let mis = SubpathMis {
                 dvcm: m.dvcm,
                 dvc: h.dvc,
@@ -184,6 +203,12 @@ impl LightVertexStore {
                 .push(PathVertex::new(&h.hit, m.wo, bsdf, m.beta, mis, m.depth));
             out.hits.push(h.hit);
         }
-        path.hero_only
+    }
+
+    /// (batch, index in it) of stored subpath `j`.
+    fn locate(&self, j: u64) -> Option<(usize, usize)> {
+        let size = self.batch_size.max(1);
+        let (b, i) = ((j / size) as usize, (j % size) as usize);
+        (i < self.batches.get(b)?.paths.len()).then_some((b, i))
     }
 }
