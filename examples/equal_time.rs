@@ -246,6 +246,7 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
             wall_time_s: ta + tb,
             version: env!("CARGO_PKG_VERSION").into(),
             scene: args.stage.display().to_string(),
+            ..Default::default()
         };
         let white = spectral_render::spectral::color::white_xy().map(|c| c as f32);
         let write = |p: &PathBuf, v: &[f64]| {

@@ -29,6 +29,30 @@ pub struct SceneDescription {
     /// for the builder to open; it is removed when the last description holding it is
     /// dropped.
     pub extracted: Option<Arc<ExtractedAssets>>,
+    /// A hash of every layer the stage was composed from, in the order they were read
+    /// (identifies the stage in a checkpoint); 0 for a description built in code.
+    pub content_hash: u64,
+}
+
+/// A 64-bit FNV-1a hash of byte strings (Fowler, Noll, Vo; the IETF draft
+/// draft-eastlake-fnv, 64-bit offset basis and prime): a fingerprint of content, not a
+/// cryptographic digest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ContentHash(pub u64);
+
+impl Default for ContentHash {
+    fn default() -> Self {
+        ContentHash(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl ContentHash {
+    /// Folds `bytes` and their length into the hash.
+    pub fn add(&mut self, bytes: &[u8]) {
+        for &b in bytes.iter().chain(&(bytes.len() as u64).to_le_bytes()) {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
 }
 
 /// A temporary directory of assets extracted from a package, removed on drop.

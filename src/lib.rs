@@ -65,6 +65,7 @@
 #![forbid(unsafe_code)]
 
 pub mod cli;
+pub mod converge;
 pub mod desc;
 pub mod error;
 pub mod output;

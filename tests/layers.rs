@@ -26,6 +26,7 @@ const LAYERS: &[&str] = &[
     "scene",
     "integrator",
     "session",
+    "converge",
     "output",
     "cli",
 ];

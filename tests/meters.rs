@@ -10,7 +10,7 @@
 //! errors are printed (`cargo test --release --test meters -- --nocapture`).
 
 mod common;
-use common::meters::{lambert, TOL};
+use common::meters::{integrating_sphere, lambert, IntegratingSphere, TOL};
 use common::*;
 use glam::{DMat4, DVec3, Vec3};
 use spectral_render::integrator::{Settings, Workspace};
@@ -112,122 +112,9 @@ fn floor_quad(x: [f64; 2], z: [f64; 2], look: &str) -> String {
 // Integrating sphere
 // ---------------------------------------------------------------------------------------
 
-/// A UV sphere of radius `r` (`n_lon` × `n_lat` facets, pole fans): points and faces.
-fn uv_sphere(r: f64, n_lon: usize, n_lat: usize) -> (Vec<DVec3>, Vec<Vec<usize>>) {
-    let mut pts = vec![DVec3::new(0.0, r, 0.0)];
-    for k in 1..n_lat {
-        let theta = PI * k as f64 / n_lat as f64;
-        for j in 0..n_lon {
-            let phi = 2.0 * PI * j as f64 / n_lon as f64;
-            pts.push(
-                r * DVec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    theta.sin() * phi.sin(),
-                ),
-            );
-        }
-    }
-    pts.push(DVec3::new(0.0, -r, 0.0));
-    let ring = |k: usize, j: usize| 1 + (k - 1) * n_lon + j % n_lon;
-    let south = pts.len() - 1;
-    let mut faces = Vec::new();
-    for j in 0..n_lon {
-        faces.push(vec![0, ring(1, j + 1), ring(1, j)]);
-        for k in 1..n_lat - 1 {
-            faces.push(vec![
-                ring(k, j),
-                ring(k, j + 1),
-                ring(k + 1, j + 1),
-                ring(k + 1, j),
-            ]);
-        }
-        faces.push(vec![south, ring(n_lat - 1, j), ring(n_lat - 1, j + 1)]);
-    }
-    (pts, faces)
-}
-
-fn polygon_area(p: &[DVec3]) -> f64 {
-    (1..p.len() - 1)
-        .map(|i| 0.5 * (p[i] - p[0]).cross(p[i + 1] - p[0]).length())
-        .sum()
-}
-
 /// Sampling target of the integrating sphere: its estimator's per-sample σ is ~0.9 (Russian
 /// roulette over ~10 bounces), so it is held at 0.5 % ≥ 4.08 σ rather than 4.9 σ.
 const REL_SPHERE: f64 = 0.0024;
-
-/// An integrating sphere: a UV sphere of reflectance `rho` around a small isotropic lamp, and
-/// meters on facet centres next to the pole, at 45° and at the equator.
-struct IntegratingSphere {
-    scene: Scene,
-    meters: Vec<Meter>,
-    /// The exact illuminance at each meter.
-    exact: Vec<f64>,
-    /// The area-averaged illuminance and that of an ideal sphere.
-    mean_e: f64,
-    ideal: f64,
-}
-
-fn integrating_sphere(rho: f64) -> IntegratingSphere {
-    let (flux, lamp) = (1000.0, 0.02);
-    let (n_lon, n_lat) = (32, 16);
-    let (pts, faces) = uv_sphere(1.0, n_lon, n_lat);
-    let mut s = header() + &looks_scope(&flat_diffuse("Wall", rho));
-    s += &mesh("Sphere", BINDING_API, &pts, &faces, &binding("Wall"));
-    let inputs =
-        format!("    float inputs:radius = {lamp}\n    float spectral:luminousFlux = {flux}\n");
-    s += &prim("SphereLight", "Lamp", &inputs);
-    let scene = load(&format!("sphere-{rho}"), &s);
-    let corners = |f: &Vec<usize>| f.iter().map(|&i| pts[i]).collect::<Vec<_>>();
-    let area: f64 = faces.iter().map(|f| polygon_area(&corners(f))).sum();
-    // Energy balance of a closed Lambertian enclosure gives the area-averaged illuminance:
-    // Φ = (1 − ρ)⟨E⟩A + (lamp absorption f ρ⟨E⟩A). The lamp is an opaque, non-reflecting
-    // UsdLux shape; from the wall it fills the cone of half-angle asin(a/R) around the inward
-    // normal, which takes the fraction f = (a/R)² of Lambertian emission. As f → 0 this is the
-    // issue's Φ/A·(1 + ρ/(1−ρ)).
-    let f = lamp * lamp;
-    let mean_e = flux / area / (1.0 - rho * (1.0 - f));
-    let ideal = flux / area * (1.0 + rho / (1.0 - rho));
-    assert!((mean_e / ideal - 1.0).abs() < 0.004);
-    // The reflected part is uniform (ρ⟨E⟩ − … as in a true sphere); the direct part at a facet
-    // point is I cos θ / d² with I = Φ/4π (a sphere's cap above the horizon), whose area
-    // average is Φ/A. A facet centre is ~1 % closer to the lamp than the vertices.
-    let exact_at = |p: DVec3, n: DVec3| {
-        let d2 = p.length_squared();
-        let direct = flux / (4.0 * PI) * n.dot(-p.normalize()) / d2;
-        mean_e + direct - flux / area
-    };
-    // Facets next to the pole, at 45° and at the equator (faces run pole fan, rings, fan per
-    // longitude): centroid, inward facet normal.
-    let points: Vec<(DVec3, DVec3)> = [0usize, 3 * n_lat + 4, 9 * n_lat + 8]
-        .iter()
-        .map(|&fi| {
-            let c = corners(&faces[fi]);
-            let centroid = c.iter().sum::<DVec3>() / c.len() as f64;
-            let mut n = (c[1] - c[0]).cross(c[2] - c[0]).normalize();
-            if n.dot(centroid) > 0.0 {
-                n = -n;
-            }
-            (centroid, n)
-        })
-        .collect();
-    let exact: Vec<f64> = points.iter().map(|&(p, n)| exact_at(p, n)).collect();
-    assert!(
-        exact.iter().all(|e| (e / mean_e - 1.0).abs() < 0.005),
-        "the reference is not uniform"
-    );
-    IntegratingSphere {
-        scene,
-        meters: points
-            .iter()
-            .map(|&(p, n)| Meter::illuminance(v3(p), v3(n)).unwrap())
-            .collect(),
-        exact,
-        mean_e,
-        ideal,
-    }
-}
 
 /// Measures meters `which` of `case` with `kind` and checks them against the exact values.
 fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Integrator) {

@@ -5,11 +5,13 @@
 use crate::error::{Error, Result};
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
+use crate::output::exr::ExrMetadata;
 use crate::scene::Scene;
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::ValueEnum;
 use std::ffi::OsStr;
 use std::marker::PhantomData;
+use std::path::Path;
 
 impl ValueEnum for Integrator {
     fn value_variants<'a>() -> &'a [Self] {
@@ -71,7 +73,7 @@ pub struct IntegratorArgs {
     pub vcm_alpha: Option<f32>,
     /// Light subpaths VCM stores per iteration of meter readings (default 4096; images
     /// store one per pixel).
-    #[arg(long = "vcm-light-paths")]
+    #[arg(long = "vcm-light-paths", allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
     pub vcm_light_paths: Option<u64>,
 }
 
@@ -234,4 +236,76 @@ pub fn clap_message(e: &clap::Error) -> String {
         lines.join(" ")
     };
     format!("{} (see --help)", first.trim_start_matches("error: "))
+}
+
+/// A value parser for whole numbers of at least `min` whose error says so, negative numbers
+/// included (give the argument `allow_negative_numbers`, or clap suggests `-- -1`).
+pub fn at_least<T: TryFrom<u64>>(
+    min: u64,
+) -> impl Fn(&str) -> std::result::Result<T, String> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        let n: i128 = s
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{s}' is not a whole number"))?;
+        if n < i128::from(min) {
+            return Err(match min {
+                0 => format!("{n} must not be negative"),
+                1 => format!("{n} must be positive (at least 1)"),
+                _ => format!("{n} must be at least {min}"),
+            });
+        }
+        u64::try_from(n)
+            .ok()
+            .and_then(|v| T::try_from(v).ok())
+            .ok_or_else(|| format!("{n} is too large"))
+    }
+}
+
+/// `--max-memory SIZE`: bytes with an optional K, M, G or T (powers of 1024).
+pub fn max_memory(s: &str) -> std::result::Result<u64, String> {
+    crate::session::memory::parse_size(s)
+}
+
+/// The metadata of an EXR rendered from `stage` (as the user named it) with `integrator`: what
+/// made it (spp, seed, depth, integrator and MIS heuristic, time, version) and the camera's
+/// exposure and matrices.
+pub struct Made<'a> {
+    pub stage: &'a Path,
+    pub scene: &'a Scene,
+    pub integrator: &'a Integrator,
+    pub seed: u64,
+    pub max_depth: u32,
+    pub spp: u64,
+    pub wall_time_s: f64,
+}
+
+impl Made<'_> {
+    pub fn metadata(&self) -> ExrMetadata {
+        let camera = &self.scene.camera;
+        ExrMetadata {
+            spp: self.spp,
+            integrator: self.integrator.name().into(),
+            mis: mis_name(self.integrator),
+            seed: self.seed,
+            max_depth: self.max_depth,
+            exposure: camera.exposure,
+            wall_time_s: self.wall_time_s,
+            version: env!("CARGO_PKG_VERSION").into(),
+            scene: self.stage.display().to_string(),
+            world_to_camera: Some(camera.world_to_exr_camera().to_cols_array()),
+            world_to_ndc: Some(camera.world_to_ndc().to_cols_array()),
+        }
+    }
+}
+
+/// The MIS heuristic an integrator combines its techniques with (the path tracer's NEE and
+/// BSDF sampling use the power heuristic); None for light tracing, which has one technique.
+fn mis_name(integrator: &Integrator) -> Option<String> {
+    match integrator {
+        Integrator::Path => Some("power".into()),
+        Integrator::Light => None,
+        Integrator::Bdpt { mis } => Some(mis.name().into()),
+        Integrator::Vcm(p) => Some(p.mis.name().into()),
+    }
 }

@@ -17,15 +17,18 @@
 //! line and exit 1; so is a luminance meter asked of light tracing, which cannot estimate it.
 
 use super::common::{
-    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+    at_least, clap_message, max_memory, print_report, print_summary, warn_dropped, warn_limits,
+    IntegratorArgs,
 };
+use super::interrupt;
 use crate::error::{Error, Result};
 use crate::output::json;
-use crate::output::map::{num, IlluminanceMap};
+use crate::output::map::{self, num, IlluminanceMap};
+use crate::output::target::{self, Format, Target};
 use crate::scene;
 use crate::sensor::meter::{self, Meter, MeterKind};
 use crate::session::meter::{DEFAULT_MAX_SAMPLES, DEFAULT_SAMPLES};
-use crate::session::{measure, Cap, MeterOptions, MeterRun, Reading, Stop};
+use crate::session::{Cap, MeterOptions, MeterRun, MeterSession, Progressive, Reading, Stop};
 use clap::Parser;
 use glam::{DMat4, DVec3};
 use serde::Serialize;
@@ -39,18 +42,8 @@ use std::path::{Path, PathBuf};
 struct MeterArgs {
     /// The stage (.usda, .usdc or .usdz).
     scene: PathBuf,
-    /// Meter position in stage coordinates (repeat for several meters).
-    #[arg(long = "at", value_name = "X,Y,Z", allow_hyphen_values = true)]
-    at: Vec<String>,
-    /// Normal of the receiving surface, one per --at (or one for --grid).
-    #[arg(long, value_name = "NX,NY,NZ", allow_hyphen_values = true)]
-    normal: Vec<String>,
-    /// Measure luminance (cd/m²) looking along --dir instead of illuminance.
-    #[arg(long)]
-    luminance: bool,
-    /// Viewing direction of a luminance meter, one per --at.
-    #[arg(long, value_name = "DX,DY,DZ", allow_hyphen_values = true)]
-    dir: Vec<String>,
+    #[command(flatten)]
+    points: PointArgs,
     /// Origin (a corner) of an illuminance grid.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     grid: Option<String>,
@@ -61,37 +54,58 @@ struct MeterArgs {
     #[arg(long = "v", value_name = "VX,VY,VZ", allow_hyphen_values = true)]
     v: Option<String>,
     /// Cells along u and v.
-    #[arg(long = "n", value_name = "NU,NV")]
+    #[arg(long = "n", value_name = "NU,NV", allow_hyphen_values = true)]
     n: Option<String>,
     /// Base name of the grid outputs: BASE.csv, BASE.json, BASE.png (default: map).
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
     /// Samples per reading (default 4096).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
     spp: Option<u64>,
     /// Sample until every reading's ci95/value is below this (or a cap is hit).
     #[arg(long = "rel-error", allow_negative_numbers = true)]
     rel_error: Option<f64>,
     /// Cap on the samples of one reading under --rel-error (default 2^24).
-    #[arg(long = "max-spp")]
+    #[arg(long = "max-spp", allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
     max_spp: Option<u64>,
     /// Wall-clock cap in seconds.
     #[arg(long = "time", allow_negative_numbers = true)]
     time: Option<f64>,
     /// Seed of the deterministic sampler.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = at_least::<u64>(0))]
     seed: u64,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = at_least::<usize>(1))]
     threads: Option<usize>,
     /// Maximum number of scattering events (as for rendering).
-    #[arg(long = "max-depth", default_value_t = 7)]
+    #[arg(long = "max-depth", default_value_t = 7, allow_negative_numbers = true, value_parser = at_least::<u32>(0))]
     max_depth: u32,
+    /// Refuse to start a measurement estimated to need more memory than SIZE (e.g. 8G;
+    /// default: the memory available).
+    #[arg(long = "max-memory", value_name = "SIZE", value_parser = max_memory, allow_hyphen_values = true)]
+    max_memory: Option<u64>,
     /// Print the readings as JSON on stdout.
     #[arg(long)]
     json: bool,
     #[command(flatten)]
     integrator: IntegratorArgs,
+}
+
+/// Where meters are and what they measure (`meter` and `converge` take them alike).
+#[derive(clap::Args, Debug, Clone)]
+pub(super) struct PointArgs {
+    /// Meter position in stage coordinates (repeat for several meters).
+    #[arg(long = "at", value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub at: Vec<String>,
+    /// Normal of the receiving surface, one per --at (or one for --grid).
+    #[arg(long, value_name = "NX,NY,NZ", allow_hyphen_values = true)]
+    pub normal: Vec<String>,
+    /// Measure luminance (cd/m²) looking along --dir instead of illuminance.
+    #[arg(long)]
+    pub luminance: bool,
+    /// Viewing direction of a luminance meter, one per --at.
+    #[arg(long, value_name = "DX,DY,DZ", allow_hyphen_values = true)]
+    pub dir: Vec<String>,
 }
 
 /// The grid as given (stage coordinates).
@@ -131,8 +145,22 @@ fn run(args: &MeterArgs) -> Result<()> {
     if let Request::Points(kind, _) = &request {
         opts.integrator.check_meter(*kind)?;
     }
+    if let Request::Grid(_) = &request {
+        let base = output_base(args.output.as_deref());
+        let files = map::files(&base);
+        target::check(&[
+            Target::new("-o", &files[0], Format::Any),
+            Target::new("-o", &files[1], Format::Any),
+            Target::new("-o", &files[2], Format::Png),
+        ])?;
+    }
+    interrupt::install()?;
     let scene = scene::load(&args.scene, Some((1, 1)))?;
     print_summary(&scene);
+    if let Some(signal) = interrupt::received() {
+        eprintln!("interrupted by {signal} before measuring; nothing written");
+        return Ok(());
+    }
     warn_limits(&opts.integrator, &scene, false);
     match request {
         Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
@@ -153,7 +181,7 @@ fn run_points(
         .collect::<Result<Vec<_>>>()?;
     let run = measure(scene, &meters, opts)?;
     warn(&run, opts);
-    let rel = matches!(opts.stop, Stop::RelError(_));
+    let rel = matches!(opts.stop, Stop::RelError(_)) || interrupt::received().is_some();
     if args.json {
         let meters = points
             .iter()
@@ -227,8 +255,22 @@ fn run_grid(
     Ok(())
 }
 
+/// Measures to the end, or until a signal arrives: then the unfinished readings are marked
+/// as interrupted and the readings so far are returned.
+fn measure(scene: &scene::Scene, meters: &[Meter], opts: &MeterOptions) -> Result<MeterRun> {
+    let mut session = MeterSession::new(scene, meters, opts)?;
+    while session.step().is_some() {
+        if let Some(signal) = interrupt::received() {
+            session.interrupt();
+            eprintln!("interrupted by {signal}; the readings so far follow");
+            break;
+        }
+    }
+    Ok(session.readings())
+}
+
 /// The meter in world space; a normal or direction that vanishes there is an error.
-fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> {
+pub(super) fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Result<Meter> {
     let p_w = meter::stage_point(m, p);
     match kind {
         MeterKind::Illuminance => Meter::illuminance(p_w, meter::stage_normal(m, d)),
@@ -243,6 +285,7 @@ fn warn(run: &MeterRun, opts: &MeterOptions) {
     for (cap, what) in [
         (Cap::Samples, "the sample cap (--max-spp)"),
         (Cap::Time, "the time cap (--time)"),
+        (Cap::Interrupted, "an interrupt"),
     ] {
         let k = run
             .readings
@@ -319,7 +362,11 @@ fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
         kind.unit(),
         r.ci95,
         r.samples,
-        if r.capped.is_some() { " [capped]" } else { "" }
+        match r.capped {
+            Some(Cap::Interrupted) => " [interrupted]",
+            Some(_) => " [capped]",
+            None => "",
+        }
     )
 }
 
@@ -354,42 +401,55 @@ fn request(a: &MeterArgs) -> Result<Request> {
             )));
         }
     }
-    if a.at.is_empty() {
+    if a.points.at.is_empty() {
         return Err(Error::option(
             "nothing to measure: give --at X,Y,Z with --normal NX,NY,NZ \
                     (illuminance), --luminance --at X,Y,Z --dir DX,DY,DZ, or --grid",
         ));
     }
-    let (kind, dirs, flag) = if a.luminance {
-        if !a.normal.is_empty() {
+    let (kind, points) = points(&a.points)?;
+    Ok(Request::Points(kind, points))
+}
+
+/// The meters of `--at` with `--normal` (illuminance) or, with `--luminance`, `--dir`: their
+/// kind and (position, normal or direction) in stage coordinates (also `converge`'s).
+pub(super) fn points(p: &PointArgs) -> Result<(MeterKind, Vec<(DVec3, DVec3)>)> {
+    let PointArgs {
+        at,
+        normal,
+        luminance,
+        dir,
+    } = p;
+    let (kind, dirs, flag) = if *luminance {
+        if !normal.is_empty() {
             return Err(Error::option("--luminance meters take --dir, not --normal"));
         }
-        (MeterKind::Luminance, &a.dir, "--dir")
+        (MeterKind::Luminance, dir, "--dir")
     } else {
-        if !a.dir.is_empty() {
+        if !dir.is_empty() {
             return Err(Error::option(
                 "--dir is for --luminance meters; illuminance meters take --normal",
             ));
         }
-        (MeterKind::Illuminance, &a.normal, "--normal")
+        (MeterKind::Illuminance, normal, "--normal")
     };
-    if dirs.len() != a.at.len() {
+    if dirs.len() != at.len() {
         return Err(Error::option(format!(
             "{} --at but {} {flag}: give one {flag} per --at, in the same order",
-            a.at.len(),
+            at.len(),
             dirs.len()
         )));
     }
-    let points =
-        a.at.iter()
-            .zip(dirs)
-            .map(|(p, d)| Ok((vector("--at", p)?, direction(flag, d)?)))
-            .collect::<Result<Vec<_>>>()?;
-    Ok(Request::Points(kind, points))
+    let points = at
+        .iter()
+        .zip(dirs)
+        .map(|(p, d)| Ok((vector("--at", p)?, direction(flag, d)?)))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((kind, points))
 }
 
 fn grid_request(a: &MeterArgs) -> Result<Request> {
-    if !a.at.is_empty() || a.luminance || !a.dir.is_empty() {
+    if !a.points.at.is_empty() || a.points.luminance || !a.points.dir.is_empty() {
         return Err(Error::option(
             "--grid measures illuminance on its own: drop --at, --dir and --luminance",
         ));
@@ -402,7 +462,7 @@ fn grid_request(a: &MeterArgs) -> Result<Request> {
         })
     };
     let (u, v, n) = (need(&a.u, "--u")?, need(&a.v, "--v")?, need(&a.n, "--n")?);
-    let normal = match a.normal.as_slice() {
+    let normal = match a.points.normal.as_slice() {
         [one] => direction("--normal", one)?,
         [] => return Err(Error::option("--grid needs --normal NX,NY,NZ")),
         _ => return Err(Error::option("--grid takes one --normal for all its cells")),
@@ -515,5 +575,6 @@ fn options(a: &MeterArgs) -> Result<MeterOptions> {
         max_depth: a.max_depth,
         threads: a.threads,
         integrator: a.integrator.integrator(true)?,
+        max_memory: a.max_memory,
     })
 }

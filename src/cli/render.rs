@@ -1,17 +1,21 @@
 //! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
 
+use super::checkpoints::{self, Checkpoints};
 use super::common::{
-    clap_message, print_report, print_summary, warn_dropped, warn_limits, IntegratorArgs,
+    at_least, clap_message, max_memory, print_report, print_summary, warn_dropped, warn_limits,
+    IntegratorArgs, Made,
 };
+use super::interrupt;
 use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::integrator::bidir::strategies::StrategyImage;
 use crate::integrator::Integrator;
+use crate::output::target::{self, Format, Target};
 use crate::output::{exr, png};
 use crate::session::image::xyz_to_rgb;
-use crate::session::{self, ImageSession, RenderOptions, RenderOutput};
+use crate::session::{self, ImageSession, Observer, Progressive, RenderOptions, RenderOutput};
 use crate::{scene, spectral};
-use clap::Parser;
+use clap::{CommandFactory, FromArgMatches, Parser};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
@@ -26,22 +30,22 @@ struct RenderArgs {
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
     /// Samples per pixel (default 64, or unlimited with --time).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = at_least::<u32>(1))]
     spp: Option<u32>,
     /// Render until this many seconds have passed, then write the result.
-    #[arg(long = "time")]
+    #[arg(long = "time", allow_negative_numbers = true)]
     time: Option<f64>,
     /// Seed of the deterministic sampler.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = at_least::<u64>(0))]
     seed: u64,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = at_least::<usize>(1))]
     threads: Option<usize>,
     /// Image size WxH, overriding RenderSettings.
-    #[arg(long, value_parser = parse_resolution)]
+    #[arg(long, value_parser = parse_resolution, allow_hyphen_values = true)]
     resolution: Option<(u32, u32)>,
     /// Maximum number of scattering events (pbrt's maxdepth; Mitsuba's max_depth − 1).
-    #[arg(long = "max-depth", default_value_t = 7)]
+    #[arg(long = "max-depth", default_value_t = 7, allow_negative_numbers = true, value_parser = at_least::<u32>(0))]
     max_depth: u32,
     #[command(flatten)]
     integrator: IntegratorArgs,
@@ -63,15 +67,38 @@ struct RenderArgs {
         allow_hyphen_values = true
     )]
     preview_exposure: f32,
+    /// Save the render's state to FILE every --checkpoint-interval seconds and when it is
+    /// interrupted (SIGINT, SIGTERM), to continue it with --resume; removed once the image
+    /// is written.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(long = "checkpoint-interval", value_name = "SECONDS", default_value_t = checkpoints::DEFAULT_INTERVAL, allow_negative_numbers = true)]
+    checkpoint_interval: f64,
+    /// Continue the render saved in FILE by --checkpoint (same stage and options); the
+    /// image equals the uninterrupted render's bit for bit.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+    /// Refuse to start a render estimated to need more memory than SIZE (e.g. 8G, 512M;
+    /// default: the memory available).
+    #[arg(long = "max-memory", value_name = "SIZE", value_parser = max_memory, allow_hyphen_values = true)]
+    max_memory: Option<u64>,
 }
 
-fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
+pub(super) fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or("expected WxH, e.g. 640x480")?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("bad width '{w}'"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("bad height '{h}'"))?;
-    if w == 0 || h == 0 || w > 65536 || h > 65536 {
+    let side = |v: &str, what: &str| {
+        let v = v.trim();
+        match v.parse::<i64>() {
+            Ok(n) if n < 1 => Err(format!("the {what} {n} must be positive")),
+            Ok(n) => u32::try_from(n).map_err(|_| format!("the {what} {n} is too large")),
+            Err(_) => Err(format!("bad {what} '{v}'")),
+        }
+    };
+    let (w, h) = (side(w, "width")?, side(h, "height")?);
+    if w > 65536 || h > 65536 {
         return Err("width and height must be between 1 and 65536".into());
     }
     Ok((w, h))
@@ -80,45 +107,127 @@ fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
 /// Parses the arguments and renders. `--help` and `--version` print and exit; any option
 /// error, clap's included, is one line and exit code 1.
 pub fn main(argv: Vec<OsString>) -> Result<()> {
-    match RenderArgs::try_parse_from(argv) {
+    let parsed = command()
+        .try_get_matches_from(argv)
+        .and_then(|m| RenderArgs::from_arg_matches(&m));
+    match parsed {
         Ok(args) => run(&args),
         Err(e) if !e.use_stderr() => e.exit(),
         Err(e) => Err(Error::option(clap_message(&e))),
     }
 }
 
+/// The render command's clap command, its help listing the subcommands.
+pub fn command() -> clap::Command {
+    RenderArgs::command().after_help(super::commands_help())
+}
+
 fn run(args: &RenderArgs) -> Result<()> {
     let opts = options(args)?;
+    let path = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(&args.scene));
+    target::check(&targets(args, &path))?;
+    let resume = args.resume.as_deref().map(checkpoints::read).transpose()?;
+    interrupt::install()?;
     let scene = scene::load(&args.scene, args.resolution)?;
     print_summary(&scene);
+    if let Some(signal) = interrupt::received() {
+        eprintln!("interrupted by {signal} before rendering; nothing written");
+        return Ok(());
+    }
     warn_limits(&opts.integrator, &scene, true);
     let mut session = ImageSession::new(&scene, &opts)?;
+    if let (Some(c), Some(file)) = (resume, &args.resume) {
+        let done = c.samples;
+        session
+            .resume(c)
+            .map_err(|e| Error::io(file, format!("--resume: {e}")))?;
+        eprintln!("resuming {} at {done} spp", file.display());
+    }
     let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
     let target = opts.spp.map(u64::from).or(match opts.time_budget {
         Some(_) => None,
         None => Some(u64::from(session::DEFAULT_SPP)),
     });
     let mut progress = Progress::image(pixels, target);
-    session::run(&mut session, &mut progress);
+    let mut saves = Checkpoints::new(args.checkpoint.clone(), args.checkpoint_interval);
+    let interrupted = render_passes(&mut session, &mut progress, &mut saves)?;
     progress.finish();
     let out = session.output();
     warn_dropped(out.dropped_samples);
     print_report(&out.report);
-    let path = args
-        .output
-        .clone()
-        .unwrap_or_else(|| default_output(&args.scene));
-    let meta = exr::ExrMetadata {
-        spp: out.spp,
-        integrator: opts.integrator.name().into(),
+    if let Some(signal) = interrupted {
+        if let Some(file) = saves.write(&session)? {
+            eprintln!("wrote checkpoint {} at {} spp", file.display(), out.spp);
+        }
+        eprintln!("interrupted by {signal} after {} spp", out.spp);
+        if out.spp == 0 {
+            eprintln!("nothing rendered; nothing written");
+            return Ok(());
+        }
+    }
+    write_outputs(args, &opts, &scene, &path, &out)?;
+    if interrupted.is_none() {
+        saves.finished();
+    }
+    Ok(())
+}
+
+/// Runs passes until the session is finished or a signal arrives (its name), saving
+/// checkpoints as asked.
+fn render_passes(
+    session: &mut ImageSession,
+    progress: &mut Progress,
+    saves: &mut Checkpoints,
+) -> Result<Option<&'static str>> {
+    while let Some(stats) = session.step() {
+        progress.pass(&stats);
+        if let Some(signal) = interrupt::received() {
+            return Ok(Some(signal));
+        }
+        saves.after_pass(session)?;
+    }
+    Ok(interrupt::received())
+}
+
+/// Every file and directory the render will write, in the order given.
+fn targets(args: &RenderArgs, output: &Path) -> Vec<Target> {
+    let mut t = vec![Target::new("-o", output, Format::Exr)];
+    if let Some(p) = &args.preview {
+        t.push(Target::new("--preview", p, Format::Png));
+    }
+    if let Some(p) = &args.checkpoint {
+        t.push(Target::new("--checkpoint", p, Format::Any));
+    }
+    if let Some(p) = &args.strategies {
+        t.push(Target::new("--strategies", p, Format::Directory));
+    }
+    t
+}
+
+/// The EXR, the preview and the strategy images.
+fn write_outputs(
+    args: &RenderArgs,
+    opts: &RenderOptions,
+    scene: &scene::Scene,
+    path: &Path,
+    out: &RenderOutput,
+) -> Result<()> {
+    let meta = Made {
+        stage: &args.scene,
+        scene,
+        integrator: &opts.integrator,
         seed: opts.seed,
+        max_depth: opts.max_depth,
+        spp: out.spp,
         wall_time_s: out.wall_time_s,
-        version: env!("CARGO_PKG_VERSION").into(),
-        scene: args.scene.display().to_string(),
-    };
+    }
+    .metadata();
     let white = spectral::color::white_xy().map(|c| c as f32);
     exr::write(
-        &path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
+        path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
     )?;
     if let Some(preview) = &args.preview {
         png::write_preview(
@@ -130,7 +239,7 @@ fn run(args: &RenderArgs) -> Result<()> {
         )?;
     }
     if let (Some(dir), Some(images)) = (&args.strategies, &out.strategies) {
-        write_strategies(dir, &out, images, &meta, white)?;
+        write_strategies(dir, out, images, &meta, white)?;
     }
     let rate = (out.width * out.height) as f64 * out.spp as f64 / out.wall_time_s.max(1e-9);
     eprintln!(
@@ -193,10 +302,25 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
     if args.spp == Some(0) {
         return Err(Error::option("--spp must be at least 1"));
     }
+    if args
+        .spp
+        .is_some_and(|n| u64::from(n) > session::image::MAX_SPP)
+    {
+        return Err(Error::option(format!(
+            "--spp must be at most {}",
+            session::image::MAX_SPP
+        )));
+    }
     if let Some(t) = args.time {
         if !(t.is_finite() && t > 0.0) {
             return Err(Error::option("--time must be a positive number of seconds"));
         }
+    }
+    let interval = args.checkpoint_interval;
+    if !(interval.is_finite() && interval > 0.0) {
+        return Err(Error::option(
+            "--checkpoint-interval must be a positive number of seconds",
+        ));
     }
     if args.threads == Some(0) {
         return Err(Error::option("--threads must be at least 1"));
@@ -210,6 +334,8 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
         integrator,
         strategies: args.strategies.is_some(),
         filter_textures: !args.no_texture_filtering,
+        max_memory: args.max_memory,
+        ..RenderOptions::default()
     })
 }
 

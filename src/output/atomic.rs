@@ -7,6 +7,9 @@
 //!
 //! The new file gets the default permissions of a newly created file; those of a file it
 //! replaces are not carried over.
+//!
+//! A symbolic link is written through, as `cp` does: the file it names is replaced and the
+//! link stays. A FIFO, device or socket is never replaced by a regular file (an error).
 
 use std::fs::{self, File, OpenOptions};
 use std::io;
@@ -22,6 +25,15 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut File) -> io::Result<()>,
 ) -> io::Result<()> {
+    let path = &resolve_symlinks(path)?;
+    if let Ok(meta) = fs::metadata(path) {
+        if !meta.is_file() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "not a regular file; refusing to replace it",
+            ));
+        }
+    }
     let (temp_path, mut file) = create_temp_beside(path)?;
     let written = write(&mut file).and_then(|()| file.sync_all());
     drop(file);
@@ -33,6 +45,44 @@ pub fn write_atomically(
     }
     sync_directory_of(path);
     Ok(())
+}
+
+/// Links followed before a chain is taken for a loop (Linux's own limit).
+const MAX_LINKS: usize = 40;
+
+/// The file `path` names once symbolic links are followed (relative links from the link's
+/// directory); a dangling link gives the file it would create.
+pub fn resolve_symlinks(path: &Path) -> io::Result<PathBuf> {
+    let mut p = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match fs::symlink_metadata(&p) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let target = fs::read_link(&p)?;
+                p = match p.parent() {
+                    Some(dir) if target.is_relative() => dir.join(target),
+                    _ => target,
+                };
+            }
+            _ => return Ok(p),
+        }
+    }
+    Err(io::Error::other("too many levels of symbolic links"))
+}
+
+/// Checks that `dir` takes new files by creating and removing one, as a write will; returns
+/// the directory's canonical path.
+pub fn probe_directory(dir: &Path) -> io::Result<PathBuf> {
+    let meta = fs::metadata(dir).map_err(|e| match e.kind() {
+        io::ErrorKind::NotFound => io::Error::new(e.kind(), "the directory does not exist"),
+        _ => e,
+    })?;
+    if !meta.is_dir() {
+        return Err(io::Error::other("not a directory"));
+    }
+    let (probe, file) = create_temp_beside(&dir.join("probe"))?;
+    drop(file);
+    fs::remove_file(&probe)?;
+    fs::canonicalize(dir)
 }
 
 /// Creates a new, uniquely named temporary file in the directory of `path`.

@@ -12,23 +12,30 @@
 //! | header attribute | type | value |
 //! |---|---|---|
 //! | `chromaticities` | chromaticities | Rec.709 primaries red (0.64, 0.33), green (0.30, 0.60), blue (0.15, 0.06); white as passed to [`write()`] |
-//! | `whiteLuminance` | float | 1.0: an RGB of (1, 1, 1) is 1 cd/m² |
+//! | `whiteLuminance` | float | 2^(−exposure) cd/m²: the luminance of RGB (1, 1, 1), the camera's `exposure` having scaled the image by 2^exposure |
+//! | `worldToCamera` | m44f | world (metres, Y up) to OpenEXR's camera space (left-handed, x right, y up, z along the view), when known |
+//! | `worldToNDC` | m44f | world to OpenEXR's NDC ((0, 0) top left, (1, 1) bottom right, after the homogeneous divide), when known |
 //! | `software` | string | `spectral-render <version>` |
-//! | `spectralRender:spp` | string | samples per pixel, decimal |
+//! | `spectralRender:spp` | int | samples per pixel |
+//! | `spectralRender:seed` | int | sampler seed; a seed above 2^31 − 1 is a string of its decimal digits (EXR's int is 32-bit) |
+//! | `spectralRender:maxDepth` | int | maximum number of scattering events |
+//! | `spectralRender:exposure` | float | the camera's exposure in stops |
 //! | `spectralRender:integrator` | string | integrator name |
-//! | `spectralRender:seed` | string | sampler seed, decimal |
-//! | `spectralRender:wallTime` | string | render wall-clock time in seconds, shortest decimal that round-trips an f64 |
+//! | `spectralRender:mis` | string | the MIS heuristic (`power`, `balance`), for integrators that combine techniques |
+//! | `spectralRender:wallTime` | double | render wall-clock time in seconds |
 //! | `spectralRender:version` | string | renderer version |
 //! | `spectralRender:scene` | string | the scene file, UTF-8 |
 //!
-//! All metadata is stored as `string` attributes: samples per pixel and the seed are 64-bit and
-//! EXR's only integer attribute type is 32-bit, and one type keeps readers (ours, `exrheader`)
-//! simple. Strings are written as UTF-8 bytes, as OpenEXR's C++ library does.
+//! Matrices are stored as OpenEXR's `M44f` is (Imath's row-vector convention, p' = p·M, the
+//! translation in the last row), which is the column-vector matrix's columns in order.
+//! Strings are written as UTF-8 bytes, as OpenEXR's C++ library does. Samples per pixel fit
+//! the 32-bit int: a render stops at 2^31 − 1 (`session::image::MAX_SPP`).
 //!
 //! [`read`] returns every channel as f32 by name and every header attribute as a string:
 //! strings verbatim, numbers in Rust's shortest round-trip notation (so `whiteLuminance` reads
-//! `"1"`), `chromaticities` as eight space-separated numbers `rx ry gx gy bx by wx wy`, other
-//! types in their `Debug` form.
+//! `"1"`), `chromaticities` as eight space-separated numbers `rx ry gx gy bx by wx wy`,
+//! matrices as their sixteen numbers in stored order, other types in their `Debug` form;
+//! [`ExrImage::types`] names each attribute's type (`int`, `float`, `double`, `string`, …).
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -58,19 +65,31 @@ pub const SEED_ATTRIBUTE: &str = "spectralRender:seed";
 pub const WALL_TIME_ATTRIBUTE: &str = "spectralRender:wallTime";
 pub const VERSION_ATTRIBUTE: &str = "spectralRender:version";
 pub const SCENE_ATTRIBUTE: &str = "spectralRender:scene";
+pub const MAX_DEPTH_ATTRIBUTE: &str = "spectralRender:maxDepth";
+pub const EXPOSURE_ATTRIBUTE: &str = "spectralRender:exposure";
+pub const MIS_ATTRIBUTE: &str = "spectralRender:mis";
 
 /// The names of the six channels, in the order of `rgb` then `xyz` components.
 const CHANNEL_NAMES: [&str; 6] = ["R", "G", "B", "XYZ.X", "XYZ.Y", "XYZ.Z"];
 
-/// How the image was made; stored as string attributes (see the module docs).
+/// How the image was made (see the module docs for the attributes).
 #[derive(Clone, Debug, Default)]
 pub struct ExrMetadata {
     pub spp: u64,
     pub integrator: String,
+    /// The MIS heuristic, for integrators that combine techniques.
+    pub mis: Option<String>,
     pub seed: u64,
+    pub max_depth: u32,
+    /// The camera's exposure in stops: the image was scaled by 2^exposure.
+    pub exposure: f32,
     pub wall_time_s: f64,
     pub version: String,
     pub scene: String,
+    /// World to OpenEXR camera space and to NDC, column-vector matrices as 16 values in
+    /// column order.
+    pub world_to_camera: Option<[f32; 16]>,
+    pub world_to_ndc: Option<[f32; 16]>,
 }
 
 /// An EXR file as read back: every channel by name (row-major, rows top to bottom) and every
@@ -81,6 +100,9 @@ pub struct ExrImage {
     pub height: usize,
     pub channels: BTreeMap<String, Vec<f32>>,
     pub attributes: BTreeMap<String, String>,
+    /// The type of each attribute: `int`, `float`, `double`, `string`, `m44f`, or its
+    /// `Debug` name for others.
+    pub types: BTreeMap<String, String>,
 }
 
 /// Writes a float32 EXR with channels R, G, B and XYZ.X, XYZ.Y, XYZ.Z from the row-major
@@ -99,13 +121,36 @@ pub fn write(
     white_xy: [f32; 2],
     meta: &ExrMetadata,
 ) -> Result<()> {
+    write_with_channels(path, width, height, rgb, xyz, &[], white_xy, meta)
+}
+
+/// [`write()`] with `extra` float32 channels (name, one value per pixel) after the six, e.g.
+/// a reference's `variance.R` (`converge`). Extra values must be finite too.
+#[allow(clippy::too_many_arguments)]
+pub fn write_with_channels(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    extra: &[(&str, Vec<f32>)],
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> Result<()> {
     let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
     check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
     check_finite(width, rgb, xyz).map_err(fail)?;
+    for (name, values) in extra {
+        if values.len() != rgb.len() || !values.iter().all(|v| v.is_finite()) {
+            return Err(fail(format!(
+                "channel {name} needs one finite value per pixel"
+            )));
+        }
+    }
     if !white_xy.iter().all(|c| c.is_finite()) {
         return Err(fail(format!("white point {white_xy:?} is not finite")));
     }
-    let image = build_image(width, height, rgb, xyz, white_xy, meta);
+    let image = build_image(width, height, rgb, xyz, extra, white_xy, meta);
     write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
 }
 
@@ -114,27 +159,47 @@ pub fn write(
 pub fn read(path: &Path) -> Result<ExrImage> {
     let fail = |reason: String| Error::io(path, format!("cannot read EXR: {reason}"));
     let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
-    let attributes = read_attributes(&bytes).map_err(fail)?;
+    let (attributes, types) = read_attributes(&bytes).map_err(fail)?;
     let (width, height, channels) = read_channels(&bytes).map_err(fail)?;
     Ok(ExrImage {
         width,
         height,
         channels,
         attributes,
+        types,
     })
 }
 
 type Channels = BTreeMap<String, Vec<f32>>;
 
-/// Every attribute of the first header, formatted as the module docs say.
-fn read_attributes(bytes: &[u8]) -> Reason<BTreeMap<String, String>> {
+type Attributes = BTreeMap<String, String>;
+
+/// Every attribute of the first header, formatted as the module docs say, and its type.
+fn read_attributes(bytes: &[u8]) -> Reason<(Attributes, Attributes)> {
     let meta =
         MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| e.to_string())?;
     let header = meta.headers.first().ok_or("the file has no header")?;
-    let named = header.all_named_attributes();
-    Ok(named
-        .map(|(name, value)| (utf8(name), attribute_to_string(&value)))
-        .collect())
+    let (mut values, mut types) = (BTreeMap::new(), BTreeMap::new());
+    for (name, value) in header.all_named_attributes() {
+        values.insert(utf8(name), attribute_to_string(&value));
+        types.insert(utf8(name), type_name(&value));
+    }
+    Ok((values, types))
+}
+
+fn type_name(value: &AttributeValue) -> String {
+    match value {
+        AttributeValue::I32(_) => "int".into(),
+        AttributeValue::F32(_) => "float".into(),
+        AttributeValue::F64(_) => "double".into(),
+        AttributeValue::Text(_) => "string".into(),
+        AttributeValue::Matrix4x4(_) => "m44f".into(),
+        other => format!("{other:?}")
+            .split(['(', ' ', '{'])
+            .next()
+            .unwrap_or("")
+            .to_string(),
+    }
 }
 
 /// Width, height and the f32 samples of every channel of the first layer.
@@ -199,6 +264,7 @@ fn build_image(
     height: usize,
     rgb: &[[f32; 3]],
     xyz: &[[f32; 3]],
+    extra: &[(&str, Vec<f32>)],
     white_xy: [f32; 2],
     meta: &ExrMetadata,
 ) -> FlatImage {
@@ -213,6 +279,10 @@ fn build_image(
     let list: Vec<_> = (0..3)
         .map(|c| channel(CHANNEL_NAMES[c], rgb, c))
         .chain((0..3).map(|c| channel(CHANNEL_NAMES[3 + c], xyz, c)))
+        .chain(extra.iter().map(|(name, values)| AnyChannel {
+            quantize_linearly: false,
+            ..AnyChannel::new(*name, FlatSamples::F32(values.clone()))
+        }))
         .collect();
     let layer = Layer::new(
         (width, height),
@@ -233,22 +303,38 @@ fn build_image(
 
 fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
     let mut attributes = LayerAttributes {
-        white_luminance: Some(1.0),
+        white_luminance: Some((-meta.exposure).exp2()),
         software_name: Some(text(format!("spectral-render {}", meta.version).trim_end())),
+        world_to_camera: meta.world_to_camera,
+        world_to_normalized_device: meta.world_to_ndc,
         ..LayerAttributes::default()
     };
-    let strings = [
-        (SPP_ATTRIBUTE, meta.spp.to_string()),
-        (INTEGRATOR_ATTRIBUTE, meta.integrator.clone()),
-        (SEED_ATTRIBUTE, meta.seed.to_string()),
-        (WALL_TIME_ATTRIBUTE, meta.wall_time_s.to_string()),
-        (VERSION_ATTRIBUTE, meta.version.clone()),
-        (SCENE_ATTRIBUTE, meta.scene.clone()),
+    let int = |v: u64| i32::try_from(v).ok().map(AttributeValue::I32);
+    let string = |v: &str| AttributeValue::Text(text(v));
+    let mut typed = vec![
+        (
+            SPP_ATTRIBUTE,
+            int(meta.spp).unwrap_or_else(|| string(&meta.spp.to_string())),
+        ),
+        (
+            SEED_ATTRIBUTE,
+            int(meta.seed).unwrap_or_else(|| string(&meta.seed.to_string())),
+        ),
+        (
+            MAX_DEPTH_ATTRIBUTE,
+            int(u64::from(meta.max_depth)).unwrap_or(AttributeValue::I32(i32::MAX)),
+        ),
+        (EXPOSURE_ATTRIBUTE, AttributeValue::F32(meta.exposure)),
+        (INTEGRATOR_ATTRIBUTE, string(&meta.integrator)),
+        (WALL_TIME_ATTRIBUTE, AttributeValue::F64(meta.wall_time_s)),
+        (VERSION_ATTRIBUTE, string(&meta.version)),
+        (SCENE_ATTRIBUTE, string(&meta.scene)),
     ];
-    for (name, value) in strings {
-        attributes
-            .other
-            .insert(text(name), AttributeValue::Text(text(&value)));
+    if let Some(mis) = &meta.mis {
+        typed.push((MIS_ATTRIBUTE, string(mis)));
+    }
+    for (name, value) in typed {
+        attributes.other.insert(text(name), value);
     }
     attributes
 }
@@ -282,6 +368,11 @@ fn attribute_to_string(value: &AttributeValue) -> String {
         AttributeValue::Chromaticities(c) => [c.red, c.green, c.blue, c.white]
             .iter()
             .flat_map(|v| [v.x(), v.y()])
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
+        AttributeValue::Matrix4x4(m) => m
+            .iter()
             .map(|v| v.to_string())
             .collect::<Vec<_>>()
             .join(" "),
@@ -334,12 +425,17 @@ mod tests {
 
     fn test_meta() -> ExrMetadata {
         ExrMetadata {
-            spp: 1 << 40,
+            spp: 1 << 20,
             integrator: "vcm".into(),
+            mis: Some("balance".into()),
             seed: u64::MAX,
+            max_depth: 12,
+            exposure: -8.0,
             wall_time_s: 12.345678901234567,
             version: "0.1.0".into(),
             scene: "scenes/Bühne – 場景.usda".into(),
+            world_to_camera: Some(std::array::from_fn(|i| i as f32)),
+            world_to_ndc: Some(std::array::from_fn(|i| -(i as f32) / 4.0)),
         }
     }
 
@@ -386,15 +482,37 @@ mod tests {
             chromaticities,
             [0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290]
         );
-        assert_eq!(attributes["whiteLuminance"], "1");
-        assert_eq!(attributes[SPP_ATTRIBUTE], "1099511627776");
+        assert_eq!(attributes["whiteLuminance"], "256");
+        assert_eq!(attributes[SPP_ATTRIBUTE], "1048576");
         assert_eq!(attributes[INTEGRATOR_ATTRIBUTE], "vcm");
+        assert_eq!(attributes[MIS_ATTRIBUTE], "balance");
         assert_eq!(attributes[SEED_ATTRIBUTE], "18446744073709551615");
+        assert_eq!(attributes[MAX_DEPTH_ATTRIBUTE], "12");
+        assert_eq!(attributes[EXPOSURE_ATTRIBUTE], "-8");
         let wall_time: f64 = attributes[WALL_TIME_ATTRIBUTE].parse().unwrap();
         assert_eq!(wall_time, 12.345678901234567);
+        let m: Vec<f32> = attributes["worldToCamera"]
+            .split(' ')
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(m, (0..16).map(|i| i as f32).collect::<Vec<_>>());
+        assert!(attributes.contains_key("worldToNDC"));
         assert_eq!(attributes[VERSION_ATTRIBUTE], "0.1.0");
         assert_eq!(attributes[SCENE_ATTRIBUTE], "scenes/Bühne – 場景.usda");
         assert_eq!(attributes["software"], "spectral-render 0.1.0");
+        let types = read(&path).unwrap().types;
+        for (name, ty) in [
+            (SPP_ATTRIBUTE, "int"),
+            (MAX_DEPTH_ATTRIBUTE, "int"),
+            (SEED_ATTRIBUTE, "string"),
+            (EXPOSURE_ATTRIBUTE, "float"),
+            ("whiteLuminance", "float"),
+            (WALL_TIME_ATTRIBUTE, "double"),
+            ("worldToCamera", "m44f"),
+            ("worldToNDC", "m44f"),
+        ] {
+            assert_eq!(types[name], ty, "{name}");
+        }
         fs::remove_dir_all(&dir).unwrap();
     }
 

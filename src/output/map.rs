@@ -190,7 +190,7 @@ impl IlluminanceMap {
 
     /// Writes `BASE.csv`, `BASE.json` and `BASE.png`; returns their paths.
     pub fn write(&self, base: &Path) -> Result<[PathBuf; 3]> {
-        let paths = ["csv", "json", "png"].map(|ext| with_suffix(base, ext));
+        let paths = files(base);
         let fail = |p: &Path, e: std::io::Error| Error::io(p, format!("cannot write: {e}"));
         let text = |p: &Path, s: String| {
             write_atomically(p, |f| f.write_all(s.as_bytes())).map_err(|e| fail(p, e))
@@ -454,6 +454,11 @@ pub fn vec3(v: [f64; 3]) -> String {
 }
 
 /// `base` with `.ext` appended to its file name (`out/map` → `out/map.csv`).
+/// The files [`IlluminanceMap::write`] writes for `base`: `BASE.csv`, `BASE.json`, `BASE.png`.
+pub fn files(base: &Path) -> [PathBuf; 3] {
+    ["csv", "json", "png"].map(|ext| with_suffix(base, ext))
+}
+
 fn with_suffix(base: &Path, ext: &str) -> PathBuf {
     let mut name = base.file_name().unwrap_or_default().to_os_string();
     name.push(".");

@@ -1,5 +1,7 @@
 //! Writing results: EXR images (only `exr.rs` names the exr crate), PNG previews,
-//! illuminance maps and JSON documents (only `json.rs` names serde_json).
+//! illuminance maps, JSON documents (only `json.rs` names serde_json), and the files of a
+//! convergence report (`reference.rs`, `report.rs`, `plot.rs`, the only module naming
+//! plotters).
 
 #[cfg(feature = "testing")]
 #[doc(hidden)]
@@ -13,4 +15,8 @@ pub mod json;
 #[cfg(not(feature = "testing"))]
 pub(crate) mod json;
 pub mod map;
+pub mod plot;
 pub mod png;
+pub mod reference;
+pub mod report;
+pub mod target;

@@ -110,6 +110,7 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         radius,
         summary,
         stage_to_world: desc.stage_to_world,
+        content_hash: desc.content_hash,
     })
 }
 

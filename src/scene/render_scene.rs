@@ -99,6 +99,8 @@ pub struct Scene {
     pub all_opaque: bool,
     /// Stage space to world space (see `SceneDescription::stage_to_world`).
     pub stage_to_world: DMat4,
+    /// The hash of the stage's layers (`SceneDescription::content_hash`).
+    pub content_hash: u64,
 }
 
 impl Scene {

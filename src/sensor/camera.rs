@@ -58,6 +58,8 @@ pub struct Camera {
     pub focus_distance: f32,
     pub clip_near: f32,
     pub clip_far: f32,
+    /// The camera's `exposure` in stops.
+    pub exposure: f32,
     /// 2^exposure: the image scale UsdLux asks renderers to apply.
     pub exposure_scale: f32,
     /// Inverse of `to_world` (a rigid transform).
@@ -91,10 +93,32 @@ impl Camera {
             focus_distance: desc.focus_distance,
             clip_near: desc.clip_near.max(0.0),
             clip_far: desc.clip_far,
+            exposure: desc.exposure,
             exposure_scale: desc.exposure.exp2(),
             from_world: desc.to_world.inverse(),
             min_dir_differentials,
         }
+    }
+
+    /// World to OpenEXR's camera space (the `worldToCamera` attribute, as a column-vector
+    /// matrix): RenderMan's left-handed frame, x right, y up, z along the view, so our
+    /// camera frame (looking along −Z, right-handed) with z negated.
+    pub fn world_to_exr_camera(&self) -> Mat4 {
+        Mat4::from_scale(Vec3::new(1.0, 1.0, -1.0)) * self.from_world
+    }
+
+    /// World to OpenEXR's NDC (the `worldToNDC` attribute, column-vector form): after the
+    /// homogeneous divide, (0, 0) is the image's top-left corner and (1, 1) its bottom-right
+    /// (x right, y down), by the pinhole projection through the lens centre; z/w is 1/depth.
+    pub fn world_to_ndc(&self) -> Mat4 {
+        let (a, b) = (0.5 / self.half_w, -0.5 / self.half_h);
+        let projection = Mat4::from_cols_array_2d(&[
+            [a, 0.0, 0.0, 0.0],
+            [0.0, b, 0.0, 0.0],
+            [0.5, 0.5, 0.0, 1.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ]);
+        projection * self.world_to_exr_camera()
     }
 
     /// ∂p/∂x and ∂p/∂y at a surface point `p` with normal `n`, per pixel step, times `scale`,
@@ -373,6 +397,23 @@ mod tests {
         };
         let (a, b) = (target([0.1, 0.2]), target([0.9, 0.7]));
         assert!((a - b).length() < 1e-4, "{a} {b}");
+    }
+
+    #[test]
+    fn exr_matrices_put_a_raster_point_at_its_ndc() {
+        let mut d = desc();
+        d.to_world = Mat4::from_translation(Vec3::new(1.0, -2.0, 0.5)) * Mat4::from_rotation_y(0.3);
+        let cam = Camera::new(&d, 40, 30);
+        let (r, _) = cam.generate_ray([10.0, 20.0], [0.5, 0.5]);
+        let p = r.at(3.0);
+        let ndc = cam.world_to_ndc().project_point3(p);
+        assert!(
+            (ndc.x - 0.25).abs() < 1e-5 && (ndc.y - 20.0 / 30.0).abs() < 1e-5,
+            "{ndc}"
+        );
+        // In front of the camera: positive z in OpenEXR's camera space.
+        let c = cam.world_to_exr_camera().transform_point3(p);
+        assert!(c.z > 0.0 && c.x < 0.0 && c.y < 0.0, "{c}");
     }
 
     fn thin_lens() -> Camera {

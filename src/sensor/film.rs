@@ -19,6 +19,9 @@
 //! a, b of the pixel, so (a − b)² n_even n_odd / n² is an unbiased estimate of the variance
 //! of the pixel's mean over all n samples, whatever the integrator ([`Film::variance_y`]).
 
+use super::film_state::FilmState;
+use crate::error::Reason;
+
 /// Accumulated XYZ per pixel (Y in cd/m²), row-major, top row first.
 #[derive(Clone, Debug)]
 pub struct Film {
@@ -199,6 +202,37 @@ impl Film {
                 scale * scale * d * d * n_even * n_odd / (n as f64 * n as f64)
             })
             .collect()
+    }
+
+    /// The film's raw state (`film_state`), to save it and continue it later.
+    pub fn state(&self) -> FilmState {
+        FilmState {
+            width: self.width,
+            height: self.height,
+            closed: self.closed.clone(),
+            open: self.open.clone(),
+            samples: self.samples.clone(),
+            odd_y: self.odd_y.clone(),
+            splat: self.splat.clone(),
+            odd_splat_y: self.odd_splat_y.clone(),
+            light_paths: self.light_paths,
+        }
+    }
+
+    /// A film that continues `state` (checked: one entry per pixel in every sequence).
+    pub fn from_state(state: FilmState) -> Reason<Film> {
+        state.check()?;
+        Ok(Film {
+            width: state.width,
+            height: state.height,
+            closed: state.closed,
+            open: state.open,
+            samples: state.samples,
+            splat: state.splat,
+            light_paths: state.light_paths,
+            odd_y: state.odd_y,
+            odd_splat_y: state.odd_splat_y,
+        })
     }
 
     /// Samples taken in the pixel with the fewest.

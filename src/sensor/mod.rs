@@ -5,7 +5,9 @@
 pub mod camera;
 pub mod endpoint;
 pub mod film;
+pub mod film_state;
 pub mod meter;
+pub mod raw_bytes;
 
 pub use camera::Camera;
 pub use endpoint::{Sensor, SensorRay, SensorSample};

@@ -4,8 +4,13 @@
 //! **Passes.** Under `--spp` the first pass takes one chunk and later ones about
 //! [`PASS_SECONDS`] of work each, so that observers (the progress bar) hear often; under a
 //! time budget passes grow (1, 1, 2, 4, … 64 samples per pixel), each cut to what the
-//! measured rate says still fits in the budget, and the session stops after the pass in which
-//! the budget ran out (equal-time comparisons rely on it ending close to the budget).
+//! measured rate says still fits in the budget and in [`PASS_SECONDS`] (so that interrupts
+//! and checkpoints are heard about once a second), and the session stops after the pass in
+//! which the budget ran out (equal-time comparisons rely on it ending close to the budget).
+//!
+//! **Checkpoints.** [`ImageSession::checkpoint`] is the session's state between passes and
+//! [`ImageSession::resume`] continues one (`session::checkpoint`); since an image depends on
+//! the seed and the sample count only, a resumed render equals the uninterrupted one.
 //!
 //! **Chunks.** Light tracing and BDPT splat: each tile returns its splat list, merged in tile
 //! order, so images stay bit-identical for any thread count. Splat lists are bounded by
@@ -20,8 +25,9 @@
 //! also end at iteration boundaries, and each iteration is prepared (`begin_iteration`) on
 //! the session's threads before its first sample.
 
+use super::checkpoint::{self, Checkpoint};
 use super::{pool, PassStats, Progressive};
-use crate::error::Result;
+use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
@@ -39,6 +45,9 @@ const TILE_SIZE: usize = 16;
 pub const SPLAT_CHUNK_SAMPLES: u64 = 1 << 18;
 /// Samples per pixel when neither a count nor a time budget is given.
 pub const DEFAULT_SPP: u32 = 64;
+/// The most samples per pixel a render takes (a time budget stops there too): the EXR
+/// records the count as a 32-bit int.
+pub const MAX_SPP: u64 = i32::MAX as u64;
 /// Aimed-at duration of a pass under a sample count.
 pub const PASS_SECONDS: f64 = 1.0;
 
@@ -58,7 +67,18 @@ pub struct RenderOptions {
     /// looks every texture up bilinearly at its finest level (pbrt-v4's
     /// `--disable-texture-filtering`; Mitsuba 3's bitmaps).
     pub filter_textures: bool,
+    /// Wavelengths each sample carries: 4 (a hero and 3 rotations, Wilkie et al. 2014) or 1
+    /// (the hero alone: the secondaries are terminated before the sample starts and again
+    /// after it, as a dispersive surface would, so every integrator, VCM's iteration tuples
+    /// included, estimates with the hero only; `converge --wavelengths 1,4`).
+    pub wavelengths: usize,
+    /// Refuse to start when the estimated memory (`session::memory`) and what the process
+    /// holds exceed this many bytes; None: the machine's available memory.
+    pub max_memory: Option<u64>,
 }
+
+/// The wavelength counts [`RenderOptions::wavelengths`] may take.
+pub const WAVELENGTH_COUNTS: [usize; 2] = [1, 4];
 
 impl Default for RenderOptions {
     fn default() -> Self {
@@ -71,6 +91,8 @@ impl Default for RenderOptions {
             integrator: Integrator::Path,
             strategies: false,
             filter_textures: true,
+            wavelengths: 4,
+            max_memory: None,
         }
     }
 }
@@ -117,15 +139,28 @@ pub struct ImageSession<'a> {
     dropped: u64,
     passes: u32,
     start: Instant,
+    /// Seconds spent before this session started (a resumed checkpoint's).
+    prior_s: f64,
 }
 
 impl<'a> ImageSession<'a> {
     pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageSession<'a>> {
+        if !WAVELENGTH_COUNTS.contains(&opts.wavelengths) {
+            return Err(crate::error::Error::option(format!(
+                "{} wavelengths per sample: 4 (hero sampling) or 1 (the hero alone)",
+                opts.wavelengths
+            )));
+        }
         let strategy_count = if opts.strategies {
             opts.integrator.check_strategies(opts.max_depth)?
         } else {
             0
         };
+        super::memory::check(
+            "the render",
+            &super::memory::image(scene, opts),
+            opts.max_memory,
+        )?;
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h);
         let settings = Settings {
@@ -150,15 +185,55 @@ impl<'a> ImageSession<'a> {
             },
             target: match (opts.spp, opts.time_budget) {
                 (Some(n), _) => u64::from(n),
-                (None, Some(_)) => u64::MAX,
+                (None, Some(_)) => MAX_SPP,
                 (None, None) => u64::from(DEFAULT_SPP),
             },
             done: 0,
             dropped: 0,
             passes: 0,
             start: Instant::now(),
+            prior_s: 0.0,
             opts: opts.clone(),
         })
+    }
+
+    /// The session's state under its run's identity (`session::checkpoint`).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            identity: checkpoint::identity(self.scene, &self.opts),
+            samples: self.done,
+            dropped: self.dropped,
+            wall_time_s: self.elapsed(),
+            film: self.film.state(),
+            strategies: self.strategy_films.as_ref().map(StrategyFilms::sums),
+        }
+    }
+
+    /// Continues from `c`, a checkpoint of the same run (identity checked), before any pass.
+    pub fn resume(&mut self, c: Checkpoint) -> Reason<()> {
+        c.check_identity(&checkpoint::identity(self.scene, &self.opts))?;
+        if self.done > 0 {
+            return Err("a session resumes only before its first pass".into());
+        }
+        let film = Film::from_state(c.film)?;
+        if (film.width, film.height) != (self.film.width, self.film.height) {
+            return Err("the checkpoint's film has another size".into());
+        }
+        match (&mut self.strategy_films, c.strategies) {
+            (Some(sf), Some(sums)) => sf.restore(sums)?,
+            (None, None) => {}
+            _ => return Err("the checkpoint's strategy images do not match".into()),
+        }
+        self.film = film;
+        self.done = c.samples;
+        self.dropped = c.dropped;
+        self.prior_s = c.wall_time_s;
+        Ok(())
+    }
+
+    /// Wall-clock seconds of the render, a resumed checkpoint's included.
+    fn elapsed(&self) -> f64 {
+        self.prior_s + self.start.elapsed().as_secs_f64()
     }
 
     /// The image so far.
@@ -172,7 +247,7 @@ impl<'a> ImageSession<'a> {
             xyz,
             rgb,
             spp: self.done,
-            wall_time_s: self.start.elapsed().as_secs_f64(),
+            wall_time_s: self.elapsed(),
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
             report: self.estimator.report(),
@@ -184,7 +259,7 @@ impl<'a> ImageSession<'a> {
     }
 
     fn finished(&self) -> bool {
-        let elapsed = self.start.elapsed().as_secs_f64();
+        let elapsed = self.elapsed();
         self.done >= self.target
             || (self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t))
     }
@@ -192,13 +267,14 @@ impl<'a> ImageSession<'a> {
     /// Samples per pixel of the next pass (see the module docs).
     fn pass_size(&self) -> u64 {
         let remaining = self.target - self.done;
-        let elapsed = self.start.elapsed().as_secs_f64();
+        let elapsed = self.elapsed();
         let per_sample = elapsed / self.done.max(1) as f64;
         let n = match self.opts.time_budget {
             Some(budget) => {
                 let mut n = self.done.clamp(1, 64);
                 if self.done > 0 && elapsed > 0.0 {
-                    n = n.min(((budget - elapsed) / per_sample).max(1.0) as u64);
+                    let left = (budget - elapsed).min(PASS_SECONDS);
+                    n = n.min((left / per_sample).max(1.0) as u64);
                 }
                 n
             }
@@ -227,6 +303,7 @@ impl<'a> ImageSession<'a> {
             seed: self.opts.seed,
             width: self.film.width as u64,
             strategy_count: self.strategy_count,
+            hero_only: self.opts.wavelengths == 1,
         };
         let (film, estimator) = (&self.film, &*self.estimator);
         let max_depth = self.opts.max_depth;
@@ -238,7 +315,11 @@ impl<'a> ImageSession<'a> {
                     |ws, tile| {
                         let acc =
                             TileAccumulator::continuing(film.open_sums(tile), task.strategy_count);
-                        render_tile(estimator, tile, &task, acc, ws)
+                        if task.hero_only {
+                            render_tile::<true>(estimator, tile, &task, acc, ws)
+                        } else {
+                            render_tile::<false>(estimator, tile, &task, acc, ws)
+                        }
                     },
                 )
                 .collect()
@@ -265,12 +346,18 @@ impl<'a> ImageSession<'a> {
     }
 }
 
-impl Progressive for ImageSession<'_> {
-    fn step(&mut self) -> Option<PassStats> {
-        if self.finished() {
-            return None;
-        }
-        let end = self.done + self.pass_size();
+impl ImageSession<'_> {
+    /// Renders on to exactly `n` samples per pixel in one pass, whatever the session's own
+    /// sample count or time budget (snapshots at chosen counts: `converge`); None when `n`
+    /// samples are already done. The image at `n` is the same as after any other passes to
+    /// `n` (chunks and iterations are aligned from sample 0).
+    pub fn step_to(&mut self, n: u64) -> Option<PassStats> {
+        (n > self.done).then(|| self.advance(n))
+    }
+
+    /// Renders samples [done, end) of every pixel, segment by segment (a segment ends at a
+    /// chunk or iteration boundary), and returns the pass's statistics.
+    fn advance(&mut self, end: u64) -> PassStats {
         let iteration = self.estimator.iteration_samples();
         while self.done < end {
             let mut segment_end = (self.done / self.chunk + 1).saturating_mul(self.chunk);
@@ -288,14 +375,25 @@ impl Progressive for ImageSession<'_> {
             self.render_segment(self.done, segment_end.min(end) - self.done);
         }
         self.passes += 1;
-        Some(PassStats {
+        PassStats {
             pass: self.passes,
             samples: self.done,
-            target: (self.target != u64::MAX).then_some(self.target),
-            wall_time_s: self.start.elapsed().as_secs_f64(),
+            target: (self.opts.time_budget.is_none() || self.opts.spp.is_some())
+                .then_some(self.target),
+            wall_time_s: self.elapsed(),
             dropped: self.dropped,
             variance: self.film.variance_y(self.exposure()),
-        })
+        }
+    }
+}
+
+impl Progressive for ImageSession<'_> {
+    fn step(&mut self) -> Option<PassStats> {
+        if self.finished() {
+            return None;
+        }
+        let end = self.done + self.pass_size();
+        Some(self.advance(end))
     }
 }
 
@@ -326,11 +424,14 @@ struct Segment {
     seed: u64,
     width: u64,
     strategy_count: usize,
+    /// Terminate the secondary wavelengths (`RenderOptions::wavelengths` = 1).
+    hero_only: bool,
 }
 
 /// Renders a tile's samples into `acc`: per-pixel XYZ sums, splats and the number of
-/// non-finite samples dropped.
-fn render_tile(
+/// non-finite samples dropped. `HERO_ONLY`: every sample carries its hero wavelength alone
+/// (a constant, so the 4-wavelength loop has no per-sample test).
+fn render_tile<const HERO_ONLY: bool>(
     estimator: &dyn Estimator,
     tile: &Tile,
     task: &Segment,
@@ -344,11 +445,18 @@ fn render_tile(
             for s in task.first..task.first + task.count {
                 let mut sampler = Sampler::new(task.seed, pixel, s);
                 let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+                if HERO_ONLY {
+                    lambda.terminate_secondary();
+                }
                 let [jx, jy] = sampler.get_2d();
                 let u_lens = sampler.get_2d();
                 let film = [x as f32 + jx, y as f32 + jy];
                 ws.record.clear();
                 estimator.image_sample(film, u_lens, &mut lambda, &mut sampler, ws);
+                if HERO_ONLY {
+                    // VCM replaces the sample's wavelengths by its iteration's tuple.
+                    lambda.terminate_secondary();
+                }
                 acc.add(k, &ws.record, &lambda, s % 2 == 1);
             }
             k += 1;

@@ -19,6 +19,11 @@
 //! [`MIN_SAMPLES_REL`] samples first so that s is not judged on a handful of samples. The
 //! interval is checked for coverage on heavy-tailed cases in `tests/meters.rs`.
 //!
+//! **Rounds.** Under a sample count a round takes about [`PASS_SECONDS`] of work (the first
+//! one block per reading), so that a progress observer or an interrupt is heard often; under
+//! a relative error rounds are set by the targets alone, so that where a reading stops does
+//! not depend on the machine's speed.
+//!
 //! **Iterations.** An estimator whose samples share per-iteration work (VCM: the light
 //! vertices merged with) names its iteration size; blocks then end at iteration boundaries,
 //! each iteration is prepared once per round before its blocks, and a reading's statistics
@@ -49,6 +54,7 @@
 //! assert!((reading.value / 1000.0 - 1.0).abs() < 0.02);
 //! ```
 
+use super::image::PASS_SECONDS;
 use super::{pool, PassStats, Progressive};
 use crate::error::Result;
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
@@ -93,6 +99,9 @@ pub struct MeterOptions {
     pub threads: Option<usize>,
     /// The estimator: path tracing (default), light tracing or BDPT, with its settings.
     pub integrator: Integrator,
+    /// Refuse to start when the estimated memory (`session::memory`) and what the process
+    /// holds exceed this many bytes; None: the machine's available memory.
+    pub max_memory: Option<u64>,
 }
 
 impl Default for MeterOptions {
@@ -105,6 +114,7 @@ impl Default for MeterOptions {
             max_depth: 7,
             threads: None,
             integrator: Integrator::Path,
+            max_memory: None,
         }
     }
 }
@@ -116,6 +126,8 @@ pub enum Cap {
     Samples,
     /// The time budget.
     Time,
+    /// The session was stopped from outside ([`MeterSession::interrupt`]: SIGINT, SIGTERM).
+    Interrupted,
 }
 
 /// One meter's answer.
@@ -194,6 +206,8 @@ impl<'a> MeterSession<'a> {
         for m in meters {
             opts.integrator.check_meter(m.kind)?;
         }
+        let estimate = super::memory::meters(meters.len(), opts);
+        super::memory::check("the measurement", &estimate, opts.max_memory)?;
         let settings = Settings {
             max_depth: opts.max_depth,
             filter: TextureFilter::Finest,
@@ -212,6 +226,15 @@ impl<'a> MeterSession<'a> {
             start: Instant::now(),
             opts: opts.clone(),
         })
+    }
+
+    /// Marks the readings that have not reached their target as interrupted; the session
+    /// takes no more samples.
+    pub fn interrupt(&mut self) {
+        for s in self.states.iter_mut().filter(|s| !s.finished) {
+            s.finished = true;
+            s.capped = Some(Cap::Interrupted);
+        }
     }
 
     /// The readings so far, in the order of the meters.
@@ -288,8 +311,27 @@ impl Progressive for MeterSession<'_> {
         if !fit_time_budget(&mut self.states, &mut targets, opts, self.start) {
             return None;
         }
+        if matches!(opts.stop, Stop::Samples(_)) {
+            fit_pass(&self.states, &mut targets, self.start);
+        }
+        self.round(&targets)
+    }
+}
+
+impl MeterSession<'_> {
+    /// Samples every reading on to exactly `n` samples in one round, whatever the session's
+    /// own stop and time budget (snapshots at chosen counts: `converge`); None when every
+    /// reading already has `n`. Blocks keep their fixed boundaries, so readings do not depend
+    /// on where the rounds fell.
+    pub fn step_to(&mut self, n: u64) -> Option<PassStats> {
+        let targets: Vec<u64> = self.states.iter().map(|s| s.taken.max(n)).collect();
+        self.round(&targets)
+    }
+
+    /// One round: every reading from its count to its target.
+    fn round(&mut self, targets: &[u64]) -> Option<PassStats> {
         let iteration = self.estimator.iteration_samples();
-        let blocks = blocks(&self.states, &targets, iteration);
+        let blocks = blocks(&self.states, targets, iteration);
         if blocks.is_empty() {
             return None;
         }
@@ -405,8 +447,31 @@ fn fit_time_budget(
         return true;
     }
     let affordable = (budget - elapsed) * taken as f64 / elapsed.max(1e-9);
+    shrink_round(states, targets, affordable);
+    true
+}
+
+/// Under a sample count, cuts the round to about [`PASS_SECONDS`] of work at the rate so far
+/// (the first round: one block per reading), so that observers and interrupts are heard
+/// often. The readings do not change: blocks keep their boundaries.
+fn fit_pass(states: &[State], targets: &mut [u64], start: Instant) {
+    let taken: u64 = states.iter().map(|s| s.taken).sum();
+    if taken == 0 {
+        for (s, t) in states.iter().zip(targets.iter_mut()) {
+            *t = (*t).min(s.taken + BLOCK);
+        }
+        return;
+    }
+    let elapsed = start.elapsed().as_secs_f64().max(1e-9);
+    shrink_round(states, targets, PASS_SECONDS * taken as f64 / elapsed);
+}
+
+/// Scales the round's new samples down to about `affordable` in all, at least one block for
+/// every reading that goes on; rounds stay whole blocks.
+fn shrink_round(states: &[State], targets: &mut [u64], affordable: f64) {
+    let wanted: u64 = states.iter().zip(&*targets).map(|(s, t)| t - s.taken).sum();
     if (wanted as f64) <= affordable {
-        return true;
+        return;
     }
     let scale = affordable / wanted as f64;
     for (s, t) in states.iter().zip(targets.iter_mut()) {
@@ -415,7 +480,6 @@ fn fit_time_budget(
             *t = (*t).min(s.taken + more);
         }
     }
-    true
 }
 
 /// The round's work: for each reading, the blocks from its current count to its target.

@@ -10,7 +10,9 @@
 //! seed and each reading's sample count (blocks of fixed boundaries), whatever the pass sizes
 //! and the number of threads.
 
+pub mod checkpoint;
 pub mod image;
+pub mod memory;
 pub mod meter;
 mod pool;
 

@@ -1,5 +1,5 @@
 //! Spectral quantities: sampled wavelengths and spectra, tabulated data, CIE observer,
-//! RGB uplift and photometry.
+//! RGB uplift, photometry and colour difference (CIEDE2000).
 //!
 //! Conventions: wavelengths in nm over [`LAMBDA_MIN`, `LAMBDA_MAX`] (docs/design.md §2); radiance
 //! spectra in W·m⁻²·sr⁻¹·nm⁻¹, so that luminance = K_m ∫ L(λ) ȳ(λ) dλ in cd/m².
@@ -8,6 +8,7 @@ pub mod blackbody;
 pub mod color;
 pub mod data;
 pub mod dense;
+pub mod difference;
 pub mod photometry;
 pub mod sampled;
 pub mod sellmeier;

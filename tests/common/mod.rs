@@ -3,6 +3,7 @@
 //! simple statistics on the result ([`stats`]).
 #![allow(dead_code)]
 
+pub mod colorchecker;
 pub mod meters;
 pub mod process;
 pub mod stages;

@@ -124,6 +124,38 @@ impl StrategyFilms {
     }
 }
 
+/// The raw sums of [`StrategyFilms`], to save them and continue later (checkpoints).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StrategySums {
+    pub weighted: Vec<Vec<[f64; 3]>>,
+    pub unweighted: Vec<Vec<[f64; 3]>>,
+    pub samples_per_pixel: u64,
+}
+
+impl StrategyFilms {
+    pub fn sums(&self) -> StrategySums {
+        StrategySums {
+            weighted: self.weighted.clone(),
+            unweighted: self.unweighted.clone(),
+            samples_per_pixel: self.samples_per_pixel,
+        }
+    }
+
+    /// Continues `sums` in place of these films' own, when their shapes agree.
+    pub fn restore(&mut self, sums: StrategySums) -> Result<(), String> {
+        let shape = |v: &Vec<Vec<[f64; 3]>>| v.iter().map(Vec::len).collect::<Vec<_>>();
+        if shape(&sums.weighted) != shape(&self.weighted)
+            || shape(&sums.unweighted) != shape(&self.unweighted)
+        {
+            return Err("the strategy images do not match this render's".into());
+        }
+        self.weighted = sums.weighted;
+        self.unweighted = sums.unweighted;
+        self.samples_per_pixel = sums.samples_per_pixel;
+        Ok(())
+    }
+}
+
 #[inline]
 fn add(acc: &mut [f64; 3], v: [f64; 3]) {
     for (a, x) in acc.iter_mut().zip(v) {

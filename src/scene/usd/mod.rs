@@ -75,7 +75,7 @@ pub fn load(path: &Path) -> Result<SceneDescription> {
 
 /// [`load`] without the panic guard.
 fn read(path: &Path) -> Result<SceneDescription> {
-    let stage = stage::open(path)?;
+    let (stage, content_hash) = stage::open(path)?;
     arcs::check(path, &stage)?;
     let meters_per_unit = stage::meters_per_unit(path, &stage)?;
     let z_up = stage::z_up(path, &stage)?;
@@ -92,7 +92,9 @@ fn read(path: &Path) -> Result<SceneDescription> {
     let mut reader = Reader::new(ctx);
     reader.read_stage()?;
     stage::check_composition(path, &stage)?;
-    reader.finish()
+    let mut desc = reader.finish()?;
+    desc.content_hash = content_hash;
+    Ok(desc)
 }
 
 /// What a prim hands down to its children.

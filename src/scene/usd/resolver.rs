@@ -6,14 +6,18 @@
 use openusd::ar::{self, Asset, DefaultResolver, ResolvedPath, Resolver};
 use std::io;
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
 use super::{usda_check, usdc_check};
+use crate::desc::ContentHash;
 use crate::error::Reason;
 
 /// [`DefaultResolver`] with checked layers.
 #[derive(Default)]
 pub(super) struct CheckedResolver {
     inner: DefaultResolver,
+    /// The hash of the bytes of the layers read so far, shared with the opener.
+    digest: Arc<Mutex<ContentHash>>,
 }
 
 impl Resolver for CheckedResolver {
@@ -36,6 +40,9 @@ impl Resolver for CheckedResolver {
         }
         let bytes = self.inner.open_asset(resolved)?.read_all()?;
         check_layer(&bytes).map_err(io::Error::other)?;
+        if let Ok(mut d) = self.digest.lock() {
+            d.add(&bytes);
+        }
         if !packaged && bytes.starts_with(ZIP_MAGIC) {
             self.check_package_root(resolved, &bytes)?;
         }
@@ -55,6 +62,14 @@ impl Resolver for CheckedResolver {
 const ZIP_MAGIC: &[u8] = b"PK\x03\x04";
 
 impl CheckedResolver {
+    /// A resolver that folds every layer it opens into `digest`.
+    pub(super) fn recording(digest: Arc<Mutex<ContentHash>>) -> CheckedResolver {
+        CheckedResolver {
+            inner: DefaultResolver::default(),
+            digest,
+        }
+    }
+
     /// A package's root layer is read by openusd straight from the archive, without coming
     /// back through [`Resolver::open_asset`], so it is checked here.
     fn check_package_root(&self, package: &ResolvedPath, bytes: &[u8]) -> io::Result<()> {

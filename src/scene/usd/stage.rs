@@ -3,15 +3,18 @@
 use glam::{DMat4, DVec3, DVec4};
 use openusd::{usd, usda};
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
 use super::{resolver, values};
+use crate::desc::ContentHash;
 use crate::error::{Error, Result};
 
 /// `metersPerUnit` when the stage does not author it (USD's fallback: centimetres).
 const DEFAULT_METERS_PER_UNIT: f64 = 0.01;
 
-/// Opens the stage at `path`, turning every failure into a one-line [`Error::file`].
-pub(super) fn open(path: &Path) -> Result<usd::Stage> {
+/// Opens the stage at `path`, turning every failure into a one-line [`Error::file`]; also
+/// returns the hash of the bytes of every layer composed, in the order read.
+pub(super) fn open(path: &Path) -> Result<(usd::Stage, u64)> {
     if !path.exists() {
         return Err(Error::io(path, "no such file"));
     }
@@ -24,10 +27,15 @@ pub(super) fn open(path: &Path) -> Result<usd::Stage> {
     };
     let bytes = std::fs::read(&absolute).map_err(|e| Error::io(path, e.to_string()))?;
     resolver::check_layer(&bytes).map_err(|e| Error::usd(path, e))?;
-    usd::Stage::builder()
-        .resolver(resolver::CheckedResolver::default())
+    let mut root = ContentHash::default();
+    root.add(&bytes);
+    let digest = Arc::new(Mutex::new(root));
+    let stage = usd::Stage::builder()
+        .resolver(resolver::CheckedResolver::recording(digest.clone()))
         .open(name)
-        .map_err(|e| Error::usd(path, open_failure(&absolute, &e)))
+        .map_err(|e| Error::usd(path, open_failure(&absolute, &e)))?;
+    let hash = digest.lock().map_or(0, |d| d.0);
+    Ok((stage, hash))
 }
 
 /// Describes why opening failed; for a text layer the parser is re-run to locate the line.
