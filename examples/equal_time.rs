@@ -195,6 +195,8 @@ fn render_y(
             wall_time_s: out.wall_time_s,
             version: env!("CARGO_PKG_VERSION").into(),
             scene: args.stage.display().to_string(),
+            max_depth: args.max_depth,
+            ..Default::default()
         };
         let white = spectral_render::spectral::color::white_xy().map(|c| c as f32);
         exr::write(
