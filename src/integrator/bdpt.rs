@@ -149,7 +149,8 @@ impl BdptIntegrator {
                     self.connect_vertex(ctx, &z, lambda, sampler, ws);
                 }
                 if let Some((store, params)) = &tech.merge {
-                    let m = store.merge(&z, &z.mis, lambda.secondary_terminated(), params);
+                    let hero = lambda.secondary_terminated();
+                    let m = store.merge(ctx.scene, &z, si.tri.mesh, &z.mis, hero, params);
                     ws.record.camera.weighted += m.all;
                     ws.record.camera.unweighted += m.all;
                     ws.record.hero_only += m.hero_only;

@@ -142,25 +142,41 @@ pub fn radius(r0: f32, alpha: f32, k: u64) -> f32 {
     (r0 * shrink).max(r0 * (1.0 / 1_048_576.0))
 }
 
-/// The hero-wavelength sample of iteration `k`, u_k = (q_k + ρ₄(k)) / 4, shifted by the seed
-/// (Cranley–Patterson rotation), in [0, 1); ρ₄ is the base-4 radical inverse and q_k the sum
-/// of k's base-4 digits mod 4. A tuple's N = 4 lanes sit a quarter apart
-/// (`SampledWavelengths::sample_visible`), so the tuple is fixed by u mod 1/4 = ρ₄(k)/4:
-/// distinct in every iteration and stratified over them (the base-2 radical inverse of k
-/// alone repeats each tuple in 4 successive iterations, as a rotation of its lanes, leaving a
-/// pixel a quarter as many wavelength samples as iterations). The hero's quarter q_k makes
-/// the heroes alone stratified too — the first 4^m iterations put one hero in each of 4^m
-/// strata of [0, 1) (for k < 4^m, fixing k's first m − 1 digits fixes u's digits after the
-/// first, and the last digit then runs q_k over all quarters) — for paths through dispersive
-/// glass, which keep their hero alone.
+/// The hero-wavelength sample of image iteration `k`, in [0, 1): the even iterations
+/// k = 2m take u = g(m) + s₀ and the odd ones g(m) + s₁ (mod 1), with s₀, s₁ two independent
+/// shifts drawn from the seed (Cranley–Patterson rotations) and g the stratified sequence of
+/// [`stratified_u`]. The film's even and odd halves (`sensor::film`) are then two independent,
+/// identically distributed randomised-QMC estimates, each stratified over the spectrum on its
+/// own, so their difference gives an honest variance (Owen's independent replicates) — with
+/// one shift for all iterations, the halves would interleave one stratified set (the base-2
+/// radical inverse put even iterations' heroes in [0, ½) and odd ones' in [½, 1)), their
+/// errors would be anticorrelated and the even/odd variance overstated.
 pub fn iteration_u(seed: u64, k: u64) -> f32 {
-    let shift = (splitmix(seed) >> 40) as f64 / (1u64 << 24) as f64;
-    ((iteration_u_unshifted(k) + shift).fract() as f32).min(1.0 - f32::EPSILON)
+    let shift = (splitmix(seed ^ splitmix(k & 1)) >> 40) as f64 / (1u64 << 24) as f64;
+    ((stratified_u(k >> 1) + shift).fract() as f32).min(1.0 - f32::EPSILON)
 }
 
-/// u_k of [`iteration_u`] before the seed's shift.
-fn iteration_u_unshifted(k: u64) -> f64 {
-    let (mut rest, mut digits, mut inverse, mut scale) = (k, 0u64, 0.0f64, 0.25f64);
+/// The hero-wavelength sample of meter iteration `k`: independent uniform in [0, 1) from the
+/// seed and k. A reading's interval is over its iteration means (`session::meter`), which
+/// must be independent for its ci95 to hold; stratifying the iterations' wavelengths would
+/// make them anticorrelated and the interval too wide.
+pub fn meter_iteration_u(seed: u64, k: u64) -> f32 {
+    let u = (splitmix(seed ^ splitmix(k ^ STORE_STREAM)) >> 40) as f32 / (1u32 << 24) as f32;
+    u.min(1.0 - f32::EPSILON)
+}
+
+/// g(m) = (q_m + ρ₄(m)) / 4 in [0, 1); ρ₄ is the base-4 radical inverse and q_m the sum of
+/// m's base-4 digits mod 4. A tuple's N = 4 lanes sit a quarter apart
+/// (`SampledWavelengths::sample_visible`), so the tuple is fixed by u mod 1/4 = ρ₄(m)/4:
+/// distinct for every m and stratified over them (the base-2 radical inverse of m alone
+/// repeats each tuple 4 times in succession, as a rotation of its lanes, leaving a pixel a
+/// quarter as many wavelength samples as iterations). The hero's quarter q_m makes the
+/// heroes alone stratified too — the first 4^j values put one hero in each of 4^j strata of
+/// [0, 1) (for m < 4^j, fixing m's first j − 1 digits fixes u's digits after the first, and
+/// the last digit then runs q_m over all quarters) — for paths through dispersive glass,
+/// which keep their hero alone.
+fn stratified_u(m: u64) -> f64 {
+    let (mut rest, mut digits, mut inverse, mut scale) = (m, 0u64, 0.0f64, 0.25f64);
     while rest > 0 {
         digits += rest & 3;
         inverse += (rest & 3) as f64 * scale;
@@ -337,7 +353,12 @@ impl Estimator for VcmEstimator<'_> {
 
     fn begin_iteration(&mut self, it: Iteration) {
         self.set_radius(it.index);
-        self.lambda = SampledWavelengths::sample_visible(iteration_u(it.seed, it.index));
+        let u = if self.meters {
+            meter_iteration_u(it.seed, it.index)
+        } else {
+            iteration_u(it.seed, it.index)
+        };
+        self.lambda = SampledWavelengths::sample_visible(u);
         let r = radius(self.r0, self.params.alpha, it.index);
         self.fill_store(it.seed, it.index, r);
     }
@@ -621,7 +642,7 @@ mod tests {
             let mut heroes = vec![0u32; n as usize];
             let mut tuples = vec![0u32; n as usize];
             for k in 0..n {
-                let u = iteration_u_unshifted(k);
+                let u = stratified_u(k);
                 heroes[(u * n as f64) as usize] += 1;
                 tuples[((u % 0.25) * 4.0 * n as f64) as usize] += 1;
             }
@@ -631,6 +652,20 @@ mod tests {
         for k in [0, 1, 17, 1 << 40, u64::MAX] {
             let u = iteration_u(3, k);
             assert!((0.0..1.0).contains(&u), "{k}: {u}");
+            assert!((0.0..1.0).contains(&meter_iteration_u(3, k)));
+        }
+        // Even and odd iterations each run the whole stratified sequence, under shifts of
+        // their own.
+        for seed in [0, 3, 99] {
+            let (s0, s1) = (iteration_u(seed, 0), iteration_u(seed, 1));
+            assert_ne!(s0, s1);
+            for m in 0..64u64 {
+                for (k, s) in [(2 * m, s0), (2 * m + 1, s1)] {
+                    let g = (f64::from(iteration_u(seed, k)) - f64::from(s)).rem_euclid(1.0);
+                    let d = (g - stratified_u(m)).abs();
+                    assert!(d.min(1.0 - d) < 1e-6, "seed {seed}, k {k}: {g}");
+                }
+            }
         }
     }
 }

@@ -113,6 +113,11 @@ impl HashGrid {
         (p - q).length_squared() <= self.radius2
     }
 
+    /// The query radius.
+    pub fn radius(&self) -> f32 {
+        self.radius2.sqrt()
+    }
+
     /// Bytes held by the grid's buffers.
     pub fn bytes(&self) -> usize {
         (self.indices.capacity() + self.keys.capacity() + self.slot_end.capacity())

@@ -70,7 +70,8 @@ impl SubpathBatch {
         debug_assert_eq!(path.vertices.len(), path.hits.len());
         let hero_only = traced.hero_only;
         for (v, hit) in path.vertices.iter().zip(&path.hits) {
-            self.vertices.push(MergeVertex::new(v, hero_only));
+            self.vertices
+                .push(MergeVertex::new(v, hit.tri.mesh, hero_only));
             self.hits.push(VertexHit {
                 hit: *hit,
                 dvc: v.mis.dvc,
