@@ -40,7 +40,7 @@ pub use mis::{Mis, MisHeuristic};
 pub use record::{SampleRecord, TileAccumulator};
 pub use splat::splat_light_subpath;
 pub use store::LightVertexStore;
-pub use subpath::{trace_light_subpath, BidirContext, LightSubpath, Walk};
+pub use subpath::{trace_light_subpath, BidirContext, CappedSubpath, LightSubpath, Walk};
 pub use vertex::PathVertex;
 
 /// Per-thread buffers of a bidirectional integrator, reused for every sample.
