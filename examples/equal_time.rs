@@ -3,7 +3,8 @@
 //! ```text
 //! cargo run --release --example equal_time -- STAGE [--time S] [--reference-time S]
 //!     [--resolution WxH] [--max-depth N] [--reference REF.exr] [--threads N]
-//!     [--integrators path,bdpt,vcm] [--reference-integrator bdpt|vcm|path]
+//!     [--integrators path,bdpt,vcm,vcm:bins=B] [--reference-integrator bdpt|vcm|path]
+//!     [--region NAME=X0,Y0,X1,Y1]... [--exclude X0,Y0,X1,Y1]... [--seed N] [--keep DIR]
 //! ```
 //!
 //! 1. Reference: `--reference-integrator` (default BDPT; VCM where only merging samples the
@@ -23,7 +24,20 @@
 //!    shared with other work, the wall budget buys an integrator fewer samples when the load
 //!    rises, and its CPU time says how much computing it actually got. `auto` runs its pilot
 //!    within its time.
+//! 4. Each `--region` (pixels X0 ≤ x < X1, Y0 ≤ y < Y1) gets the same figures over its
+//!    pixels alone: where in the image an integrator wins or loses. With `--exclude`
+//!    rectangles, the figures are also given for the image without them: for a few pixels
+//!    that carry nearly all of every integrator's error with the same technique in all (a
+//!    light seen through specular surfaces, which only the camera path hitting it samples),
+//!    where the ratio is then only the ratio of the costs.
+//!
+//! `--keep DIR` also writes each timed render to DIR/NAME.exr (colour included; two runs with
+//! different `--seed`s give each integrator's colour noise without a reference).
+//!
+//! `vcm:bins=B` is VCM with per-sample wavelength tuples and merges within B hero bins
+//! (`VcmWavelengths::PerSample`), the measured alternative to one tuple per iteration.
 
+use spectral_render::integrator::vcm::{VcmParams, VcmWavelengths};
 use spectral_render::output::exr;
 use spectral_render::session::{self, RenderOptions};
 use spectral_render::{Integrator, MisHeuristic};
@@ -37,12 +51,32 @@ struct Args {
     max_depth: u32,
     reference: Option<PathBuf>,
     threads: Option<usize>,
-    integrators: Vec<Integrator>,
+    integrators: Vec<(String, Integrator)>,
     reference_integrator: Integrator,
+    regions: Vec<(String, [usize; 4])>,
+    exclude: Vec<[usize; 4]>,
+    seed: u64,
+    keep: Option<PathBuf>,
 }
 
 fn integrator(name: &str) -> Result<Integrator, String> {
+    if let Some(b) = name.strip_prefix("vcm:bins=") {
+        let bins = b.parse().map_err(|e| format!("{name}: {e}"))?;
+        return Ok(Integrator::Vcm(VcmParams {
+            wavelengths: VcmWavelengths::PerSample { bins },
+            ..VcmParams::default()
+        }));
+    }
     Integrator::from_name(name).ok_or(format!("unknown integrator {name}"))
+}
+
+/// X0,Y0,X1,Y1 as a pixel rectangle.
+fn rect(v: &str) -> Result<[usize; 4], String> {
+    let n: Vec<usize> = v
+        .split(',')
+        .map(|x| x.trim().parse().map_err(|e| format!("{v}: {e}")))
+        .collect::<Result<_, _>>()?;
+    n.try_into().map_err(|_| format!("{v}: want X0,Y0,X1,Y1"))
 }
 
 fn parse() -> Result<Args, String> {
@@ -55,14 +89,21 @@ fn parse() -> Result<Args, String> {
         reference: None,
         threads: None,
         integrators: vec![
-            Integrator::Path,
-            Integrator::Bdpt {
-                mis: MisHeuristic::Power,
-            },
+            ("path".into(), Integrator::Path),
+            (
+                "bdpt".into(),
+                Integrator::Bdpt {
+                    mis: MisHeuristic::Power,
+                },
+            ),
         ],
         reference_integrator: Integrator::Bdpt {
             mis: MisHeuristic::Power,
         },
+        regions: Vec::new(),
+        exclude: Vec::new(),
+        seed: 7,
+        keep: None,
     };
     let mut it = std::env::args().skip(1);
     let mut stage = None;
@@ -79,9 +120,17 @@ fn parse() -> Result<Args, String> {
             "--integrators" => {
                 a.integrators = value()?
                     .split(',')
-                    .map(integrator)
-                    .collect::<Result<_, _>>()?
+                    .map(|n| Ok((n.to_string(), integrator(n)?)))
+                    .collect::<Result<_, String>>()?
             }
+            "--region" => {
+                let v = value()?;
+                let (name, r) = v.split_once('=').ok_or("--region NAME=X0,Y0,X1,Y1")?;
+                a.regions.push((name.to_string(), rect(r)?));
+            }
+            "--exclude" => a.exclude.push(rect(&value()?)?),
+            "--seed" => a.seed = value()?.parse().map_err(|e| format!("--seed: {e}"))?,
+            "--keep" => a.keep = Some(value()?.into()),
             "--reference-integrator" => a.reference_integrator = integrator(&value()?)?,
             "--resolution" => {
                 let v = value()?;
@@ -118,13 +167,15 @@ fn cpu_seconds() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
-/// One render: luminance per pixel, wall time, samples per pixel and CPU seconds.
+/// One render: luminance per pixel, wall time, samples per pixel and CPU seconds; written to
+/// `keep` when given.
 fn render_y(
     scene: &spectral_render::scene::Scene,
     args: &Args,
     integrator: Integrator,
     seconds: f64,
     seed: u64,
+    keep: Option<PathBuf>,
 ) -> (Vec<f64>, f64, u64, f64) {
     let cpu0 = cpu_seconds();
     let opts = RenderOptions {
@@ -137,6 +188,23 @@ fn render_y(
     };
     let out = session::render(scene, &opts).expect("render");
     assert_eq!(out.dropped_samples, 0, "non-finite samples");
+    if let Some(path) = keep {
+        let meta = exr::ExrMetadata {
+            spp: out.spp,
+            integrator: integrator.name().into(),
+            seed,
+            wall_time_s: out.wall_time_s,
+            version: env!("CARGO_PKG_VERSION").into(),
+            scene: args.stage.display().to_string(),
+            max_depth: Some(args.max_depth),
+            ..Default::default()
+        };
+        let white = spectral_render::spectral::color::white_xy().map(|c| c as f32);
+        exr::write(
+            &path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
+        )
+        .expect("write render");
+    }
     let y = out.xyz.iter().map(|p| p[1] as f64).collect();
     (y, out.wall_time_s, out.spp, cpu_seconds() - cpu0)
 }
@@ -156,8 +224,8 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
     }
     let half = 0.5 * args.reference_time;
     let kind = args.reference_integrator;
-    let (a, ta, sa, _) = render_y(scene, args, kind, half, 1001);
-    let (b, tb, sb, _) = render_y(scene, args, kind, half, 1002);
+    let (a, ta, sa, _) = render_y(scene, args, kind, half, 1001, None);
+    let (b, tb, sb, _) = render_y(scene, args, kind, half, 1002, None);
     eprintln!(
         "reference: {} {} + {} spp in {:.0} + {:.0} s",
         kind.name(),
@@ -204,67 +272,103 @@ fn main() {
     };
     let scene = spectral_render::scene::load(&args.stage, args.resolution).expect("stage");
     let (reference, noise) = reference(&scene, &args);
-    let n = reference.len() as f64;
-    let ref_mean = reference.iter().sum::<f64>() / n;
-    let noise_floor = noise.iter().sum::<f64>() / n;
-    println!(
-        "{} ({}x{}), max depth {}: reference mean Y {:.5} cd/m², reference noise RMSE {:.3e}",
-        args.stage.display(),
-        scene.camera.width,
-        scene.camera.height,
-        args.max_depth,
-        ref_mean,
-        noise_floor.sqrt()
-    );
-    println!(
-        "{:>6} {:>8} {:>8} {:>7} {:>12} {:>9}",
-        "", "time s", "cpu s", "spp", "RMSE cd/m²", "relRMSE"
-    );
-    let mut rows = Vec::new();
-    for &kind in &args.integrators {
-        let name = kind.name();
-        let (y, t, spp, cpu) = render_y(&scene, &args, kind, args.time, 7);
-        let mse = y
-            .iter()
-            .zip(&reference)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            / n
-            - noise_floor;
-        let rmse = mse.max(0.0).sqrt();
-        println!(
-            "{name:>6} {t:8.1} {cpu:8.1} {spp:7} {rmse:12.4e} {:9.4}",
-            rmse / ref_mean
-        );
-        rows.push((name, mse, t, cpu));
-    }
-    let over_best = |cost: &dyn Fn(f64, f64, f64) -> f64| {
-        let best = rows
-            .iter()
-            .map(|&(_, m, t, c)| cost(m, t, c))
-            .fold(f64::INFINITY, f64::min);
-        let each: Vec<String> = rows
-            .iter()
-            .map(|&(n, m, t, c)| format!("{n} {:.2}", cost(m, t, c) / best))
-            .collect();
-        each.join(", ")
+    let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+    let inside = |r: &[usize; 4], k: usize| {
+        let (x, y) = (k % w, k / w);
+        (r[0]..r[2]).contains(&x) && (r[1]..r[3]).contains(&y)
     };
+    let kept: Vec<bool> = (0..w * h)
+        .map(|k| !args.exclude.iter().any(|r| inside(r, k)))
+        .collect();
+    let left_out = kept.iter().filter(|k| !**k).count();
+    let mut regions = vec![("image".to_string(), vec![true; w * h])];
+    if left_out > 0 {
+        regions.push((format!("image without {left_out} excluded pixels"), kept));
+    }
+    for (name, r) in &args.regions {
+        let mask = (0..w * h).map(|k| inside(r, k)).collect();
+        regions.push((format!("region {name} {r:?}"), mask));
+    }
     println!(
-        "MSE × time over the best's: {}",
-        over_best(&|m, t, _| m * t)
+        "{} ({w}x{h}), max depth {}",
+        args.stage.display(),
+        args.max_depth
     );
-    println!(
-        "MSE × CPU time over the best's: {}",
-        over_best(&|m, _, c| m * c)
-    );
-    let (first, mse0, t0, cpu0) = rows[0];
-    for &(name, mse, t, cpu) in &rows[1..] {
+    let renders: Vec<(&str, Vec<f64>, f64, u64, f64)> = args
+        .integrators
+        .iter()
+        .map(|(name, kind)| {
+            let keep = args.keep.as_ref().map(|d| d.join(format!("{name}.exr")));
+            let (y, t, spp, cpu) = render_y(&scene, &args, *kind, args.time, args.seed, keep);
+            (name.as_str(), y, t, spp, cpu)
+        })
+        .collect();
+    for (label, mask) in &regions {
+        let n = mask.iter().filter(|m| **m).count() as f64;
+        if n == 0.0 {
+            continue;
+        }
+        let over = |v: &[f64]| {
+            v.iter()
+                .zip(mask)
+                .filter(|(_, m)| **m)
+                .map(|(x, _)| x)
+                .sum::<f64>()
+                / n
+        };
+        let ref_mean = over(&reference);
+        let noise_floor = over(&noise);
         println!(
-            "equal time: MSE({first})/MSE({name}) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}; CPU-normalised (MSE × CPU time) = {:.2}",
-            mse0 / mse,
-            (mse0 / mse).sqrt(),
-            (mse0 * t0) / (mse * t),
-            (mse0 * cpu0) / (mse * cpu)
+            "{label}: reference mean Y {ref_mean:.5} cd/m², reference noise RMSE {:.3e}",
+            noise_floor.sqrt()
         );
+        println!(
+            "{:>10} {:>8} {:>8} {:>7} {:>12} {:>9}",
+            "", "time s", "cpu s", "spp", "RMSE cd/m²", "relRMSE"
+        );
+        let mut rows = Vec::new();
+        for (name, y, t, spp, cpu) in &renders {
+            let sq: Vec<f64> = y
+                .iter()
+                .zip(&reference)
+                .map(|(a, b)| (a - b).powi(2))
+                .collect();
+            let mse = over(&sq) - noise_floor;
+            let rmse = mse.max(0.0).sqrt();
+            println!(
+                "{name:>10} {t:8.1} {cpu:8.1} {spp:7} {rmse:12.4e} {:9.4}",
+                rmse / ref_mean
+            );
+            rows.push((*name, mse, *t, *cpu));
+        }
+        let over_best = |cost: &dyn Fn(f64, f64, f64) -> f64| {
+            let best = rows
+                .iter()
+                .map(|&(_, m, t, c)| cost(m, t, c))
+                .fold(f64::INFINITY, f64::min);
+            let each: Vec<String> = rows
+                .iter()
+                .map(|&(n, m, t, c)| format!("{n} {:.2}", cost(m, t, c) / best))
+                .collect();
+            each.join(", ")
+        };
+        println!(
+            "MSE × time over the best's: {}",
+            over_best(&|m, t, _| m * t)
+        );
+        println!(
+            "MSE × CPU time over the best's: {}",
+            over_best(&|m, _, c| m * c)
+        );
+        let (first, mse0, t0, cpu0) = rows[0];
+        for &(name, mse, t, cpu) in &rows[1..] {
+            println!(
+                "equal time: MSE({first})/MSE({name}) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}; CPU-normalised (MSE × CPU time) = {:.2}",
+                mse0 / mse,
+                (mse0 / mse).sqrt(),
+                (mse0 * t0) / (mse * t),
+                (mse0 * cpu0) / (mse * cpu)
+            );
+        }
     }
 }

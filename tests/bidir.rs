@@ -1242,6 +1242,8 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
                     dvm: walk.mis.dvm,
                     cos_ng: n_i.dot(wo).abs(),
                     depth: i as u32,
+                    mesh: 0,
+                    n: n_i,
                     hero_only: false,
                 };
                 return sensor_merge_weight(&ctx.mis, m, &y);
@@ -1286,7 +1288,7 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
     }
     if merge {
         let (z, y) = (camera_vertex.unwrap(), light_vertex.unwrap());
-        return merge_weight(&ctx.mis, &z, &z.mis, &MergeVertex::new(&y, false));
+        return merge_weight(&ctx.mis, &z, &z.mis, &MergeVertex::new(&y, 0, false));
     }
     let pdf_dir = |p: Vec3| ctx.sensor.ray_pdf_dir_w((p - sensor_p).normalize());
     match (s, t) {

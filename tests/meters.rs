@@ -918,6 +918,34 @@ fn ci95_covers_the_exact_value_at_least_90_times_in_100() {
 }
 
 #[test]
+fn vcm_ci95_covers_the_exact_value_at_least_90_times_in_100() {
+    // VCM's interval is over iteration means (64 samples sharing one wavelength tuple and the
+    // iteration's light vertices): it holds only if the iterations are independent, which the
+    // meters' independent per-iteration wavelengths make them (`integrator::vcm`).
+    let (scene, meter, exact) = heavy_tailed_case();
+    let vcm = Integrator::Vcm(spectral_render::integrator::vcm::VcmParams::default());
+    let (mut covered, mut sq, mut width) = (0, 0.0, 0.0);
+    for seed in 0..100u64 {
+        let r = read_with(
+            &scene,
+            &[meter],
+            Stop::Samples(2048),
+            2000 + seed,
+            Some(7),
+            vcm,
+        )[0];
+        covered += usize::from((r.value - exact).abs() <= r.ci95);
+        sq += (r.value - exact).powi(2) / 100.0;
+        width += r.ci95 / 100.0;
+    }
+    eprintln!(
+        "VCM ci95 coverage in 100 seeded repeats: {covered}; mean ci95 {width:.4}, 1.96 × RMSE {:.4}",
+        1.96 * sq.sqrt()
+    );
+    assert!(covered >= 90, "{covered}/100");
+}
+
+#[test]
 fn readings_do_not_depend_on_the_number_of_threads() {
     let (scene, meter, _) = heavy_tailed_case();
     let other = Meter::illuminance(Vec3::new(1.0, 0.0, 0.5), Vec3::Y).unwrap();

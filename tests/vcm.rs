@@ -474,3 +474,90 @@ fn vcm_meter_reads_the_lux_under_a_glass_slab() {
     .readings[0];
     assert!(pt.value < 0.01 * paraxial, "path tracing read {}", pt.value);
 }
+
+/// Two floors (separate meshes) meet under a zero-thickness wall 2 m tall; a sphere light
+/// 30 cm above the right floor lights it, and the camera, on the left, sees the left floor
+/// and the wall's back near its foot. No light path reaches the left side: light crossing
+/// x = 0 below the wall's top is blocked, and light crossing above it travels upwards, away
+/// from the left floor. The left side is exactly black.
+fn walled_stage() -> String {
+    let mut s = header();
+    s += &looks_scope(&material(
+        "White",
+        "spectral:diffuse",
+        &flat_reflectance(0.8),
+    ));
+    let floors = [
+        (
+            "FloorLeft",
+            [
+                [-1.0f32, 0.0, -1.0],
+                [0.0, 0.0, -1.0],
+                [0.0, 0.0, 1.0],
+                [-1.0, 0.0, 1.0],
+            ],
+        ),
+        (
+            "FloorRight",
+            [
+                [0.0f32, 0.0, -1.0],
+                [1.0, 0.0, -1.0],
+                [1.0, 0.0, 1.0],
+                [0.0, 0.0, 1.0],
+            ],
+        ),
+        (
+            "Wall",
+            [
+                [0.0f32, 0.0, -1.0],
+                [0.0, 0.0, 1.0],
+                [0.0, 2.0, 1.0],
+                [0.0, 2.0, -1.0],
+            ],
+        ),
+    ];
+    for (name, corners) in floors {
+        s += &polygon(name, &corners, None, &binding("White"));
+    }
+    s += &prim(
+        "SphereLight",
+        "Bulb",
+        &("    float inputs:radius = 0.05\n    float inputs:intensity = 1000\n".to_string()
+            + &xform(&[("translate", "(0.5, 0.3, 0)".into())])),
+    );
+    // At (−0.4, 0.25, 0) looking along +x and 30° down: the wall's foot at the image centre.
+    s += &prim(
+        "Camera",
+        "Cam",
+        &("    float focalLength = 18\n    float horizontalAperture = 24\n    float verticalAperture = 24\n    float2 clippingRange = (0.01, 100)\n".to_string()
+            + &xform(&[
+                ("translate", "(-0.4, 0.25, 0)".into()),
+                ("rotateY", "-90".into()),
+                ("rotateX", "-30".into()),
+            ])),
+    );
+    s
+}
+
+#[test]
+fn vcm_does_not_merge_light_through_a_wall() {
+    // The default radius (1.5 pixel footprints, here about 5 cm) reaches across the wall's
+    // foot; merges with vertices the camera vertex cannot see must not count.
+    let scene = load_text("vcm_walled", &walled_stage(), (16, 16));
+    for integrator in [
+        Integrator::Vcm(VcmParams::default()),
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+    ] {
+        let opts = RenderOptions {
+            spp: Some(16),
+            max_depth: Some(5),
+            integrator,
+            ..Default::default()
+        };
+        let out = session::render(&scene, &opts).unwrap();
+        let lit = out.xyz.iter().filter(|p| p[1] != 0.0).count();
+        assert_eq!(lit, 0, "{}: {lit} pixels lit", integrator.name());
+    }
+}

@@ -14,8 +14,8 @@
 //!   the snapshot's own variance of the mean (the film's even/odd halves, `sensor::film`) and
 //!   v_r the reference's; mean((x − r)² − v_x − v_r)/(r² + 0.01) estimates the relative squared
 //!   bias that remains (about 0 for an unbiased integrator, > 0 for a consistent one such as
-//!   VCM early on). Reported as √max(b², 0), only when both variances are known — not for
-//!   VCM, whose even/odd halves are not alike (`run_image`).
+//!   VCM early on). Reported as √max(b², 0), only when both variances are known (VCM's
+//!   even and odd iterations are independent replicates: `integrator::vcm::iteration_u`).
 
 /// pbrt-v4's offset in the relMSE denominator (`ImageMetrics`: (x − r)² / (r² + 0.01)).
 pub const REL_MSE_OFFSET: f64 = 0.01;

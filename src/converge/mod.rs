@@ -192,14 +192,9 @@ pub fn run_image(
             continue;
         };
         let out = session.output();
-        // VCM's even and odd samples are iterations whose hero wavelengths are stratified
-        // apart (the radical inverse of the iteration puts even ones in [0, ½) and odd ones in
-        // [½, 1)), so the film's even/odd variance overstates its noise: no bias estimate.
-        let own_variance = config
-            .integrator
-            .capabilities()
-            .unbiased
-            .then_some(stats.variance.as_slice());
+        // The film's even/odd variance is the snapshot's own for every integrator: VCM's
+        // even and odd iterations are independent replicates (`integrator::vcm::iteration_u`).
+        let own_variance = Some(stats.variance.as_slice());
         let y: Vec<f32> = out.xyz.iter().map(|p| p[1]).collect();
         let errors = image_errors(&out.rgb, &y, own_variance, reference, masked);
         keep(config, &out)?;

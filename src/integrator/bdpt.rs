@@ -13,11 +13,11 @@
 //! loop.
 
 use super::bidir::connect::{connect, emitter_hit, escaped, next_event};
-use super::bidir::merge::{LightVertexStore, MergeParams};
+use super::bidir::merge::MergeParams;
 use super::bidir::vertex::bsdf_at;
 use super::bidir::{
-    splat_light_subpath, trace_light_subpath, BidirContext, Mis, MisHeuristic, PathVertex, Walk,
-    Workspace,
+    splat_light_subpath, trace_light_subpath, BidirContext, LightVertexStore, Mis, MisHeuristic,
+    PathVertex, Walk, Workspace,
 };
 use super::cut::continuation;
 use super::path::PathIntegrator;
@@ -35,17 +35,21 @@ use crate::spectral::{SampledSpectrum, SampledWavelengths};
 pub struct BdptIntegrator;
 
 /// Which techniques a bidirectional sample uses (Georgiev et al. 2012 §5): connections
-/// (s ≥ 1, and t = 1 through the sample's own light subpath), merges with the iteration's
+/// (s ≥ 1, and t = 1 through the sample's light subpath), merges with the iteration's
 /// light vertices, or both. BDPT connects; bidirectional photon mapping merges; VCM does both.
 #[derive(Clone, Copy, Debug)]
 pub struct Techniques<'s> {
     pub connect: bool,
+    /// The light subpath for connections is already in the workspace (VCM's stored subpath
+    /// of the sample's pixel); false traces the sample's own.
+    pub light_given: bool,
     pub merge: Option<(&'s LightVertexStore, MergeParams)>,
 }
 
 impl Techniques<'_> {
     pub const BDPT: Techniques<'static> = Techniques {
         connect: true,
+        light_given: false,
         merge: None,
     };
 }
@@ -66,8 +70,9 @@ impl BdptIntegrator {
         self.sample_with(&Techniques::BDPT, ctx, film, u_sensor, lambda, sampler, ws);
     }
 
-    /// One sample with the techniques `tech`: with connections, the sample's own light
-    /// subpath is traced and splatted first (t = 1), then the camera subpath.
+    /// One sample with the techniques `tech`: with connections, the sample's light subpath
+    /// (traced here, or given in `ws.light`) is splatted first (t = 1), then the camera
+    /// subpath.
     #[allow(clippy::too_many_arguments)]
     pub fn sample_with(
         &self,
@@ -80,7 +85,9 @@ impl BdptIntegrator {
         ws: &mut Workspace,
     ) {
         if tech.connect {
-            trace_light_subpath(ctx, lambda, sampler, &mut ws.light);
+            if !tech.light_given {
+                trace_light_subpath(ctx, lambda, sampler, &mut ws.light);
+            }
             splat_light_subpath(ctx, lambda, sampler, ws, true);
         }
         let Some(sr) = ctx.sensor.generate_ray(film, u_sensor) else {
@@ -145,7 +152,8 @@ impl BdptIntegrator {
                     self.connect_vertex(ctx, &z, lambda, sampler, ws);
                 }
                 if let Some((store, params)) = &tech.merge {
-                    let m = store.merge(&z, &z.mis, lambda.secondary_terminated(), params);
+                    let hero = lambda.secondary_terminated();
+                    let m = store.merge(ctx.scene, &z, si.tri.mesh, &z.mis, hero, params);
                     ws.record.camera.weighted += m.all;
                     ws.record.camera.unweighted += m.all;
                     ws.record.hero_only += m.hero_only;

@@ -95,6 +95,7 @@ impl Integrator {
             radius: None,
             alpha: vcm::DEFAULT_ALPHA,
             meter_light_paths: vcm::DEFAULT_METER_LIGHT_PATHS,
+            wavelengths: vcm::VcmWavelengths::PerIteration,
         }),
         Integrator::Auto {
             mis: MisHeuristic::Power,

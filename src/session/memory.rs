@@ -34,8 +34,8 @@
 use super::image::splat_chunk_samples;
 use super::{MeterOptions, RenderOptions};
 use crate::error::{Error, Result};
-use crate::integrator::bidir::merge::MergeVertex;
 use crate::integrator::bidir::strategies;
+use crate::integrator::bidir::LightVertexStore;
 use crate::integrator::cut::depth_cap;
 use crate::integrator::Integrator;
 use crate::scene::Scene;
@@ -134,7 +134,7 @@ fn light_vertices(integrator: &Integrator, paths: u64, depth: u64) -> u64 {
     if !matches!(integrator, Integrator::Vcm(_)) {
         return 0;
     }
-    let vertex = 2 * std::mem::size_of::<MergeVertex>() as u64 + 8;
+    let vertex = LightVertexStore::BYTES_PER_VERTEX as u64;
     paths.saturating_mul(depth.max(1)).saturating_mul(vertex)
 }
 

@@ -1,6 +1,8 @@
 //! A hash grid over points for fixed-radius queries: the light vertices an iteration of VCM
 //! stores, looked up around every camera vertex (Georgiev et al. 2012 §5; SmallVCM's
-//! `HashGrid`, written anew).
+//! `HashGrid`, written anew). Every point carries a key (the hero-wavelength bin of its light
+//! subpath, `vcm.rs`; 0 when all share one), hashed with its cell: a query finds only the
+//! points of its own key.
 //!
 //! Cells are cubes of side 2r, so a ball of radius r around a query point overlaps at most
 //! the 2 × 2 × 2 block of cells nearest to it. Cells are hashed into a table of a power of two
@@ -14,8 +16,9 @@ use glam::Vec3;
 
 #[derive(Clone, Debug, Default)]
 pub struct HashGrid {
-    /// Point indices sorted by slot.
+    /// Point indices sorted by slot, with their keys.
     indices: Vec<u32>,
+    keys: Vec<u32>,
     /// `slot_end[k]`: one past the last entry of slot k in `indices` (slot k starts at
     /// `slot_end[k − 1]`, or 0).
     slot_end: Vec<u32>,
@@ -25,20 +28,25 @@ pub struct HashGrid {
 }
 
 impl HashGrid {
-    /// Rebuilds the grid over `points` for queries of radius `radius` (> 0, finite).
-    pub fn build(&mut self, points: impl ExactSizeIterator<Item = Vec3> + Clone, radius: f32) {
+    /// Rebuilds the grid over `points` (position, key) for queries of radius `radius` (> 0,
+    /// finite).
+    pub fn build(
+        &mut self,
+        points: impl ExactSizeIterator<Item = (Vec3, u32)> + Clone,
+        radius: f32,
+    ) {
         let n = points.len();
         let slots = n.max(1).next_power_of_two();
         let lo = points
             .clone()
-            .fold(Vec3::splat(f32::INFINITY), |a, p| a.min(p));
+            .fold(Vec3::splat(f32::INFINITY), |a, (p, _)| a.min(p));
         self.origin = if lo.is_finite() { lo } else { Vec3::ZERO };
         self.inv_cell = 1.0 / (2.0 * radius);
         self.radius2 = radius * radius;
         self.slot_end.clear();
         self.slot_end.resize(slots, 0);
-        for p in points.clone() {
-            let k = self.slot_of(self.cell_of(p));
+        for (p, key) in points.clone() {
+            let k = self.slot_of(self.cell_of(p), key);
             self.slot_end[k] += 1;
         }
         let mut start = 0u32;
@@ -48,19 +56,21 @@ impl HashGrid {
         }
         self.indices.clear();
         self.indices.resize(n, 0);
-        // Filling from the back leaves slot_end[k] at the slot's start; the pass after it
-        // restores the ends.
+        self.keys.clear();
+        self.keys.resize(n, 0);
+        // Filling from the back leaves the cursor at each slot's start.
         let mut cursor = self.slot_end.clone();
-        for (i, p) in points.enumerate() {
-            let k = self.slot_of(self.cell_of(p));
+        for (i, (p, key)) in points.enumerate() {
+            let k = self.slot_of(self.cell_of(p), key);
             cursor[k] -= 1;
             self.indices[cursor[k] as usize] = i as u32;
+            self.keys[cursor[k] as usize] = key;
         }
     }
 
-    /// Calls `visit(i)` for every point index i whose point may lie within the radius of
-    /// `q` (the caller tests the distance; `within` does it for a point).
-    pub fn query(&self, q: Vec3, mut visit: impl FnMut(u32)) {
+    /// Calls `visit(i)` for every point index i of key `key` whose point may lie within the
+    /// radius of `q` (the caller tests the distance; `within` does it for a point).
+    pub fn query(&self, q: Vec3, key: u32, mut visit: impl FnMut(u32)) {
         if self.indices.is_empty() {
             return;
         }
@@ -78,15 +88,21 @@ impl HashGrid {
                 b[1] + if corner & 2 != 0 { d[1] } else { 0 },
                 b[2] + if corner & 4 != 0 { d[2] } else { 0 },
             ];
-            let k = self.slot_of(cell);
+            let k = self.slot_of(cell, key);
             // Two cells of the block may hash to one slot: visit it once.
             if seen[..n].contains(&k) {
                 continue;
             }
             seen[n] = k;
-            let start = if k == 0 { 0 } else { self.slot_end[k - 1] };
-            for &i in &self.indices[start as usize..self.slot_end[k] as usize] {
-                visit(i);
+            let range = if k == 0 {
+                0
+            } else {
+                self.slot_end[k - 1] as usize
+            }..self.slot_end[k] as usize;
+            for (&i, &pk) in self.indices[range.clone()].iter().zip(&self.keys[range]) {
+                if pk == key {
+                    visit(i);
+                }
             }
         }
     }
@@ -97,9 +113,15 @@ impl HashGrid {
         (p - q).length_squared() <= self.radius2
     }
 
+    /// The query radius.
+    pub fn radius(&self) -> f32 {
+        self.radius2.sqrt()
+    }
+
     /// Bytes held by the grid's buffers.
     pub fn bytes(&self) -> usize {
-        (self.indices.capacity() + self.slot_end.capacity()) * std::mem::size_of::<u32>()
+        (self.indices.capacity() + self.keys.capacity() + self.slot_end.capacity())
+            * std::mem::size_of::<u32>()
     }
 
     fn cell_of(&self, p: Vec3) -> [i64; 3] {
@@ -108,10 +130,13 @@ impl HashGrid {
         [c.x as i64, c.y as i64, c.z as i64]
     }
 
-    fn slot_of(&self, c: [i64; 3]) -> usize {
+    /// The slot of cell `c` for points of key `key` (Teschner et al.'s hash, the key mixed in
+    /// with a fourth large prime).
+    fn slot_of(&self, c: [i64; 3], key: u32) -> usize {
         let h = (c[0].wrapping_mul(73_856_093))
             ^ (c[1].wrapping_mul(19_349_663))
-            ^ (c[2].wrapping_mul(83_492_791));
+            ^ (c[2].wrapping_mul(83_492_791))
+            ^ (i64::from(key).wrapping_mul(2_654_435_761));
         (h as u64 as usize) & (self.slot_end.len() - 1)
     }
 }
@@ -126,21 +151,26 @@ mod tests {
         let mut rng = Rng::new(7);
         let points: Vec<Vec3> = (0..2000).map(|_| rng.vec3(-1.0, 1.0)).collect();
         let mut grid = HashGrid::default();
+        let key = |i: usize| (i % 3) as u32;
         for radius in [0.05f32, 0.2, 3.0] {
-            grid.build(points.iter().copied(), radius);
+            grid.build(points.iter().enumerate().map(|(i, p)| (*p, key(i))), radius);
             for _ in 0..200 {
                 let q = rng.vec3(-1.2, 1.2);
-                let mut found: Vec<u32> = Vec::new();
-                grid.query(q, |i| {
-                    if grid.within(q, points[i as usize]) {
-                        found.push(i);
-                    }
-                });
-                found.sort_unstable();
-                let brute: Vec<u32> = (0..points.len() as u32)
-                    .filter(|&i| (points[i as usize] - q).length() <= radius)
-                    .collect();
-                assert_eq!(found, brute, "radius {radius} at {q}");
+                for k in 0..4 {
+                    let mut found: Vec<u32> = Vec::new();
+                    grid.query(q, k, |i| {
+                        if grid.within(q, points[i as usize]) {
+                            found.push(i);
+                        }
+                    });
+                    found.sort_unstable();
+                    let brute: Vec<u32> = (0..points.len() as u32)
+                        .filter(|&i| {
+                            key(i as usize) == k && (points[i as usize] - q).length() <= radius
+                        })
+                        .collect();
+                    assert_eq!(found, brute, "radius {radius} at {q}, key {k}");
+                }
             }
         }
     }
@@ -148,12 +178,12 @@ mod tests {
     #[test]
     fn an_empty_grid_and_far_points_are_safe() {
         let mut grid = HashGrid::default();
-        grid.build(std::iter::empty::<Vec3>(), 0.1);
-        grid.query(Vec3::ZERO, |_| panic!("no points"));
+        grid.build(std::iter::empty::<(Vec3, u32)>(), 0.1);
+        grid.query(Vec3::ZERO, 0, |_| panic!("no points"));
         let far = [Vec3::splat(1e30), Vec3::splat(-1e30), Vec3::ZERO];
-        grid.build(far.iter().copied(), 1e-6);
+        grid.build(far.iter().map(|p| (*p, 0)), 1e-6);
         let mut n = 0;
-        grid.query(Vec3::ZERO, |i| {
+        grid.query(Vec3::ZERO, 0, |i| {
             n += grid.within(Vec3::ZERO, far[i as usize]) as u32
         });
         assert_eq!(n, 1);

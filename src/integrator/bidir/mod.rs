@@ -1,5 +1,5 @@
-//! Shared machinery of the bidirectional integrators (light tracing, BDPT and, later, VCM,
-//! which adds merging on top of the same vertices, walks and MIS quantities).
+//! Shared machinery of the bidirectional integrators (light tracing, BDPT and VCM, which adds
+//! merging on top of the same vertices, walks and MIS quantities).
 //!
 //! | file | concept |
 //! |---|---|
@@ -8,7 +8,8 @@
 //! | `subpath.rs` | [`Walk`] (loop-carried state), [`trace_light_subpath`], [`BidirContext`] |
 //! | `connect.rs` | the techniques: s = 0, t = 1, s = 1 and general connections |
 //! | `splat.rs` | t = 1: the light subpath connected to the sensor |
-//! | `merge.rs` | vertex merging: the iteration's light vertices ([`merge::LightVertexStore`]) and the merge technique |
+//! | `store.rs` | the iteration's light subpaths ([`store::LightVertexStore`]): merge vertices and whole subpaths for connections |
+//! | `merge.rs` | vertex merging: the merge technique over the stored light vertices |
 //! | `hashgrid.rs` | the fixed-radius hash grid over them |
 //! | `record.rs` | a sample's contributions → tile sums and splats |
 //! | `strategies.rs` | the per-(s, t) decomposition written by `--strategies` |
@@ -28,15 +29,17 @@ pub mod merge;
 pub mod mis;
 pub mod record;
 pub mod splat;
+pub mod store;
 pub mod strategies;
 pub mod subpath;
 pub mod vertex;
 
 pub use connect::Contribution;
-pub use merge::{LightVertexStore, MergeParams, MergeVertex};
+pub use merge::{MergeParams, MergeVertex};
 pub use mis::{Mis, MisHeuristic};
 pub use record::{SampleRecord, TileAccumulator};
 pub use splat::splat_light_subpath;
+pub use store::LightVertexStore;
 pub use subpath::{trace_light_subpath, BidirContext, CappedSubpath, LightSubpath, Walk};
 pub use vertex::PathVertex;
 
@@ -53,6 +56,7 @@ impl Workspace {
     pub fn new(max_depth: u32, strategy_count: usize) -> Workspace {
         let mut light = LightSubpath::default();
         light.vertices.reserve((max_depth as usize + 1).min(64));
+        light.hits.reserve((max_depth as usize + 1).min(64));
         Workspace {
             light,
             record: SampleRecord::new(strategy_count),

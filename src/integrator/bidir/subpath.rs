@@ -62,12 +62,14 @@ impl<'a> BidirContext<'a> {
 }
 
 /// A light subpath: its origin y_0 and its non-specular scattering vertices y_1, y_2, …
-/// (specular ones cannot be connected to and are not stored), and where the depth cap
-/// stopped it, if it did.
+/// (specular ones cannot be connected to and are not stored), with the surface hit of each
+/// (what VCM's store keeps to rebuild them, `store.rs`), and where the depth cap stopped it,
+/// if it did.
 #[derive(Clone, Debug, Default)]
 pub struct LightSubpath {
     pub origin: Option<LightOrigin>,
     pub vertices: Vec<PathVertex>,
+    pub hits: Vec<SurfaceHit>,
     pub capped: Option<CappedSubpath>,
 }
 
@@ -75,6 +77,7 @@ impl LightSubpath {
     pub fn clear(&mut self) {
         self.origin = None;
         self.vertices.clear();
+        self.hits.clear();
         self.capped = None;
     }
 }
@@ -285,6 +288,7 @@ pub fn trace_light_subpath(
         let v = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
         if !bsdf.is_specular() {
             path.vertices.push(v);
+            path.hits.push(si);
         }
         if walk.depth >= ctx.max_depth {
             let within_cap = true;
