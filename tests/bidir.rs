@@ -330,7 +330,7 @@ fn render_with(
     let opts = RenderOptions {
         spp: Some(spp),
         seed,
-        max_depth,
+        max_depth: Some(max_depth),
         integrator,
         ..Default::default()
     };

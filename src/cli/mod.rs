@@ -8,6 +8,7 @@
 mod checkpoints;
 mod common;
 mod converge;
+mod info;
 mod interrupt;
 mod lights;
 mod meter;
@@ -25,6 +26,7 @@ type Command = fn(Vec<OsString>) -> Result<()>;
 /// list them from here.
 const SUBCOMMANDS: &[(&str, Command)] = &[
     ("converge", converge::main),
+    ("info", info::main),
     ("lights", lights::main),
     ("meter", meter::main),
 ];
