@@ -128,7 +128,7 @@ fn main() {
             let opts = RenderOptions {
                 spp: Some(args.spp),
                 seed: 1000 + b,
-                max_depth: args.max_depth,
+                max_depth: Some(args.max_depth),
                 integrator,
                 strategies,
                 ..Default::default()
