@@ -449,8 +449,9 @@ fn z_test(a: &Batches, b: &Batches, alpha: f64) -> ZTest {
 // Agreement of PT, LT and BDPT
 // ---------------------------------------------------------------------------------------------
 
-/// One scene of the agreement table.
-struct AgreementCase {
+/// One scene of the agreement and efficiency tables: rendered `batches` times at `spp` per
+/// pixel by each integrator, seeds fixed.
+struct SceneCase {
     name: &'static str,
     scene: fn() -> Scene,
     max_depth: u32,
@@ -460,22 +461,22 @@ struct AgreementCase {
 
 /// The agreement scenes: adding one (e.g. a glossy conductor with a small bright light, once
 /// that model exists) is one entry.
-const AGREEMENT: &[AgreementCase] = &[
-    AgreementCase {
+const AGREEMENT: &[SceneCase] = &[
+    SceneCase {
         name: "cornell box",
         scene: || scene::load(&cbox_path(), Some((20, 20))).unwrap(),
         max_depth: 7,
         batches: 32,
         spp: 32,
     },
-    AgreementCase {
+    SceneCase {
         name: "small bright light, thin lens, shading normals",
         scene: || load_text("small-light", &small_light_stage(), (20, 20)),
         max_depth: 7,
         batches: 32,
         spp: 64,
     },
-    AgreementCase {
+    SceneCase {
         name: "glossy conductor (rough gold, GGX α 0.2) and a small bright light",
         scene: || load_text("glossy", &small_light_stage_with("Gold"), (20, 20)),
         max_depth: 7,
@@ -541,16 +542,6 @@ fn path_light_and_bdpt_agree_per_pixel() {
 // Efficiency: BDPT against the path tracer it contains
 // ---------------------------------------------------------------------------------------------
 
-/// One scene of the efficiency table: rendered `batches` times at `spp` per pixel by each
-/// integrator, seeds fixed.
-struct EfficiencyCase {
-    name: &'static str,
-    scene: fn() -> Scene,
-    max_depth: u32,
-    batches: usize,
-    spp: u32,
-}
-
 /// A caustic stage of `scenes/` (`caustic.usda`, `caustic-mirror.usda`: a glass ball focusing
 /// a 3 cm SphereLight of 30000 nits) with the camera's focal length `focal` mm, zooming in on
 /// the caustic, and the lamp's radius × 4 at the same power (radiance ÷ 16). The caustic keeps
@@ -586,36 +577,36 @@ fn caustic_stage(file: &str, focal: (&str, &str), res: (u32, u32)) -> Scene {
 /// The scenes of issue 17: BDPT's strategies include the path tracer's (s = 0, 1), so with a
 /// sound MIS its variance per sample is never much above the path tracer's. The last two are
 /// the SDS scenes VCM is also measured on (`scenes/README.md`).
-const EFFICIENCY: &[EfficiencyCase] = &[
-    EfficiencyCase {
+const EFFICIENCY: &[SceneCase] = &[
+    SceneCase {
         name: "cornell box",
         scene: || scene::load(&cbox_path(), Some((16, 16))).unwrap(),
         max_depth: 5,
         batches: 400,
         spp: 2,
     },
-    EfficiencyCase {
+    SceneCase {
         name: "small light behind a panel",
         scene: || load_text("eff-small-light", &small_light_stage(), (16, 16)),
         max_depth: 5,
         batches: 400,
         spp: 2,
     },
-    EfficiencyCase {
+    SceneCase {
         name: "glossy gold panel",
         scene: || load_text("eff-glossy", &small_light_stage_with("Gold"), (16, 16)),
         max_depth: 5,
         batches: 400,
         spp: 2,
     },
-    EfficiencyCase {
+    SceneCase {
         name: "glass ball, caustic seen directly (caustic.usda)",
         scene: || caustic_stage("caustic.usda", ("35", "70"), (32, 24)),
         max_depth: 5,
         batches: 400,
         spp: 2,
     },
-    EfficiencyCase {
+    SceneCase {
         name: "caustic seen in a mirror (caustic-mirror.usda)",
         scene: || caustic_stage("caustic-mirror.usda", ("24", "72"), (32, 24)),
         max_depth: 5,
@@ -631,7 +622,7 @@ const EFFICIENCY: &[EfficiencyCase] = &[
 fn image_means(
     scene: &Scene,
     integrator: Integrator,
-    case: &EfficiencyCase,
+    case: &SceneCase,
     seed_base: u64,
 ) -> (Vec<f64>, f64) {
     let mut sums: Vec<(f64, f64)> = Vec::new();
