@@ -199,8 +199,12 @@ fn auto_renders_exactly_what_its_choice_renders() {
     // bdpt wins here. At the default unlimited depth a splatting chunk is one sample per
     // pixel at these sizes (`splat_chunk_samples`): a pilot of 2, then 62 more.
     auto_is_its_choice(&stage("gap.usda"), (80, 60), 64, "bdpt");
-    // path wins here (a pilot of 2, then 30 more; bdpt's pilot finds no light at all).
-    auto_is_its_choice(&stage("prism.usda"), (240, 120), 32, "path");
+    // path wins here (a pilot of 2, then 30 more): a chart under a uniform dome, where
+    // next-event estimation from every patch is all it takes and BDPT's light subpaths from
+    // the dome add little. (The prism no longer serves: since BDPT's camera subpaths survive
+    // roulette inside glass as the path tracer's do, issue 17, its pilot finds the light
+    // through the prism as often as the path tracer's.)
+    auto_is_its_choice(&stage("colorchecker.usda"), (120, 80), 32, "path");
 }
 
 #[test]

@@ -101,7 +101,12 @@ pub struct Walk {
     /// Throughput including emission (light) or importance (camera).
     pub beta: SampledSpectrum,
     /// Product of the scattering factors f |cos| / pdf alone: what Russian roulette looks at
-    /// (a light subpath's `beta` is in units of power).
+    /// (a light subpath's `beta` is in units of power). For radiance (camera subpaths) each
+    /// refraction's 1/η'² is undone here, as the path tracer's `eta_scale` does (pbrt-v4
+    /// `etaScale`, PBR 4ed §14.1.3): a ray inside glass is not absorbed. Roulette that took
+    /// the factor for absorption let a camera path inside a ball of IOR 1.5 survive with
+    /// 1/1.5² of the path tracer's probability, about doubling the variance of the caustics
+    /// it carries (issue 17).
     pub rr_beta: SampledSpectrum,
     pub mis: SubpathMis,
     /// Depth of the vertex the ray left from.
@@ -194,6 +199,9 @@ impl Walk {
         let f = bs.f * factor;
         self.beta *= f;
         self.rr_beta *= f;
+        if mode == TransportMode::Radiance && bs.transmission {
+            self.rr_beta *= bs.eta * bs.eta;
+        }
         self.mis
             .scatter(mis, v.cos_geo(bs.wi), bs.pdf_w, pdf_rev_w, bs.specular);
         self.ray = spawn_ray(v.p, v.p_error, v.ng, bs.wi);
