@@ -92,7 +92,8 @@ mod tests {
     #[test]
     fn sums_do_not_depend_on_grouping() {
         let g = Grid::for_scale(1.0);
-        let terms = [0.1f64, 1e-9, 3.0e5, -2.5, 1.0 / 3.0, 7e-12];
+        let (big, small) = (2f64.powi(40), 2f64.powi(-20));
+        let terms = [big, small, -big, small, 0.1, 1.0 / 3.0];
         let all = terms.iter().fold(0i128, |a, &x| a + g.term(x).0);
         let left = terms[..2].iter().fold(0i128, |a, &x| a + g.term(x).0);
         let right = terms[2..].iter().fold(0i128, |a, &x| a + g.term(x).0);
@@ -100,7 +101,8 @@ mod tests {
         // The f64 sums of the same split differ: what the grid is for.
         let f = |t: &[f64]| t.iter().fold(0.0f64, |a, &x| a + x);
         assert_ne!(f(&terms), f(&terms[..2]) + f(&terms[2..]));
-        assert!((g.value(all) - f(&terms)).abs() < 1e-12);
+        // Both terms below big's f64 resolution count on the grid.
+        assert!((g.value(all) - (2.0 * small + 0.1 + 1.0 / 3.0)).abs() < 1e-15);
     }
 
     #[test]
