@@ -67,10 +67,13 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
 
 #[test]
 fn nesting_within_the_limit_loads_quickly() {
+    // A guard against a hang (parsing that grows exponentially with the depth would take
+    // hours at 250 levels), not a speed target: the bound is wide enough for a machine loaded
+    // many times over (8 s seen at a load of 13 on 2 cores; well under 1 s unloaded).
     let start = std::time::Instant::now();
     let desc = load_body(&nested(250));
     assert_eq!(desc.lights.len(), 1);
-    assert!(start.elapsed().as_secs_f64() < 5.0, "{:?}", start.elapsed());
+    assert!(start.elapsed().as_secs_f64() < 120.0, "{:?}", start.elapsed());
 }
 
 #[test]
