@@ -310,6 +310,16 @@ pub fn warn_dropped(dropped: u64) {
     }
 }
 
+/// Warns about contributions clamped to the film's range (`sensor::grid_sum`).
+pub fn warn_clamped(clamped: u64) {
+    if clamped > 0 {
+        eprintln!(
+            "warning: {clamped} contributions exceeded the film's range (2^50 × the output's \
+             white in one sample) and were clamped"
+        );
+    }
+}
+
 /// One line from a clap error: its message and the possible values, without the `error: `
 /// prefix and the usage block.
 pub fn clap_message(e: &clap::Error) -> String {

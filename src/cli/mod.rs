@@ -11,7 +11,9 @@ mod converge;
 mod info;
 mod interrupt;
 mod lights;
+mod merge;
 mod meter;
+mod parts;
 mod progress;
 mod render;
 
@@ -28,6 +30,7 @@ const SUBCOMMANDS: &[(&str, Command)] = &[
     ("converge", converge::main),
     ("info", info::main),
     ("lights", lights::main),
+    ("merge", merge::main),
     ("meter", meter::main),
 ];
 

@@ -3,9 +3,10 @@
 use super::checkpoints::{self, Checkpoints};
 use super::common::{
     at_least, clap_message, max_memory, metadata_name, print_auto, print_report, print_summary,
-    warn_depth_cut, warn_dropped, warn_limits, IntegratorArgs, MachineryArgs, Made,
+    warn_clamped, warn_depth_cut, warn_dropped, warn_limits, IntegratorArgs, MachineryArgs, Made,
 };
 use super::interrupt;
+use super::parts::PartArgs;
 use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::integrator::bidir::strategies::StrategyImage;
@@ -52,6 +53,8 @@ struct RenderArgs {
     integrator: IntegratorArgs,
     #[command(flatten)]
     machinery: MachineryArgs,
+    #[command(flatten)]
+    part: PartArgs,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
     strategies: Option<PathBuf>,
@@ -127,6 +130,11 @@ pub fn command() -> clap::Command {
 
 fn run(args: &RenderArgs) -> Result<()> {
     let opts = options(args)?;
+    args.part.check(
+        &opts,
+        args.strategies.is_some(),
+        args.checkpoint.is_some() || args.resume.is_some(),
+    )?;
     let path = args
         .output
         .clone()
@@ -155,6 +163,7 @@ fn run(args: &RenderArgs) -> Result<()> {
             .map_err(|e| Error::io(file, format!("--resume: {e}")))?;
         eprintln!("resuming {} at {done} spp", file.display());
     }
+    args.part.start(&mut session, &opts)?;
     let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
     let target = opts.spp.map(u64::from).or(match opts.time_budget {
         Some(_) => None,
@@ -166,6 +175,7 @@ fn run(args: &RenderArgs) -> Result<()> {
     progress.finish();
     let out = session.output();
     warn_dropped(out.dropped_samples);
+    warn_clamped(out.clamped);
     warn_depth_cut(out.depth_cut.as_ref(), "the image's mean luminance");
     print_report(&out.report);
     if let Some(signal) = interrupted {
@@ -179,6 +189,14 @@ fn run(args: &RenderArgs) -> Result<()> {
         }
     }
     write_outputs(args, &opts, &scene, &path, &out)?;
+    let chosen = opts.integrator;
+    args.part.save(
+        &made(args, &opts, &scene, &chosen, &out),
+        &opts,
+        &session,
+        &path,
+        &out,
+    )?;
     if interrupted.is_none() {
         saves.finished();
     }
@@ -214,7 +232,48 @@ fn targets(args: &RenderArgs, output: &Path) -> Vec<Target> {
     if let Some(p) = &args.strategies {
         t.push(Target::new("--strategies", p, Format::Directory));
     }
+    t.extend(args.part.target(output));
     t
+}
+
+/// What made the render's image (its EXR metadata).
+fn made<'a>(
+    args: &'a RenderArgs,
+    opts: &RenderOptions,
+    scene: &'a scene::Scene,
+    integrator: &'a Integrator,
+    out: &RenderOutput,
+) -> Made<'a> {
+    Made {
+        stage: &args.scene,
+        scene,
+        integrator,
+        seed: opts.seed,
+        max_depth: opts.max_depth,
+        spp: out.spp,
+        wall_time_s: out.wall_time_s,
+    }
+}
+
+/// Writes `out` as the calibrated EXR at `path` with `made`'s metadata (the integrator named
+/// `integrator_name`), and the preview when asked for; returns the metadata.
+pub(super) fn write_image(
+    made: &Made,
+    integrator_name: String,
+    path: &Path,
+    preview: Option<(&Path, f32)>,
+    out: &RenderOutput,
+) -> Result<exr::ExrMetadata> {
+    let mut meta = made.metadata();
+    meta.integrator = integrator_name;
+    let white = spectral::color::white_xy().map(|c| c as f32);
+    exr::write(
+        path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
+    )?;
+    if let Some((preview, exposure)) = preview {
+        png::write_preview(preview, out.width, out.height, &out.rgb, exposure)?;
+    }
+    Ok(meta)
 }
 
 /// The EXR, the preview and the strategy images.
@@ -226,30 +285,14 @@ fn write_outputs(
     out: &RenderOutput,
 ) -> Result<()> {
     let chosen = out.auto.as_ref().map_or(opts.integrator, |a| a.choice);
-    let mut meta = Made {
-        stage: &args.scene,
-        scene,
-        integrator: &chosen,
-        seed: opts.seed,
-        max_depth: opts.max_depth,
-        spp: out.spp,
-        wall_time_s: out.wall_time_s,
-    }
-    .metadata();
-    meta.integrator = metadata_name(&chosen, out.auto.as_ref());
-    let white = spectral::color::white_xy().map(|c| c as f32);
-    exr::write(
-        path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
+    let meta = write_image(
+        &made(args, opts, scene, &chosen, out),
+        metadata_name(&chosen, out.auto.as_ref()),
+        path,
+        args.preview.as_deref().map(|p| (p, args.preview_exposure)),
+        out,
     )?;
-    if let Some(preview) = &args.preview {
-        png::write_preview(
-            preview,
-            out.width,
-            out.height,
-            &out.rgb,
-            args.preview_exposure,
-        )?;
-    }
+    let white = spectral::color::white_xy().map(|c| c as f32);
     if let (Some(dir), Some(images)) = (&args.strategies, &out.strategies) {
         write_strategies(dir, out, images, &meta, white)?;
     }

@@ -1,25 +1,22 @@
-//! The film: per-pixel XYZ sums in f64 (so millions of samples add up without loss), filled
-//! by tiles, each pixel always in the same order (bit-identical images for any thread count).
+//! The film: per-pixel XYZ sums, filled by tiles, each term rounded once to a fixed grid and
+//! summed as integers (`grid_sum`), so that the image depends on the samples only — not on
+//! the passes, the threads, nor on whether the samples were rendered as parts and merged
+//! ([`Film::merge`], `session::part`).
 //!
-//! Samples are summed in *chunks* (`session::image`): a chunk's per-pixel sums start from
-//! zero and are added to the film when the chunk closes. A render pass may end inside a chunk;
-//! the chunk's partial sums are then kept open and the next pass continues them, so an image
-//! depends only on the samples and the chunk size, not on how the samples were split into
-//! passes.
-//!
-//! Light tracing and BDPT also *splat*: a light path adds to whatever pixel it reaches. Splats
-//! are collected per tile as a list and merged in tile order ([`Film::add_splats`]), so their
-//! sum is as deterministic as the tiles'. A splat is a contribution per light path with the
-//! camera importance normalised over the whole image (see `sensor::camera`); a pixel's value
-//! is its sample mean plus its splat sum divided by the light paths traced per pixel
-//! (pbrt-v4's `RGBFilm::GetPixelRGB`, splatScale = 1/spp).
+//! Light tracing and BDPT also *splat*: a light path adds to whatever pixel it reaches. Each
+//! splat is rounded to the grid and added ([`Film::add_splats`]). A splat is a contribution
+//! per light path with the camera importance normalised over the whole image (see
+//! `sensor::camera`); a pixel's value is its sample mean plus its splat sum divided by the
+//! light paths traced per pixel (pbrt-v4's `RGBFilm::GetPixelRGB`, splatScale = 1/spp).
 //!
 //! **Variance.** The film also keeps the luminance Y of the odd-numbered samples apart (their
-//! own-pixel values and their splats). The even and odd halves are two independent estimates
-//! a, b of the pixel, so (a − b)² n_even n_odd / n² is an unbiased estimate of the variance
-//! of the pixel's mean over all n samples, whatever the integrator ([`Film::variance_y`]).
+//! own-pixel values and their splats, in f64: they serve the variance estimate only). The even
+//! and odd halves are two independent estimates a, b of the pixel, so
+//! (a − b)² n_even n_odd / n² is an unbiased estimate of the variance of the pixel's mean over
+//! all n samples, whatever the integrator ([`Film::variance_y`]).
 
 use super::film_state::FilmState;
+use super::grid_sum::{Fixed3, Grid};
 use crate::error::Reason;
 
 /// Accumulated XYZ per pixel (Y in cd/m²), row-major, top row first.
@@ -27,17 +24,19 @@ use crate::error::Reason;
 pub struct Film {
     pub width: usize,
     pub height: usize,
-    /// Sums of the closed chunks.
-    closed: Vec<[f64; 3]>,
-    /// Sums of the open chunk.
-    open: Vec<[f64; 3]>,
+    grid: Grid,
+    /// Own-pixel sums of every sample, on the grid.
+    sums: Vec<Fixed3>,
     samples: Vec<u64>,
-    splat: Vec<[f64; 3]>,
+    /// Splat sums on the grid (empty until something splats).
+    splat: Vec<Fixed3>,
     /// Light paths traced over the whole image (each may splat anywhere).
     light_paths: u64,
     /// Y of the odd-numbered samples: own-pixel values and splats.
     odd_y: Vec<f64>,
     odd_splat_y: Vec<f64>,
+    /// Terms clamped and sums saturated (`grid_sum`).
+    clamped: u64,
 }
 
 /// One light-path contribution to a pixel (XYZ, before the 1/light-paths-per-pixel scale).
@@ -57,7 +56,6 @@ pub struct Tile {
 }
 
 impl Tile {
-    #[cfg(test)]
     pub fn pixel_count(&self) -> usize {
         (self.x1 - self.x0) * (self.y1 - self.y0)
     }
@@ -69,19 +67,30 @@ impl Tile {
 }
 
 impl Film {
-    pub fn new(width: usize, height: usize) -> Film {
+    pub fn new(width: usize, height: usize, grid: Grid) -> Film {
         let n = width * height;
         Film {
             width,
             height,
-            closed: vec![[0.0; 3]; n],
-            open: vec![[0.0; 3]; n],
+            grid,
+            sums: vec![[0; 3]; n],
             samples: vec![0; n],
             splat: Vec::new(),
             light_paths: 0,
             odd_y: vec![0.0; n],
             odd_splat_y: Vec::new(),
+            clamped: 0,
         }
+    }
+
+    /// The grid the sums are held on.
+    pub fn grid(&self) -> Grid {
+        self.grid
+    }
+
+    /// Terms clamped and sums saturated so far (0 for any sane scene; reported when not).
+    pub fn clamped(&self) -> u64 {
+        self.clamped
     }
 
     /// The image split into tiles of `size` × `size` pixels, row by row.
@@ -100,54 +109,82 @@ impl Film {
         tiles
     }
 
-    /// The open chunk's sums of a tile (row-major over the tile), to continue them.
-    pub fn open_sums(&self, tile: &Tile) -> Vec<[f64; 3]> {
-        tile.pixels(self.width).map(|i| self.open[i]).collect()
-    }
-
-    /// Replaces a tile's open-chunk sums by `sums` (which continued [`Film::open_sums`]),
-    /// counting `samples_per_pixel` more samples, and adds the odd samples' Y sums.
-    pub fn store_tile(&mut self, tile: &Tile, sums: &[[f64; 3]], odd_y: &[f64], samples: u64) {
+    /// Adds a tile's grid sums (row-major over the tile), counting `samples_per_pixel` more
+    /// samples, the odd samples' Y sums, and `clamped` terms the tile clamped.
+    pub fn store_tile(
+        &mut self,
+        tile: &Tile,
+        sums: &[Fixed3],
+        odd_y: &[f64],
+        samples: u64,
+        clamped: u64,
+    ) {
         for (k, i) in tile.pixels(self.width).enumerate() {
-            self.open[i] = sums[k];
+            self.clamped += u64::from(Grid::add3(&mut self.sums[i], &sums[k]));
             self.odd_y[i] += odd_y[k];
             self.samples[i] += samples;
         }
+        self.clamped += clamped;
     }
 
-    /// Closes the open chunk: its sums are added to the film's and it starts again at zero.
-    pub fn close_chunk(&mut self) {
-        for (c, o) in self.closed.iter_mut().zip(&mut self.open) {
-            for (a, v) in c.iter_mut().zip(o.iter_mut()) {
-                *a += *v;
-                *v = 0.0;
-            }
-        }
-    }
-
-    /// Adds splats in the order given (callers pass tiles in tile order); `odd` holds the
-    /// (pixel, Y) of the odd-numbered samples' splats among them.
+    /// Adds splats (each rounded to the grid, so their order does not matter); `odd` holds
+    /// the (pixel, Y) of the odd-numbered samples' splats among them.
     pub fn add_splats(&mut self, splats: &[Splat], odd: &[(u32, f32)]) {
         if splats.is_empty() {
             return;
         }
-        if self.splat.is_empty() {
-            self.splat = vec![[0.0; 3]; self.width * self.height];
-            self.odd_splat_y = vec![0.0; self.width * self.height];
-        }
+        self.ensure_splats();
         for s in splats {
-            for (acc, v) in self.splat[s.pixel as usize].iter_mut().zip(s.xyz) {
-                *acc += v as f64;
-            }
+            let (t, clamped) = self.grid.triple(s.xyz.map(f64::from));
+            let saturated = Grid::add3(&mut self.splat[s.pixel as usize], &t);
+            self.clamped += clamped + u64::from(saturated);
         }
         for &(pixel, y) in odd {
             self.odd_splat_y[pixel as usize] += y as f64;
         }
     }
 
+    fn ensure_splats(&mut self) {
+        if self.splat.is_empty() {
+            self.splat = vec![[0; 3]; self.width * self.height];
+            self.odd_splat_y = vec![0.0; self.width * self.height];
+        }
+    }
+
     /// Counts light paths traced (whether or not they splatted).
     pub fn add_light_paths(&mut self, n: u64) {
         self.light_paths += n;
+    }
+
+    /// Adds the film of another part of the same render (same size and grid): the result
+    /// is the film that rendered both parts' samples, bit for bit in its sums and counts
+    /// (the odd samples' Y, kept in f64 for the variance only, to round-off).
+    pub fn merge(&mut self, other: &FilmState) -> Reason<()> {
+        other.check()?;
+        if (other.width, other.height) != (self.width, self.height) {
+            return Err(format!(
+                "a film of {}×{} pixels does not merge with one of {}×{}",
+                other.width, other.height, self.width, self.height
+            ));
+        }
+        if other.grid_exponent != self.grid.exponent {
+            return Err("the films' grids differ (another camera exposure)".into());
+        }
+        for i in 0..self.sums.len() {
+            self.clamped += u64::from(Grid::add3(&mut self.sums[i], &other.sums[i]));
+            self.samples[i] += other.samples[i];
+            self.odd_y[i] += other.odd_y[i];
+        }
+        if !other.splat.is_empty() {
+            self.ensure_splats();
+            for i in 0..self.splat.len() {
+                self.clamped += u64::from(Grid::add3(&mut self.splat[i], &other.splat[i]));
+                self.odd_splat_y[i] += other.odd_splat_y[i];
+            }
+        }
+        self.light_paths += other.light_paths;
+        self.clamped += other.clamped;
+        Ok(())
     }
 
     /// The scale of splat sums: `scale` over the light paths per pixel (0 without any).
@@ -163,14 +200,15 @@ impl Film {
     /// the splat sum over light paths per pixel.
     pub fn xyz(&self, scale: f64) -> Vec<[f32; 3]> {
         let splat_k = self.splat_scale(scale);
-        (0..self.closed.len())
+        let g = self.grid;
+        (0..self.sums.len())
             .map(|i| {
-                let s: [f64; 3] = std::array::from_fn(|c| self.closed[i][c] + self.open[i][c]);
+                let s = self.sums[i].map(|c| g.value(c));
                 let n = self.samples[i];
                 let k = if n > 0 { scale / n as f64 } else { 0.0 };
                 match self.splat.get(i) {
                     Some(sp) if splat_k > 0.0 => {
-                        std::array::from_fn(|c| (s[c] * k + sp[c] * splat_k) as f32)
+                        std::array::from_fn(|c| (s[c] * k + g.value(sp[c]) * splat_k) as f32)
                     }
                     _ => s.map(|c| (c * k) as f32),
                 }
@@ -182,21 +220,22 @@ impl Film {
     /// difference of the even and odd samples' means; infinite with fewer than 2 samples.
     pub fn variance_y(&self, scale: f64) -> Vec<f64> {
         let pixels = (self.width * self.height) as f64;
-        (0..self.closed.len())
+        let g = self.grid;
+        (0..self.sums.len())
             .map(|i| {
                 let n = self.samples[i];
                 let (n_odd, n_even) = ((n / 2) as f64, (n - n / 2) as f64);
                 if n < 2 {
                     return f64::INFINITY;
                 }
-                let own = self.closed[i][1] + self.open[i][1];
+                let own = g.value(self.sums[i][1]);
                 let (mut odd, mut even) = (self.odd_y[i], own - self.odd_y[i]);
                 if let Some(sp) = self.splat.get(i) {
                     // Light paths per pixel = samples per pixel, split alike.
                     let lp = self.light_paths as f64 / pixels;
                     let k = n as f64 / lp;
                     odd += self.odd_splat_y[i] * k;
-                    even += (sp[1] - self.odd_splat_y[i]) * k;
+                    even += (g.value(sp[1]) - self.odd_splat_y[i]) * k;
                 }
                 let d = even / n_even - odd / n_odd;
                 scale * scale * d * d * n_even * n_odd / (n as f64 * n as f64)
@@ -209,13 +248,14 @@ impl Film {
         FilmState {
             width: self.width,
             height: self.height,
-            closed: self.closed.clone(),
-            open: self.open.clone(),
+            grid_exponent: self.grid.exponent,
+            sums: self.sums.clone(),
             samples: self.samples.clone(),
             odd_y: self.odd_y.clone(),
             splat: self.splat.clone(),
             odd_splat_y: self.odd_splat_y.clone(),
             light_paths: self.light_paths,
+            clamped: self.clamped,
         }
     }
 
@@ -225,13 +265,16 @@ impl Film {
         Ok(Film {
             width: state.width,
             height: state.height,
-            closed: state.closed,
-            open: state.open,
+            grid: Grid {
+                exponent: state.grid_exponent,
+            },
+            sums: state.sums,
             samples: state.samples,
             splat: state.splat,
             light_paths: state.light_paths,
             odd_y: state.odd_y,
             odd_splat_y: state.odd_splat_y,
+            clamped: state.clamped,
         })
     }
 
@@ -252,29 +295,34 @@ mod tests {
         x1: 2,
         y1: 1,
     };
+    const UNIT: Grid = Grid {
+        exponent: super::super::grid_sum::GRID_BITS,
+    };
+
+    fn fixed(v: [f64; 3]) -> Fixed3 {
+        v.map(|c| UNIT.term(c).0)
+    }
 
     #[test]
     fn tiles_cover_the_image_once() {
-        let f = Film::new(37, 20);
+        let f = Film::new(37, 20, UNIT);
         let tiles = f.tiles(16);
         assert_eq!(tiles.iter().map(Tile::pixel_count).sum::<usize>(), 37 * 20);
     }
 
     #[test]
-    fn chunks_average() {
-        let mut f = Film::new(2, 1);
-        f.store_tile(&WHOLE, &[[2.0, 4.0, 6.0], [0.0; 3]], &[0.0; 2], 2);
-        f.close_chunk();
-        assert_eq!(f.open_sums(&WHOLE), vec![[0.0; 3]; 2]);
-        f.store_tile(&WHOLE, &[[2.0, 0.0, 0.0], [0.0; 3]], &[0.0; 2], 2);
+    fn sums_average() {
+        let mut f = Film::new(2, 1, UNIT);
+        f.store_tile(&WHOLE, &[fixed([2.0, 4.0, 6.0]), [0; 3]], &[0.0; 2], 2, 0);
+        f.store_tile(&WHOLE, &[fixed([2.0, 0.0, 0.0]), [0; 3]], &[0.0; 2], 2, 0);
         assert_eq!(f.xyz(1.0)[0], [1.0, 1.0, 1.5]);
         assert_eq!(f.min_samples(), 4);
     }
 
     #[test]
     fn splats_are_divided_by_light_paths_per_pixel() {
-        let mut f = Film::new(2, 1);
-        f.store_tile(&WHOLE, &[[1.0; 3], [0.0; 3]], &[0.0; 2], 4);
+        let mut f = Film::new(2, 1, UNIT);
+        f.store_tile(&WHOLE, &[fixed([1.0; 3]), [0; 3]], &[0.0; 2], 4, 0);
         f.add_light_paths(8);
         let sp = |pixel, v| Splat { pixel, xyz: [v; 3] };
         f.add_splats(&[sp(1, 2.0), sp(1, 6.0), sp(0, 4.0)], &[]);
@@ -283,16 +331,48 @@ mod tests {
     }
 
     #[test]
+    fn merged_halves_equal_the_whole_bit_for_bit() {
+        let sp = |pixel, v: f32| Splat {
+            pixel,
+            xyz: [v, 0.1 * v, 3.0],
+        };
+        let tiles: Vec<(Fixed3, Vec<Splat>)> = (0..6)
+            .map(|s| {
+                let v = 1.0 / (s as f64 + 3.0);
+                (fixed([v, 1e-7 * v, 1e5 * v]), vec![sp(s % 2, v as f32)])
+            })
+            .collect();
+        let render = |range: std::ops::Range<usize>| {
+            let mut f = Film::new(2, 1, UNIT);
+            for (own, splats) in &tiles[range] {
+                f.store_tile(&WHOLE, &[*own, *own], &[0.5; 2], 1, 0);
+                f.add_splats(splats, &[]);
+                f.add_light_paths(2);
+            }
+            f
+        };
+        let whole = render(0..6);
+        let mut merged = render(0..2);
+        merged.merge(&render(2..5).state()).unwrap();
+        merged.merge(&render(5..6).state()).unwrap();
+        assert_eq!(merged.state(), whole.state());
+        assert_eq!(merged.xyz(0.7), whole.xyz(0.7));
+        let other = Film::new(1, 1, UNIT);
+        assert!(merged.merge(&other.state()).is_err());
+    }
+
+    #[test]
     fn variance_from_the_even_and_odd_halves() {
         // Pixel 0: samples Y = 1, 3, 1, 3 (odd ones 3 + 3): halves 1 and 3, variance of the
         // mean (3 − 1)² · 2 · 2 / 16 = 1. Pixel 1: all equal, variance 0.
-        let mut f = Film::new(2, 1);
-        f.store_tile(&WHOLE, &[[0.0, 8.0, 0.0], [0.0, 4.0, 0.0]], &[6.0, 2.0], 4);
+        let mut f = Film::new(2, 1, UNIT);
+        let own = [fixed([0.0, 8.0, 0.0]), fixed([0.0, 4.0, 0.0])];
+        f.store_tile(&WHOLE, &own, &[6.0, 2.0], 4, 0);
         assert_eq!(f.variance_y(1.0), vec![1.0, 0.0]);
         assert_eq!(f.variance_y(2.0)[0], 4.0);
         // The same pixel values as splats of 4 light paths per pixel.
-        let mut g = Film::new(2, 1);
-        g.store_tile(&WHOLE, &[[0.0; 3]; 2], &[0.0; 2], 4);
+        let mut g = Film::new(2, 1, UNIT);
+        g.store_tile(&WHOLE, &[[0; 3]; 2], &[0.0; 2], 4, 0);
         g.add_light_paths(8);
         let sp = |pixel, y| Splat {
             pixel,
@@ -303,6 +383,6 @@ mod tests {
             &[(0, 3.0), (0, 3.0)],
         );
         assert_eq!(g.variance_y(1.0)[0], 1.0);
-        assert!(Film::new(1, 1).variance_y(1.0)[0].is_infinite());
+        assert!(Film::new(1, 1, UNIT).variance_y(1.0)[0].is_infinite());
     }
 }

@@ -5,8 +5,9 @@
 //! bounds-checked); [`FilmState::check`] validates one read from a file before a film is
 //! built from it.
 //!
-//! Layout: width, height, light paths, then the per-pixel sequences closed, open (f64 XYZ
-//! triples), samples (u64), odd Y (f64), splat (triples) and odd splat Y (f64); the splat
+//! Layout: width, height, the grid's exponent (as u64 of its i64), light paths, terms
+//! clamped, then the per-pixel sequences sums (i128 XYZ triples on the grid, `grid_sum`),
+//! samples (u64), odd Y (f64), splat (i128 triples) and odd splat Y (f64); the splat
 //! sequences are empty for a film that was never splatted.
 
 use super::raw_bytes::{ByteReader, ByteWriter};
@@ -17,48 +18,55 @@ use crate::error::Reason;
 pub struct FilmState {
     pub width: usize,
     pub height: usize,
-    /// XYZ sums of the closed chunks, per pixel.
-    pub closed: Vec<[f64; 3]>,
-    /// XYZ sums of the open chunk, per pixel.
-    pub open: Vec<[f64; 3]>,
+    /// The exponent e of the grid 2^−e the sums are held on (`grid_sum`).
+    pub grid_exponent: i32,
+    /// Own-pixel XYZ sums on the grid, per pixel.
+    pub sums: Vec<[i128; 3]>,
     /// Samples per pixel.
     pub samples: Vec<u64>,
     /// Y of the odd-numbered samples, per pixel.
     pub odd_y: Vec<f64>,
-    /// Splat XYZ sums per pixel (empty when nothing splatted).
-    pub splat: Vec<[f64; 3]>,
+    /// Splat XYZ sums on the grid per pixel (empty when nothing splatted).
+    pub splat: Vec<[i128; 3]>,
     /// Y of the odd-numbered samples' splats (empty with `splat`).
     pub odd_splat_y: Vec<f64>,
     /// Light paths traced over the whole image.
     pub light_paths: u64,
+    /// Terms clamped and sums saturated.
+    pub clamped: u64,
 }
 
 impl FilmState {
     pub fn encode(&self, w: &mut ByteWriter) {
         w.u64(self.width as u64);
         w.u64(self.height as u64);
+        w.u64(i64::from(self.grid_exponent) as u64);
         w.u64(self.light_paths);
-        w.triples(&self.closed);
-        w.triples(&self.open);
+        w.u64(self.clamped);
+        w.fixed_triples(&self.sums);
         w.u64s(&self.samples);
         w.f64s(&self.odd_y);
-        w.triples(&self.splat);
+        w.fixed_triples(&self.splat);
         w.f64s(&self.odd_splat_y);
     }
 
     pub fn decode(r: &mut ByteReader) -> Reason<FilmState> {
         let width = r.u64()? as usize;
         let height = r.u64()? as usize;
+        let grid_exponent = i32::try_from(r.u64()? as i64)
+            .map_err(|_| "the film's grid exponent is out of range")?;
         let light_paths = r.u64()?;
+        let clamped = r.u64()?;
         let state = FilmState {
             width,
             height,
+            grid_exponent,
             light_paths,
-            closed: r.triples()?,
-            open: r.triples()?,
+            clamped,
+            sums: r.fixed_triples()?,
             samples: r.u64s()?,
             odd_y: r.f64s()?,
-            splat: r.triples()?,
+            splat: r.fixed_triples()?,
             odd_splat_y: r.f64s()?,
         };
         state.check()?;
@@ -71,12 +79,7 @@ impl FilmState {
             .width
             .checked_mul(self.height)
             .ok_or("the film's size overflows")?;
-        let full = [
-            self.closed.len(),
-            self.open.len(),
-            self.samples.len(),
-            self.odd_y.len(),
-        ];
+        let full = [self.sums.len(), self.samples.len(), self.odd_y.len()];
         let splats = [self.splat.len(), self.odd_splat_y.len()];
         if full.iter().any(|&l| l != n) || !(splats == [0, 0] || splats == [n, n]) {
             return Err(format!(
@@ -96,13 +99,14 @@ mod tests {
         FilmState {
             width: 2,
             height: 1,
-            closed: vec![[1.0, 2.0, 3.0], [0.1, 0.2, 0.3]],
-            open: vec![[4.0; 3], [-0.0; 3]],
+            grid_exponent: -3,
+            sums: vec![[1, 2, i128::MIN], [-1, 0, i128::MAX]],
             samples: vec![5, 5],
             odd_y: vec![1.5, 0.25],
             splat: vec![],
             odd_splat_y: vec![],
             light_paths: 0,
+            clamped: 2,
         }
     }
 
@@ -118,7 +122,7 @@ mod tests {
         let cut = &w.bytes[..w.bytes.len() - 4];
         assert!(FilmState::decode(&mut ByteReader::new(cut)).is_err());
         let mut bad = s;
-        bad.splat = vec![[0.0; 3]];
+        bad.splat = vec![[0; 3]];
         let mut w = ByteWriter::default();
         bad.encode(&mut w);
         assert!(FilmState::decode(&mut ByteReader::new(&w.bytes)).is_err());

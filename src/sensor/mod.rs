@@ -6,6 +6,7 @@ pub mod camera;
 pub mod endpoint;
 pub mod film;
 pub mod film_state;
+pub mod grid_sum;
 pub mod meter;
 pub mod raw_bytes;
 

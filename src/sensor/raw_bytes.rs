@@ -35,6 +35,17 @@ impl ByteWriter {
         }
     }
 
+    /// A length-prefixed sequence of i128 triples (each as low then high u64).
+    pub fn fixed_triples(&mut self, v: &[[i128; 3]]) {
+        self.u64(v.len() as u64);
+        for t in v {
+            for &c in t {
+                self.u64(c as u64);
+                self.u64((c >> 64) as u64);
+            }
+        }
+    }
+
     /// A length-prefixed sequence of f64.
     pub fn f64s(&mut self, v: &[f64]) {
         self.u64(v.len() as u64);
@@ -105,6 +116,16 @@ impl<'a> ByteReader<'a> {
             .collect()
     }
 
+    pub fn fixed_triples(&mut self) -> Reason<Vec<[i128; 3]>> {
+        let n = self.len(48)?;
+        let mut one = || -> Reason<i128> {
+            let lo = self.u64()?;
+            let hi = self.u64()?;
+            Ok((i128::from(hi as i64) << 64) | i128::from(lo))
+        };
+        (0..n).map(|_| Ok([one()?, one()?, one()?])).collect()
+    }
+
     pub fn f64s(&mut self) -> Reason<Vec<f64>> {
         let n = self.len(8)?;
         (0..n).map(|_| self.f64()).collect()
@@ -129,6 +150,7 @@ mod tests {
         w.f64s(&[5e-324]);
         w.u64s(&[7, 8]);
         w.bytes(b"stage");
+        w.fixed_triples(&[[i128::MIN, -1, i128::MAX]]);
         let mut r = ByteReader::new(&w.bytes);
         assert_eq!(r.u64(), Ok(u64::MAX));
         assert_eq!(r.f64().unwrap().to_bits(), (-0.0f64).to_bits());
@@ -139,6 +161,7 @@ mod tests {
         assert_eq!(r.f64s().unwrap()[0].to_bits(), 1);
         assert_eq!(r.u64s(), Ok(vec![7, 8]));
         assert_eq!(r.bytes(), Ok(&b"stage"[..]));
+        assert_eq!(r.fixed_triples(), Ok(vec![[i128::MIN, -1, i128::MAX]]));
         assert_eq!(r.remaining(), 0);
         assert!(r.u64().is_err());
     }

@@ -27,7 +27,7 @@ use super::RenderOptions;
 /// The first bytes of a checkpoint file.
 pub const MAGIC: &[u8] = b"spectral-render checkpoint\n";
 /// The version of the layout.
-const FORMAT: u64 = 2;
+const FORMAT: u64 = 3;
 
 /// An image session's state under its run's identity.
 #[derive(Clone, Debug, PartialEq)]
@@ -220,13 +220,14 @@ mod tests {
             film: FilmState {
                 width: 1,
                 height: 1,
-                closed: vec![[0.0; 3]],
-                open: vec![[1.0, 2.0, 1.0 / 3.0]],
+                grid_exponent: 50,
+                sums: vec![[1, 2, -3]],
                 samples: vec![4],
                 odd_y: vec![1.0],
-                splat: vec![[0.5; 3]],
+                splat: vec![[5; 3]],
                 odd_splat_y: vec![0.25],
                 light_paths: 4,
+                clamped: 0,
             },
             strategies: Some(StrategySums {
                 weighted: vec![vec![[1.0; 3]]],

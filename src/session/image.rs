@@ -12,13 +12,16 @@
 //! [`ImageSession::resume`] continues one (`session::checkpoint`); since an image depends on
 //! the seed and the sample count only, a resumed render equals the uninterrupted one.
 //!
-//! **Chunks.** Light tracing and BDPT splat: each tile returns its splat list, merged in tile
-//! order, so images stay bit-identical for any thread count. Splat lists are bounded by
-//! working in chunks of [`SPLAT_CHUNK_SAMPLES`] samples over the image, aligned at multiples
-//! of the chunk size from sample 0; under `--spp` their passes are whole chunks, so the
-//! splats of a chunk are merged in the same order however the passes fall. The path tracer
-//! has one chunk for the whole render. Per-thread buffers (`Workspace`) live as long as a
-//! rayon job and are reused by every sample of it.
+//! **Sums.** Every sample's own-pixel value and every splat is rounded once to the film's
+//! grid and summed as integers (`sensor::grid_sum`), so the image does not depend on the
+//! order of the additions: not on threads, passes, chunks, nor on a render split into parts
+//! ([`ImageSession::start_part`], `session::part`) and merged.
+//!
+//! **Chunks.** Light tracing and BDPT splat: each tile returns its splat list. Splat lists are
+//! bounded by working in chunks of [`SPLAT_CHUNK_SAMPLES`] samples over the image, aligned at
+//! multiples of the chunk size from sample 0; under `--spp` their passes are whole chunks.
+//! The path tracer has one chunk for the whole render. Per-thread buffers (`Workspace`) live
+//! as long as a rayon job and are reused by every sample of it.
 //!
 //! **Iterations.** An estimator whose samples share per-iteration work (VCM: the light
 //! vertices of the iteration and their hash grid) names its iteration size; segments then
@@ -36,6 +39,7 @@ use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::sensor::film::{Film, Tile};
+use crate::sensor::grid_sum::{Fixed3, Grid};
 use crate::spectral::{color, SampledWavelengths};
 use crate::texture::TextureFilter;
 use rayon::prelude::*;
@@ -129,6 +133,8 @@ pub struct RenderOutput {
     pub auto: Option<AutoReport>,
     /// What the depth cap cut of the image's mean luminance, when a path reached it.
     pub depth_cut: Option<DepthCut>,
+    /// Contributions clamped to the film's range (`sensor::grid_sum`; should be 0).
+    pub clamped: u64,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -156,6 +162,8 @@ pub struct ImageSession<'a> {
     /// The samples' luminance within and past the cap, merged in tile order.
     cut: BatchedRatio,
     target: u64,
+    /// The first sample of every pixel this session renders (0, or a part's start).
+    first: u64,
     done: u64,
     dropped: u64,
     passes: u32,
@@ -190,7 +198,7 @@ impl<'a> ImageSession<'a> {
         )?;
         let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
-        let film = Film::new(w, h);
+        let film = Film::new(w, h, Grid::for_scale(scene.camera.exposure_scale as f64));
         let settings = Settings {
             max_depth: cap,
             filter: texture_filter(opts),
@@ -218,6 +226,7 @@ impl<'a> ImageSession<'a> {
                 (None, Some(_)) => MAX_SPP,
                 (None, None) => u64::from(DEFAULT_SPP),
             },
+            first: 0,
             done: 0,
             dropped: 0,
             passes: 0,
@@ -266,6 +275,44 @@ impl<'a> ImageSession<'a> {
     /// Samples per pixel so far.
     pub fn samples(&self) -> u64 {
         self.done
+    }
+
+    /// Makes the session render samples [first, end) of every pixel (a part of the render,
+    /// `session::part`) instead of [0, its target), before its first pass; the samples are
+    /// the whole render's, with the same random numbers (the sampler is keyed by the sample
+    /// index). A time budget has no fixed sample range and is refused.
+    pub fn start_part(&mut self, first: u64, end: u64) -> Reason<()> {
+        if self.done > 0 || self.first > 0 {
+            return Err("a session starts a part only before its first pass".into());
+        }
+        if self.opts.time_budget.is_some() && self.opts.spp.is_none() {
+            return Err("a part needs a sample count, not a time budget".into());
+        }
+        if first > end || end > self.target {
+            return Err(format!(
+                "samples {first}..{end} are not within the render's {}",
+                self.target
+            ));
+        }
+        self.first = first;
+        self.done = first;
+        self.target = end;
+        Ok(())
+    }
+
+    /// The film's raw state (a part's result, `session::part`).
+    pub fn film_state(&self) -> crate::sensor::film_state::FilmState {
+        self.film.state()
+    }
+
+    /// Samples dropped for a non-finite value so far.
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+
+    /// What the depth cap cut so far, as sums that merge (`integrator::cut`).
+    pub fn depth_cut_sums(&self) -> BatchedRatio {
+        self.cut
     }
 
     /// The integrator the session runs (the one `auto` chose, if it was asked for).
@@ -329,7 +376,7 @@ impl<'a> ImageSession<'a> {
             height: self.film.height,
             xyz,
             rgb,
-            spp: self.done,
+            spp: self.done - self.first,
             wall_time_s: self.elapsed(),
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
@@ -341,6 +388,7 @@ impl<'a> ImageSession<'a> {
                 self.cut.capped,
                 self.cut.limited,
             ),
+            clamped: self.film.clamped(),
         }
     }
 
@@ -358,7 +406,7 @@ impl<'a> ImageSession<'a> {
     fn pass_size(&self) -> u64 {
         let remaining = self.target - self.done;
         let elapsed = self.elapsed();
-        let per_sample = elapsed / self.done.max(1) as f64;
+        let per_sample = elapsed / (self.done - self.first).max(1) as f64;
         let n = match self.opts.time_budget {
             Some(budget) => {
                 let mut n = self.done.clamp(1, 64);
@@ -394,17 +442,20 @@ impl<'a> ImageSession<'a> {
             width: self.film.width as u64,
             strategy_count: self.strategy_count,
             hero_only: self.opts.wavelengths == 1,
+            grid: self.film.grid(),
         };
-        let (film, estimator) = (&self.film, &*self.estimator);
+        let estimator = &*self.estimator;
         let max_depth = self.cap;
-        let results: Vec<TileAccumulator> = self.pool.install(|| {
+        let results: Vec<TileSums> = self.pool.install(|| {
             self.tiles
                 .par_iter()
                 .map_init(
                     || Workspace::new(max_depth, task.strategy_count),
                     |ws, tile| {
-                        let acc =
-                            TileAccumulator::continuing(film.open_sums(tile), task.strategy_count);
+                        let acc = TileAccumulator::continuing(
+                            vec![[0.0; 3]; tile.pixel_count()],
+                            task.strategy_count,
+                        );
                         if task.hero_only {
                             render_tile::<true>(estimator, tile, &task, acc, ws)
                         } else {
@@ -414,8 +465,8 @@ impl<'a> ImageSession<'a> {
                 )
                 .collect()
         });
-        for (tile, r) in self.tiles.iter().zip(results) {
-            self.film.store_tile(tile, &r.sums, &r.odd_y, count);
+        for (tile, (r, fixed, clamped)) in self.tiles.iter().zip(results) {
+            self.film.store_tile(tile, &fixed, &r.odd_y, count, clamped);
             self.film.add_splats(&r.splats, &r.odd_splats);
             self.cut.merge(&r.cut);
             if let (Some(sf), Some(st)) = (&mut self.strategy_films, &r.strategies) {
@@ -431,9 +482,6 @@ impl<'a> ImageSession<'a> {
             sf.add_samples(count);
         }
         self.done += count;
-        if self.done.is_multiple_of(self.chunk) {
-            self.film.close_chunk();
-        }
     }
 }
 
@@ -523,7 +571,13 @@ struct Segment {
     strategy_count: usize,
     /// Terminate the secondary wavelengths (`RenderOptions::wavelengths` = 1).
     hero_only: bool,
+    /// The film's grid (`sensor::grid_sum`).
+    grid: Grid,
 }
+
+/// A tile's accumulator (its own-pixel sums emptied), its own-pixel sums on the grid and the
+/// terms it clamped.
+type TileSums = (TileAccumulator, Vec<Fixed3>, u64);
 
 /// Renders a tile's samples into `acc`: per-pixel XYZ sums, splats and the number of
 /// non-finite samples dropped. `HERO_ONLY`: every sample carries its hero wavelength alone
@@ -534,7 +588,9 @@ fn render_tile<const HERO_ONLY: bool>(
     task: &Segment,
     mut acc: TileAccumulator,
     ws: &mut Workspace,
-) -> TileAccumulator {
+) -> TileSums {
+    let mut fixed = vec![[0; 3]; tile.pixel_count()];
+    let mut clamped = 0;
     let mut k = 0;
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
@@ -555,9 +611,13 @@ fn render_tile<const HERO_ONLY: bool>(
                     lambda.terminate_secondary();
                 }
                 acc.add(k, &ws.record, &lambda, s);
+                // The sample's own value (0 when it was dropped), rounded to the grid.
+                let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
+                let (t, c) = task.grid.triple(own);
+                clamped += c + u64::from(Grid::add3(&mut fixed[k], &t));
             }
             k += 1;
         }
     }
-    acc
+    (acc, fixed, clamped)
 }

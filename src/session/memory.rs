@@ -6,10 +6,11 @@
 //! The estimate adds what the session allocates on top of what the process already holds (the
 //! scene: meshes, BVH, textures; read as the resident set, `VmRSS` of `/proc/self/status`):
 //!
-//! - the film: f64 XYZ sums of the closed and the open chunk, the sample count and the odd
-//!   samples' Y per pixel (64 B), and for splatting integrators the splat sums and the odd
-//!   splats' Y (32 B more);
-//! - a pass: the tiles' continued sums (32 B per pixel) and the per-pixel variance (8 B), and
+//! - the film: i128 XYZ sums on the grid (`sensor::grid_sum`), the sample count and the odd
+//!   samples' Y per pixel (64 B), and for splatting integrators the splat sums on the grid
+//!   and the odd splats' Y (56 B more);
+//! - a pass: the tiles' f64 and grid sums and odd Y (80 B per pixel) and the per-pixel
+//!   variance (8 B), and
 //!   for splatting integrators the splat lists of one chunk, up to max-depth + 1 splats of
 //!   24 B (with their odd-sample copy) per sample, `max(splat_chunk_samples(cap), pixels)`
 //!   samples (2¹⁸ at caps up to 7, fewer for deeper ones);
@@ -48,8 +49,8 @@ pub const TYPICAL_DEPTH: u32 = 16;
 
 /// Bytes per pixel of the film, a pass and the output (see the module docs).
 const FILM: u64 = 64;
-const FILM_SPLATS: u64 = 32;
-const PASS: u64 = 40;
+const FILM_SPLATS: u64 = 56;
+const PASS: u64 = 88;
 const OUTPUT: u64 = 72;
 const STRATEGY: u64 = 96;
 /// Bytes of one splat and its odd-sample copy.

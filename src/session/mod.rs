@@ -16,6 +16,7 @@ pub mod depth_cut;
 pub mod image;
 pub mod memory;
 pub mod meter;
+pub mod part;
 mod pool;
 
 pub use auto::{AutoReport, PilotFigures};

@@ -73,7 +73,11 @@ fn nesting_within_the_limit_loads_quickly() {
     let start = std::time::Instant::now();
     let desc = load_body(&nested(250));
     assert_eq!(desc.lights.len(), 1);
-    assert!(start.elapsed().as_secs_f64() < 120.0, "{:?}", start.elapsed());
+    assert!(
+        start.elapsed().as_secs_f64() < 120.0,
+        "{:?}",
+        start.elapsed()
+    );
 }
 
 #[test]

@@ -1,0 +1,153 @@
+//! `spectral-render merge PART… -o out.exr`: the parts of a render (`--part K/N`) merged
+//! into the render's calibrated EXR, bit for bit the single render's (`session::part`). The
+//! parts must be of one render (same stage content and options), each complete, none missing
+//! and none twice; otherwise one line names the part at fault. The stage is read again (from
+//! the path the parts recorded, or `--stage`) for the EXR's camera metadata, and must still
+//! have the content the parts were rendered from.
+
+use super::common::{clap_message, print_summary, warn_clamped, warn_depth_cut, warn_dropped};
+use super::parts;
+use super::render::write_image;
+use crate::error::{Error, Result};
+use crate::output::target::{self, Format, Target};
+use crate::scene::{self, Machinery};
+use crate::session::image::xyz_to_rgb;
+use crate::session::part::{self, STAGE_FILE_KEY};
+use crate::session::{DepthCut, RenderOutput};
+use clap::{CommandFactory, FromArgMatches, Parser};
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+
+/// Merge the parts of a render (`--part K/N`) into its calibrated EXR, bit for bit the
+/// single render's.
+#[derive(Parser, Debug)]
+#[command(name = "spectral-render merge")]
+struct MergeArgs {
+    /// The parts: their EXRs (the .part file beside each is read) or the .part files.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// The merged EXR.
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+    /// The stage, when it is no longer at the path the parts recorded (its content must be
+    /// the same).
+    #[arg(long)]
+    stage: Option<PathBuf>,
+    /// Also write an 8-bit sRGB PNG preview.
+    #[arg(long)]
+    preview: Option<PathBuf>,
+    /// Exposure of the preview in stops (the EXR stays absolute).
+    #[arg(
+        long = "preview-exposure",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    preview_exposure: f32,
+}
+
+pub fn main(argv: Vec<OsString>) -> Result<()> {
+    let parsed = MergeArgs::command()
+        .try_get_matches_from(argv)
+        .and_then(|m| MergeArgs::from_arg_matches(&m));
+    match parsed {
+        Ok(args) => run(&args),
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => Err(Error::option(clap_message(&e))),
+    }
+}
+
+fn run(args: &MergeArgs) -> Result<()> {
+    let mut targets = vec![Target::new("-o", &args.output, Format::Exr)];
+    if let Some(p) = &args.preview {
+        targets.push(Target::new("--preview", p, Format::Png));
+    }
+    target::check(&targets)?;
+    let states = args
+        .parts
+        .iter()
+        .map(|p| parts::read(p))
+        .collect::<Result<Vec<_>>>()?;
+    let merged = part::merge(&states).map_err(|(i, e)| match i {
+        Some(i) => Error::io(&args.parts[i], e),
+        None => Error::option(format!("merge: {e}")),
+    })?;
+    let id = &merged.identity;
+    let recorded = part::value(&states[0].identity, STAGE_FILE_KEY).map(PathBuf::from);
+    let stage = args
+        .stage
+        .clone()
+        .or(recorded)
+        .ok_or_else(|| Error::io(&args.parts[0], "the part names no stage"))?;
+    let resolution = part::value(id, "resolution")
+        .and_then(|r| super::render::parse_resolution(r).ok())
+        .ok_or_else(|| Error::io(&args.parts[0], "the part's resolution cannot be read"))?;
+    let scene = scene::load_with(&stage, Some(resolution), Machinery::default())?;
+    print_summary(&scene);
+    check_content(&stage, &scene, id)?;
+    let integrator = part::integrator(id)
+        .ok_or_else(|| Error::io(&args.parts[0], "the part's integrator cannot be read"))?;
+    let out = output(&scene, &merged)?;
+    warn_dropped(out.dropped_samples);
+    warn_clamped(out.clamped);
+    warn_depth_cut(out.depth_cut.as_ref(), "the image's mean luminance");
+    let made = parts::made(&stage, &scene, &integrator, id, &out)?;
+    let preview = args.preview.as_deref().map(|p| (p, args.preview_exposure));
+    write_image(&made, integrator.name().into(), &args.output, preview, &out)?;
+    eprintln!(
+        "merged {} parts into {} ({}x{}, {} spp, {:.2} s of rendering)",
+        states.len(),
+        args.output.display(),
+        out.width,
+        out.height,
+        out.spp,
+        out.wall_time_s
+    );
+    Ok(())
+}
+
+/// The stage must still be what the parts rendered.
+fn check_content(stage: &Path, scene: &scene::Scene, id: &[(String, String)]) -> Result<()> {
+    let now = format!("{:016x}", scene.content_hash);
+    match part::value(id, "stage content") {
+        Some(h) if h == now => Ok(()),
+        h => Err(Error::io(
+            stage,
+            format!(
+                "the stage's content ({now}) is not the parts' ({})",
+                h.unwrap_or("unknown")
+            ),
+        )),
+    }
+}
+
+/// The merged film as the render's output.
+fn output(scene: &scene::Scene, m: &part::Merged) -> Result<RenderOutput> {
+    let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+    if (m.film.width, m.film.height) != (w, h) {
+        return Err(Error::option(format!(
+            "merge: the parts' film is {}×{}, the stage's camera {w}×{h}",
+            m.film.width, m.film.height
+        )));
+    }
+    let xyz = m.film.xyz(scene.camera.exposure_scale as f64);
+    let rgb = xyz.iter().map(|p| xyz_to_rgb(*p)).collect();
+    let max_depth = match part::value(&m.identity, "max depth") {
+        Some("unlimited") | None => None,
+        Some(d) => d.parse().ok(),
+    };
+    let cut = &m.depth_cut;
+    Ok(RenderOutput {
+        width: w,
+        height: h,
+        xyz,
+        rgb,
+        spp: m.samples,
+        wall_time_s: m.wall_time_s,
+        dropped_samples: m.dropped,
+        strategies: None,
+        report: None,
+        auto: None,
+        depth_cut: DepthCut::new(max_depth, &cut.sums(), cut.capped, cut.limited),
+        clamped: m.film.clamped(),
+    })
+}

@@ -1,0 +1,156 @@
+//! `--part K/N` of the render command: render part K of N of every pixel's samples
+//! (`session::part`) and write, beside the part's EXR (an image of its own samples), a
+//! `.part` file holding its film's raw state under the render's identity, for
+//! `spectral-render merge` (`cli/merge.rs`).
+//!
+//! The raw state is a sidecar rather than EXR channels or attributes: it is i128 sums on the
+//! film's grid, counts and the depth cap's sums (about 120 B per pixel, more than the EXR's
+//! own channels), and the checkpoint format already carries it with the run's identity, a
+//! hash that catches damage and bounds-checked reading; the EXR stays an ordinary image.
+
+use super::common::Made;
+use crate::error::{Error, Result};
+use crate::integrator::Integrator;
+use crate::output::atomic::write_atomically;
+use crate::output::target::{Format, Target};
+use crate::scene::Scene;
+use crate::session::checkpoint::Checkpoint;
+use crate::session::part::{self, Part};
+use crate::session::{ImageSession, RenderOptions, RenderOutput, DEFAULT_SPP};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The extension of a part's raw state beside its EXR.
+pub const SIDECAR_EXTENSION: &str = "part";
+
+/// The render command's part flag.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PartArgs {
+    /// Render only part K of N (samples [K·spp/N, (K+1)·spp/N) of every pixel) and write its
+    /// raw film state beside the EXR (OUTPUT.part) for `spectral-render merge`.
+    #[arg(long, value_name = "K/N", value_parser = Part::parse)]
+    pub part: Option<Part>,
+}
+
+/// The `.part` file beside `output`.
+pub fn sidecar(output: &Path) -> PathBuf {
+    output.with_extension(SIDECAR_EXTENSION)
+}
+
+impl PartArgs {
+    /// Refuses what a part cannot be: a time budget (no fixed samples), auto (every part
+    /// would run its own pilot), strategy images and checkpoints (not carried by parts).
+    pub fn check(&self, opts: &RenderOptions, strategies: bool, checkpoints: bool) -> Result<()> {
+        if self.part.is_none() {
+            return Ok(());
+        }
+        let refuse = |why: &str| Err(Error::option(format!("--part {why}")));
+        if opts.spp.is_none() && opts.time_budget.is_some() {
+            return refuse("needs --spp: a time budget gives no fixed sample range");
+        }
+        if let Integrator::Auto { .. } = opts.integrator {
+            return refuse(&format!(
+                "needs a named --integrator ({}): auto would run its pilot in every part",
+                Integrator::names_with(|_| true)
+            ));
+        }
+        if strategies {
+            return refuse("does not take --strategies");
+        }
+        if checkpoints {
+            return refuse("does not take --checkpoint or --resume");
+        }
+        Ok(())
+    }
+
+    /// The sidecar as an output target, checked with the others before the work.
+    pub fn target(&self, output: &Path) -> Option<Target> {
+        self.part
+            .map(|_| Target::new("--part", sidecar(output), Format::Any))
+    }
+
+    /// Restricts `session` to the part's samples.
+    pub fn start(&self, session: &mut ImageSession, opts: &RenderOptions) -> Result<()> {
+        if let Some(p) = self.part {
+            let (first, end) = p.samples(u64::from(opts.spp.unwrap_or(DEFAULT_SPP)));
+            session.start_part(first, end).map_err(Error::option)?;
+            eprintln!("part {}: samples {first}..{end} of every pixel", p.label());
+        }
+        Ok(())
+    }
+
+    /// Writes the part's raw state beside `output` (atomically).
+    pub fn save(
+        &self,
+        made: &Made,
+        opts: &RenderOptions,
+        session: &ImageSession,
+        output: &Path,
+        out: &RenderOutput,
+    ) -> Result<()> {
+        let Some(p) = self.part else {
+            return Ok(());
+        };
+        let stage = made.stage.display().to_string();
+        let state = Checkpoint {
+            identity: part::identity(made.scene, opts, &stage, p),
+            samples: out.spp,
+            dropped: out.dropped_samples,
+            wall_time_s: out.wall_time_s,
+            film: session.film_state(),
+            strategies: None,
+            depth_cut: session.depth_cut_sums(),
+        };
+        let path = sidecar(output);
+        let bytes = state.encode();
+        write_atomically(&path, |f| f.write_all(&bytes))
+            .map_err(|e| Error::io(&path, format!("cannot write the part: {e}")))?;
+        eprintln!("wrote part {} to {}", p.label(), path.display());
+        Ok(())
+    }
+}
+
+/// Reads a part: `path` is a `.part` file or the EXR beside which it lies.
+pub fn read(path: &Path) -> Result<Checkpoint> {
+    let file = if path.extension().is_some_and(|e| e == SIDECAR_EXTENSION) {
+        path.to_path_buf()
+    } else {
+        sidecar(path)
+    };
+    let fail = |reason: String| Error::io(path, reason);
+    let meta = std::fs::metadata(&file)
+        .map_err(|e| fail(format!("cannot read its part {}: {e}", file.display())))?;
+    if !meta.is_file() {
+        return Err(fail(format!("{} is not a regular file", file.display())));
+    }
+    let bytes = std::fs::read(&file).map_err(|e| fail(e.to_string()))?;
+    Checkpoint::decode(&bytes).map_err(|e| fail(e.replace("checkpoint", "part file")))
+}
+
+/// The scene a part was rendered from, for its merge's metadata.
+pub fn made<'a>(
+    stage: &'a Path,
+    scene: &'a Scene,
+    integrator: &'a Integrator,
+    identity: &[(String, String)],
+    out: &RenderOutput,
+) -> Result<Made<'a>> {
+    let bad = |key: &str| Error::option(format!("merge: the parts' {key} cannot be read"));
+    let seed = part::value(identity, "seed")
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| bad("seed"))?;
+    let max_depth = match part::value(identity, "max depth") {
+        Some("unlimited") => None,
+        Some(d) => Some(d.parse().map_err(|_| bad("max depth"))?),
+        None => return Err(bad("max depth")),
+    };
+    Ok(Made {
+        stage,
+        scene,
+        integrator,
+        seed,
+        max_depth,
+        spp: out.spp,
+        wall_time_s: out.wall_time_s,
+    })
+}
