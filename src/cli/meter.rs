@@ -20,6 +20,7 @@ use super::common::{
     at_least, clap_message, max_memory, print_report, print_summary, warn_dropped, warn_limits,
     IntegratorArgs,
 };
+use super::frames::FrameArgs;
 use super::interrupt;
 use crate::error::{Error, Result};
 use crate::output::json;
@@ -89,6 +90,8 @@ struct MeterArgs {
     json: bool,
     #[command(flatten)]
     integrator: IntegratorArgs,
+    #[command(flatten)]
+    when: FrameArgs,
 }
 
 /// Where meters are and what they measure (`meter` and `converge` take them alike).
@@ -155,7 +158,7 @@ fn run(args: &MeterArgs) -> Result<()> {
         ])?;
     }
     interrupt::install()?;
-    let scene = scene::load(&args.scene, Some((1, 1)))?;
+    let scene = scene::load_at(&args.scene, Some((1, 1)), args.when.read_time())?;
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before measuring; nothing written");

@@ -8,6 +8,7 @@
 mod checkpoints;
 mod common;
 mod converge;
+mod frames;
 mod interrupt;
 mod lights;
 mod meter;

@@ -5,6 +5,7 @@ use super::common::{
     at_least, clap_message, max_memory, print_report, print_summary, warn_dropped, warn_limits,
     IntegratorArgs, Made,
 };
+use super::frames::{frame_path, parse_frames, FrameArgs, FrameRange};
 use super::interrupt;
 use super::progress::Progress;
 use crate::error::{Error, Result};
@@ -83,6 +84,13 @@ struct RenderArgs {
     /// default: the memory available).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = max_memory, allow_hyphen_values = true)]
     max_memory: Option<u64>,
+    #[command(flatten)]
+    when: FrameArgs,
+    /// Render the time codes A, A + STEP, ... up to B into a sequence: -o (default
+    /// STAGE.####.exr) and --preview name each frame with a placeholder, #### or %04d.
+    #[arg(long, value_name = "A..B[:STEP]", value_parser = parse_frames, allow_hyphen_values = true,
+          conflicts_with_all = ["frame", "checkpoint", "resume", "strategies"])]
+    frames: Option<FrameRange>,
 }
 
 pub(super) fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -124,21 +132,88 @@ pub fn command() -> clap::Command {
 
 fn run(args: &RenderArgs) -> Result<()> {
     let opts = options(args)?;
+    if let Some(frames) = &args.frames {
+        return run_sequence(args, &opts, frames);
+    }
     let path = args
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    target::check(&targets(args, &path))?;
+    target::check(&targets(args, &path, args.preview.as_deref()))?;
     let resume = args.resume.as_deref().map(checkpoints::read).transpose()?;
     interrupt::install()?;
-    let scene = scene::load(&args.scene, args.resolution)?;
+    let scene = scene::load_at(&args.scene, args.resolution, args.when.read_time())?;
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before rendering; nothing written");
         return Ok(());
     }
-    warn_limits(&opts.integrator, &scene, true);
-    let mut session = ImageSession::new(&scene, &opts)?;
+    let output = Output {
+        exr: &path,
+        preview: args.preview.as_deref(),
+    };
+    render_frame(args, &opts, &scene, output, resume).map(|_| ())
+}
+
+/// `--frames`: every frame's outputs are checked first, the stage is opened once and read at
+/// each time code in turn; an interrupt ends the sequence after writing the frame under way.
+fn run_sequence(args: &RenderArgs, opts: &RenderOptions, frames: &FrameRange) -> Result<()> {
+    let pattern = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(&args.scene).with_extension("####.exr"));
+    let mut outputs = Vec::new();
+    let mut all_targets = Vec::new();
+    for t in frames.times() {
+        let exr = frame_path(&pattern, t)?;
+        let preview = args
+            .preview
+            .as_deref()
+            .map(|p| frame_path(p, t))
+            .transpose()?;
+        all_targets.extend(targets(args, &exr, preview.as_deref()));
+        outputs.push((t, exr, preview));
+    }
+    target::check(&all_targets)?;
+    interrupt::install()?;
+    let stage = scene::open(&args.scene)?;
+    for (t, exr, preview) in &outputs {
+        let scene = scene::build(&stage.read(args.when.at(Some(*t)))?, args.resolution)?;
+        eprintln!("frame {t}");
+        print_summary(&scene);
+        if let Some(signal) = interrupt::received() {
+            eprintln!("interrupted by {signal} before frame {t}; the sequence stops");
+            return Ok(());
+        }
+        let output = Output {
+            exr,
+            preview: preview.as_deref(),
+        };
+        if render_frame(args, opts, &scene, output, None)?.is_some() {
+            eprintln!("the sequence stops after frame {t}");
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// Where one frame is written.
+#[derive(Clone, Copy)]
+struct Output<'a> {
+    exr: &'a Path,
+    preview: Option<&'a Path>,
+}
+
+/// Renders `scene` and writes its outputs; the signal that interrupted it, if any.
+fn render_frame(
+    args: &RenderArgs,
+    opts: &RenderOptions,
+    scene: &scene::Scene,
+    output: Output,
+    resume: Option<crate::session::checkpoint::Checkpoint>,
+) -> Result<Option<&'static str>> {
+    warn_limits(&opts.integrator, scene, true);
+    let mut session = ImageSession::new(scene, opts)?;
     if let (Some(c), Some(file)) = (resume, &args.resume) {
         let done = c.samples;
         session
@@ -165,14 +240,14 @@ fn run(args: &RenderArgs) -> Result<()> {
         eprintln!("interrupted by {signal} after {} spp", out.spp);
         if out.spp == 0 {
             eprintln!("nothing rendered; nothing written");
-            return Ok(());
+            return Ok(interrupted);
         }
     }
-    write_outputs(args, &opts, &scene, &path, &out)?;
+    write_outputs(args, opts, scene, output, &out)?;
     if interrupted.is_none() {
         saves.finished();
     }
-    Ok(())
+    Ok(interrupted)
 }
 
 /// Runs passes until the session is finished or a signal arrives (its name), saving
@@ -193,9 +268,9 @@ fn render_passes(
 }
 
 /// Every file and directory the render will write, in the order given.
-fn targets(args: &RenderArgs, output: &Path) -> Vec<Target> {
+fn targets(args: &RenderArgs, output: &Path, preview: Option<&Path>) -> Vec<Target> {
     let mut t = vec![Target::new("-o", output, Format::Exr)];
-    if let Some(p) = &args.preview {
+    if let Some(p) = preview {
         t.push(Target::new("--preview", p, Format::Png));
     }
     if let Some(p) = &args.checkpoint {
@@ -212,9 +287,10 @@ fn write_outputs(
     args: &RenderArgs,
     opts: &RenderOptions,
     scene: &scene::Scene,
-    path: &Path,
+    output: Output,
     out: &RenderOutput,
 ) -> Result<()> {
+    let path = output.exr;
     let meta = Made {
         stage: &args.scene,
         scene,
@@ -229,7 +305,7 @@ fn write_outputs(
     exr::write(
         path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
     )?;
-    if let Some(preview) = &args.preview {
+    if let Some(preview) = output.preview {
         png::write_preview(
             preview,
             out.width,

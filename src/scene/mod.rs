@@ -26,8 +26,19 @@ pub use render_scene::{Hit, Scene, SurfaceHit};
 use crate::error::Result;
 use std::path::Path;
 
+pub use usd::{OpenStage, ReadTime};
+
 /// Reads a stage and builds the render scene; `resolution` overrides RenderSettings.
 pub fn load(path: &Path, resolution: Option<(u32, u32)>) -> Result<Scene> {
-    let desc = usd::load(path)?;
-    build(&desc, resolution)
+    load_at(path, resolution, ReadTime::default())
+}
+
+/// [`load`] at a time code: every attribute is evaluated at `time`.
+pub fn load_at(path: &Path, resolution: Option<(u32, u32)>, time: ReadTime) -> Result<Scene> {
+    build(&usd::open(path)?.read(time)?, resolution)
+}
+
+/// Opens a stage once to read it at several times ([`OpenStage::read`], then [`build`]).
+pub fn open(path: &Path) -> Result<OpenStage> {
+    usd::open(path)
 }
