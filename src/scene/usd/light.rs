@@ -281,7 +281,7 @@ fn type_inputs(type_name: &str) -> &'static [&'static str] {
         "SphereLight" => &["radius"],
         "CylinderLight" => &["radius", "length"],
         "DistantLight" => &["angle"],
-        "DomeLight" | "DomeLight_1" => &["texture:file", "texture:format"],
+        "DomeLight" | "DomeLight_1" => &["texture:file", "texture:format", "guideRadius"],
         _ => &[],
     }
 }
