@@ -17,11 +17,12 @@
 //!    the render loop sizes its passes to end near the budget).
 //! 3. For each: RMSE of luminance (XYZ.Y, cd/m²) against the reference, relative RMSE, the
 //!    time actually spent, and the ratio of its MSE and of its MSE × time (the inverse
-//!    efficiency, fair even if the times differ a little) to the first integrator's. The
-//!    process's CPU time of each render (user + system, from `/proc/self/stat`) is printed
-//!    too, with the ratio of MSE × CPU time: on a machine shared with other work, the wall
-//!    budget buys an integrator fewer samples when the load rises, and its CPU time says how
-//!    much computing it actually got.
+//!    efficiency, fair even if the times differ a little) to the first integrator's and to
+//!    the best one's. The process's CPU time of each render (user + system, from
+//!    `/proc/self/stat`) is printed too, with the ratios of MSE × CPU time: on a machine
+//!    shared with other work, the wall budget buys an integrator fewer samples when the load
+//!    rises, and its CPU time says how much computing it actually got. `auto` runs its pilot
+//!    within its time.
 
 use spectral_render::output::exr;
 use spectral_render::session::{self, RenderOptions};
@@ -130,7 +131,7 @@ fn render_y(
         time_budget: Some(seconds),
         seed,
         threads: args.threads,
-        max_depth: args.max_depth,
+        max_depth: Some(args.max_depth),
         integrator,
         ..Default::default()
     };
@@ -237,6 +238,25 @@ fn main() {
         );
         rows.push((name, mse, t, cpu));
     }
+    let over_best = |cost: &dyn Fn(f64, f64, f64) -> f64| {
+        let best = rows
+            .iter()
+            .map(|&(_, m, t, c)| cost(m, t, c))
+            .fold(f64::INFINITY, f64::min);
+        let each: Vec<String> = rows
+            .iter()
+            .map(|&(n, m, t, c)| format!("{n} {:.2}", cost(m, t, c) / best))
+            .collect();
+        each.join(", ")
+    };
+    println!(
+        "MSE × time over the best's: {}",
+        over_best(&|m, t, _| m * t)
+    );
+    println!(
+        "MSE × CPU time over the best's: {}",
+        over_best(&|m, _, c| m * c)
+    );
     let (first, mse0, t0, cpu0) = rows[0];
     for &(name, mse, t, cpu) in &rows[1..] {
         println!(

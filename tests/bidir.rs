@@ -325,7 +325,7 @@ fn render_with(
     let opts = RenderOptions {
         spp: Some(spp),
         seed,
-        max_depth,
+        max_depth: Some(max_depth),
         integrator,
         ..Default::default()
     };

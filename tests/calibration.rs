@@ -24,7 +24,7 @@ fn direct_view(
         "    float3 xformOp:rotateXYZ = (0, 180, 0)\n    uniform token[] xformOpOrder = [\"xformOp:rotateXYZ\"]\n    float inputs:exposure",
     );
     let path = write(&dir, "direct.usda", &text);
-    render_file(&path, (8, 8), 4096, 5, None)
+    render_file(&path, (8, 8), 4096, Some(5), None)
 }
 
 /// Each pixel's luminance is an average of 4096 × 4 wavelength samples of K_m L(λ)ȳ(λ)/p(λ)

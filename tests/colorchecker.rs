@@ -21,7 +21,7 @@ fn colorchecker_matches_colour_science_within_delta_e_1() {
         &root.join("scenes/colorchecker.usda"),
         (WIDTH as u32, HEIGHT as u32),
         64,
-        5,
+        Some(5),
         None,
     );
     let patches: Vec<String> = PATCHES

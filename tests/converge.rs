@@ -350,7 +350,7 @@ fn meters_reach_one_percent_and_their_ci95_covers_at_95_percent() {
             time_s: 1e9,
             max_samples: Some(1 << 17),
             seed: 1,
-            max_depth: 1000,
+            max_depth: None,
             ..RunOptions::default()
         };
         let rows = run_meters(&case.scene, &meters, &config, &opts, &reference).unwrap();

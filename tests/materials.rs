@@ -511,7 +511,7 @@ fn backdrop_stage(extra: &str, looks: &str) -> String {
 fn render_stage(name: &str, text: &str, res: u32, spp: u32) -> RenderOutput {
     let dir = temp_dir(name);
     let path = write(&dir, "stage.usda", text);
-    render_file(&path, (res, res), spp, 5, None)
+    render_file(&path, (res, res), spp, Some(5), None)
 }
 
 /// Per-pixel z-scores of two renders' luminance, from a 4×4-pixel block average and its
@@ -605,7 +605,7 @@ fn materials_scene_renders_without_nan() {
         std::path::Path::new("scenes/materials.usda"),
         (96, 40),
         8,
-        7,
+        Some(7),
         None,
     );
     assert_finite(&out);

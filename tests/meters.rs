@@ -40,7 +40,13 @@ const ALL: [Integrator; 3] = [
     },
 ];
 
-fn read(scene: &Scene, meters: &[Meter], stop: Stop, seed: u64, max_depth: u32) -> Vec<Reading> {
+fn read(
+    scene: &Scene,
+    meters: &[Meter],
+    stop: Stop,
+    seed: u64,
+    max_depth: Option<u32>,
+) -> Vec<Reading> {
     read_with(scene, meters, stop, seed, max_depth, Integrator::Path)
 }
 
@@ -49,7 +55,7 @@ fn read_with(
     meters: &[Meter],
     stop: Stop,
     seed: u64,
-    max_depth: u32,
+    max_depth: Option<u32>,
     integrator: Integrator,
 ) -> Vec<Reading> {
     let opts = MeterOptions {
@@ -116,11 +122,12 @@ fn floor_quad(x: [f64; 2], z: [f64; 2], look: &str) -> String {
 /// roulette over ~10 bounces), so it is held at 0.5 % ≥ 4.08 σ rather than 4.9 σ.
 const REL_SPHERE: f64 = 0.0024;
 
-/// Measures meters `which` of `case` with `kind` and checks them against the exact values.
+/// Measures meters `which` of `case` with `kind` at the default depth (unlimited) and checks
+/// them against the exact values; the safety cap must never act.
 fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Integrator) {
     let meters: Vec<Meter> = which.iter().map(|&i| case.meters[i]).collect();
     let stop = Stop::RelError(REL_SPHERE);
-    let readings = read_with(&case.scene, &meters, stop, 1, 1000, kind);
+    let readings = read_with(&case.scene, &meters, stop, 1, None, kind);
     for (&i, r) in which.iter().zip(&readings) {
         let exact = case.exact[i];
         let rel = r.value / exact - 1.0;
@@ -140,6 +147,7 @@ fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Int
             "facet {i}: too noisy"
         );
         assert!(rel.abs() < TOL, "facet {i}: {} vs exact {exact}", r.value);
+        assert_eq!(r.depth_cut, None, "facet {i}: the safety cap acted");
     }
 }
 
@@ -147,6 +155,87 @@ fn check_integrating_sphere(case: &IntegratingSphere, which: &[usize], kind: Int
 fn integrating_sphere_is_uniform_at_phi_over_a_one_minus_rho() {
     let case = integrating_sphere(0.9);
     check_integrating_sphere(&case, &[0, 1, 2], Integrator::Path);
+}
+
+/// The case of a silently biased default: at ρ = 0.9 a cap of 7 bounces cuts the
+/// light of every path with 8 or more, ρ'⁸/(1 − ρ') of Φ/A (ρ' = ρ(1 − f), the lamp's
+/// absorption f as in [`integrating_sphere`]), about 43 % of the reading (the 48 % is
+/// ρ⁷: Mitsuba's max_depth 7 is our 6). The reading then says so: the reported fraction
+/// matches that deficit within its ci95 — widened by the reference's own uniformity bound,
+/// 0.5 % of the reflected light, which the exact values already carry — and so does the
+/// deficit of the reading itself. The command line warns with the same figure.
+#[test]
+fn integrating_sphere_under_max_depth_7_reports_the_light_it_cut() {
+    let rho = 0.9;
+    let case = integrating_sphere(rho);
+    let meters = [case.meters[2]];
+    // The cut is estimated from the 1/8 of the capped paths that are continued: its interval
+    // is ~7× the reading's, hence the sample count.
+    let stop = Stop::Samples(1 << 18);
+    let r = read_with(&case.scene, &meters, stop, 1, Some(7), Integrator::Path)[0];
+    let cut = r
+        .depth_cut
+        .expect("a cap of 7 acts in an integrating sphere");
+    let exact = case.exact[2];
+    let flux_over_area = case.mean_e * (1.0 - rho * (1.0 - 0.02f64 * 0.02));
+    let rho_eff = rho * (1.0 - 0.02f64 * 0.02);
+    let cut_exact = flux_over_area * rho_eff.powi(8) / (1.0 - rho_eff) / exact;
+    let model = 0.005 * cut_exact;
+    let measured = 1.0 - r.value / exact;
+    let measured_ci = r.ci95 / exact;
+    eprintln!(
+        "max-depth 7: cut {:.4} ± {:.4} (exact {cut_exact:.4} ± {model:.4}); reading {:.4} low ± {measured_ci:.4}; {} paths capped",
+        cut.fraction, cut.ci95, measured, cut.capped
+    );
+    assert!(cut.user && cut.max_depth == 7 && !cut.lower_bound);
+    assert!(cut.ci95 < 0.01, "too noisy to judge: ±{}", cut.ci95);
+    assert!(
+        (cut.fraction - cut_exact).abs() <= cut.ci95 + model,
+        "reported {} ± {} vs exact {cut_exact}",
+        cut.fraction,
+        cut.ci95
+    );
+    assert!(
+        (measured - cut_exact).abs() <= measured_ci + model,
+        "the capped reading is {measured} low, exact {cut_exact}"
+    );
+    // The command line's warning and JSON.
+    let dir = common::temp_dir("sphere-cli");
+    common::write(&dir, "sphere.usda", &case.text);
+    let m = meters[0];
+    let (p, n) = (
+        format!("{},{},{}", m.p.x, m.p.y, m.p.z),
+        format!("{},{},{}", m.dir.x, m.dir.y, m.dir.z),
+    );
+    let args = [
+        "meter",
+        "sphere.usda",
+        "--at",
+        &p,
+        "--normal",
+        &n,
+        "--max-depth",
+        "7",
+        "--spp",
+        "8192",
+        "--json",
+    ];
+    let o = common::spectral_render(&args, &dir);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let err = common::stderr(&o);
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("warning: --max-depth 7 cut "))
+        .unwrap_or_else(|| panic!("no warning in {err}"));
+    let json: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    let c = &json["meters"][0]["depth_cut"];
+    let (f, h) = (c["fraction"].as_f64().unwrap(), c["ci95"].as_f64().unwrap());
+    eprintln!("{line}");
+    assert!(line.contains(&format!("{:.1} %", 100.0 * f)), "{line}");
+    assert!(
+        (f - cut_exact).abs() <= h + model,
+        "CLI: {f} ± {h} vs {cut_exact}"
+    );
 }
 
 /// The integrating sphere with light tracing and BDPT. Both cost O(path length) and
@@ -235,7 +324,7 @@ fn rect_light_matches_lamberts_polygon_formula_on_a_floor_and_a_wall() {
         .map(|&(q, n)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
     for kind in ALL {
-        let readings = read_with(&scene, &meters, Stop::RelError(REL), 2, 7, kind);
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 2, Some(7), kind);
         for (&(q, n), r) in points.iter().zip(&readings) {
             let exact = l * lambert(q, n, &corners);
             assert_exact(&format!("{}: rect at {q} n {n}", kind.name()), r, exact);
@@ -258,7 +347,7 @@ fn disk_light_on_axis() {
         .map(|&y| Meter::illuminance(Vec3::new(0.0, y as f32, 0.0), Vec3::Y).unwrap())
         .collect();
     for kind in ALL {
-        let readings = read_with(&scene, &meters, Stop::RelError(REL), 3, 7, kind);
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 3, Some(7), kind);
         for (&y, r) in ys.iter().zip(&readings) {
             let h: f64 = height - y;
             // E = π L R² / (h² + R²): the disk's form factor on its axis.
@@ -299,7 +388,7 @@ fn sphere_light_gives_pi_l_r_over_d_squared() {
         .map(|&(q, n)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
     for kind in ALL {
-        let readings = read_with(&scene, &meters, Stop::RelError(REL), 4, 7, kind);
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 4, Some(7), kind);
         for ((&(d, _, tilt), &(_, n)), r) in cases.iter().zip(&points).zip(&readings) {
             // E = π L sin²α cos θ with sin α = r/d (the cap is entirely above the horizon).
             let cos = f64::to_radians(tilt).cos();
@@ -334,7 +423,7 @@ fn point_like_source_follows_the_inverse_square_cosine_law() {
         .map(|&(q, n, _, _)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
     for kind in ALL {
-        let readings = read_with(&scene, &meters, Stop::RelError(REL), 5, 7, kind);
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 5, Some(7), kind);
         for (&(_, _, d, theta), r) in points.iter().zip(&readings) {
             let exact = i_cd * theta.to_radians().cos() / (d * d);
             let label = format!("{}: point-like, d = {d}, θ = {theta}°", kind.name());
@@ -372,7 +461,7 @@ fn uniform_dome_gives_pi_l() {
         .map(|&(q, n, _)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
     for kind in ALL {
-        let readings = read_with(&scene, &meters, Stop::RelError(REL), 6, 7, kind);
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 6, Some(7), kind);
         for (&(q, n, frac), r) in cases.iter().zip(&readings) {
             let label = format!("{}: dome at {q} n {n}", kind.name());
             assert_exact(&label, r, frac * PI * l);
@@ -400,7 +489,7 @@ fn normalized_distant_light_gives_intensity_times_cosine() {
             })
             .collect();
         for kind in ALL {
-            let readings = read_with(&scene, &meters, Stop::RelError(REL), 7, 7, kind);
+            let readings = read_with(&scene, &meters, Stop::RelError(REL), 7, Some(7), kind);
             for (t, r) in thetas.iter().zip(&readings) {
                 let label = format!("{}: distant (angle {angle}°), θ = {t}°", kind.name());
                 assert_exact(&label, r, e * t.to_radians().cos());
@@ -482,7 +571,7 @@ fn flux_through_the_walls_of_a_closed_black_box_is_the_sources_flux() {
         }
     }
     let cell_area = 4.0 / (n * n) as f64;
-    let readings = read(&scene, &meters, Stop::Samples(128), 8, 7);
+    let readings = read(&scene, &meters, Stop::Samples(128), 8, Some(7));
     // Σ E·A (midpoint rule over the cells) and its 95 % interval from the readings'.
     let total: f64 = readings.iter().map(|r| r.value * cell_area).sum();
     let ci = readings
@@ -522,10 +611,10 @@ fn furnace_meters_read_le_over_one_minus_rho_with_every_integrator() {
     let e_meter = [Meter::illuminance(at, Vec3::new(0.3, 1.0, -0.2)).unwrap()];
     let l_meter = [Meter::luminance(at, Vec3::new(-1.0, 0.2, 0.5)).unwrap()];
     for kind in ALL {
-        let r = read_with(&scene, &e_meter, Stop::RelError(REL), 9, 10_000, kind)[0];
+        let r = read_with(&scene, &e_meter, Stop::RelError(REL), 9, None, kind)[0];
         assert_exact(&format!("{}: furnace illuminance", kind.name()), &r, PI * l);
         if kind != Integrator::Light {
-            let r = read_with(&scene, &l_meter, Stop::RelError(REL), 9, 10_000, kind)[0];
+            let r = read_with(&scene, &l_meter, Stop::RelError(REL), 9, None, kind)[0];
             assert_exact(&format!("{}: furnace luminance", kind.name()), &r, l);
         }
     }
@@ -561,7 +650,7 @@ fn path_light_and_bdpt_meters_agree_in_the_cornell_box() {
     let stop = Stop::RelError(0.01);
     let e: Vec<Vec<Reading>> = ALL
         .iter()
-        .map(|&k| read_with(&scene, &e_meters, stop, 21, 7, k))
+        .map(|&k| read_with(&scene, &e_meters, stop, 21, Some(7), k))
         .collect();
     let pairs = [(0, 1), (0, 2), (1, 2)];
     let mut worst = 0.0f64;
@@ -589,13 +678,13 @@ fn path_light_and_bdpt_meters_agree_in_the_cornell_box() {
             );
         }
     }
-    let pt = read_with(&scene, &l_meters, stop, 22, 7, Integrator::Path);
+    let pt = read_with(&scene, &l_meters, stop, 22, Some(7), Integrator::Path);
     let bd = read_with(
         &scene,
         &l_meters,
         stop,
         22,
-        7,
+        Some(7),
         Integrator::Bdpt {
             mis: MisHeuristic::Power,
         },
@@ -670,7 +759,7 @@ fn shaped_lights_agree_with_path_light_and_bdpt() {
     ];
     let r: Vec<Vec<Reading>> = ALL
         .iter()
-        .map(|&k| read_with(&scene, &meters, Stop::RelError(0.01), 31, 5, k))
+        .map(|&k| read_with(&scene, &meters, Stop::RelError(0.01), 31, Some(5), k))
         .collect();
     for (i, m) in meters.iter().enumerate() {
         eprintln!(
@@ -740,7 +829,7 @@ fn meters_agree_through_dispersive_glass() {
             mis: MisHeuristic::Power,
         },
     ] {
-        let est = kind.estimator(&scene, settings);
+        let est = kind.estimator(&scene, settings).unwrap();
         let mut ws = Workspace::new(7, 0);
         let terminated = (0..200u64)
             .filter(|&i| {
@@ -758,7 +847,7 @@ fn meters_agree_through_dispersive_glass() {
     }
     let r: Vec<Reading> = ALL
         .iter()
-        .map(|&k| read_with(&scene, &meters, Stop::RelError(0.01), 31, 7, k)[0])
+        .map(|&k| read_with(&scene, &meters, Stop::RelError(0.01), 31, Some(7), k)[0])
         .collect();
     let line: Vec<String> = (0..3)
         .map(|k| format!("{} {:.4} ± {:.4}", ALL[k].name(), r[k].value, r[k].ci95))
@@ -781,7 +870,7 @@ fn meters_agree_through_dispersive_glass() {
         meter_light_paths: 256,
         ..Default::default()
     });
-    let v = read_with(&scene, &meters, Stop::RelError(0.02), 31, 7, vcm)[0];
+    let v = read_with(&scene, &meters, Stop::RelError(0.02), 31, Some(7), vcm)[0];
     let z = z_score(&r[0], &v);
     eprintln!(
         "through BK7: vcm {:.4} ± {:.4} (z = {z:.2} against path)",
@@ -812,7 +901,7 @@ fn heavy_tailed_case() -> (Scene, Meter, f64) {
 fn coverage(scene: &Scene, meter: Meter, exact: f64, stop: Stop) -> usize {
     (0..100u64)
         .filter(|&seed| {
-            let r = read(scene, &[meter], stop, 1000 + seed, 7)[0];
+            let r = read(scene, &[meter], stop, 1000 + seed, Some(7))[0];
             (r.value - exact).abs() <= r.ci95
         })
         .count()
@@ -877,7 +966,7 @@ fn vcm_meters_read_the_furnace_and_agree_with_path_tracing() {
         Meter::illuminance(at, Vec3::new(0.3, 1.0, -0.2)).unwrap(),
         Meter::luminance(at, Vec3::new(-1.0, 0.2, 0.5)).unwrap(),
     ];
-    let r = read_with(&furnace, &meters, Stop::RelError(0.01), 9, 10_000, vcm);
+    let r = read_with(&furnace, &meters, Stop::RelError(0.01), 9, None, vcm);
     for (reading, exact) in r.iter().zip([PI * l, l]) {
         let z = (reading.value - exact) / (reading.ci95 / 1.96);
         eprintln!(
@@ -896,8 +985,8 @@ fn vcm_meters_read_the_furnace_and_agree_with_path_tracing() {
         Meter::luminance(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.1, 0.2, -1.0)).unwrap(),
     ];
     let stop = Stop::RelError(0.01);
-    let pt = read_with(&scene, &meters, stop, 23, 7, Integrator::Path);
-    let v = read_with(&scene, &meters, stop, 23, 7, vcm);
+    let pt = read_with(&scene, &meters, stop, 23, Some(7), Integrator::Path);
+    let v = read_with(&scene, &meters, stop, 23, Some(7), vcm);
     for ((m, a), b) in meters.iter().zip(&pt).zip(&v) {
         let z = z_score(a, b);
         eprintln!(

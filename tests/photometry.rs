@@ -558,7 +558,7 @@ fn ies_intensity_read_back_from_renders_matches_the_candela_table() {
                 let opts = RenderOptions {
                     spp: Some(64),
                     seed,
-                    max_depth: 1,
+                    max_depth: Some(1),
                     ..Default::default()
                 };
                 let out = session::render(&scene, &opts).unwrap();

@@ -180,7 +180,13 @@ const DIFFUSE_CONNECTED: &str =
 /// textured with `q` by quadrant) at `spp` and checks that each quadrant reads L·texel within
 /// 6e-3·L + 5 SEM.
 fn assert_quadrants(dir: &Path, stage: &str, l: f32, q: [[u8; 4]; 4], spp: u32) {
-    let out = render_file(&write(dir, "quadrants.usda", stage), (32, 32), spp, 7, None);
+    let out = render_file(
+        &write(dir, "quadrants.usda", stage),
+        (32, 32),
+        spp,
+        Some(7),
+        None,
+    );
     for (k, texel) in q.iter().enumerate() {
         for (ch, &byte) in texel[..3].iter().enumerate() {
             let (mean, sem) = quadrant(&out, k, ch);
@@ -216,7 +222,13 @@ fn textured_opacity_cuts_out_with_a_threshold() {
         "",
         "            color3f inputs:diffuseColor = (0.5, 0.5, 0.5)\n            float inputs:opacity.connect = </Looks/Paint/Tex.outputs:a>\n            float inputs:opacityThreshold = 0.5\n",
     );
-    let out = render_file(&write(&dir, "cut.usda", &stage), (32, 32), 32, 7, None);
+    let out = render_file(
+        &write(&dir, "cut.usda", &stage),
+        (32, 32),
+        32,
+        Some(7),
+        None,
+    );
     for (k, expected) in [(0, 0.5 * l), (1, l), (2, 0.5 * l), (3, l)] {
         let (mean, sem) = quadrant(&out, k, 1);
         let tol = 6e-3 * f64::from(l) + 5.0 * sem;
@@ -317,7 +329,13 @@ fn textured_emission_is_seen_at_its_st() {
     let inputs = "            color3f inputs:diffuseColor = (0, 0, 0)\n            color3f inputs:emissiveColor.connect = </Looks/Paint/Tex.outputs:rgb>\n";
     let raw = "            token inputs:sourceColorSpace = \"raw\"\n";
     let stage = textured_stage(0.0, "glow.png", raw, inputs);
-    let out = render_file(&write(&dir, "glow.usda", &stage), (32, 32), 16, 3, None);
+    let out = render_file(
+        &write(&dir, "glow.usda", &stage),
+        (32, 32),
+        16,
+        Some(3),
+        None,
+    );
     for (k, texel) in q.iter().enumerate() {
         for (ch, &byte) in texel[..3].iter().enumerate() {
             let (mean, sem) = quadrant(&out, k, ch);
@@ -403,13 +421,13 @@ fn a_textured_emitter_lights_like_the_constant_emitters_it_is_made_of() {
     let looks = &looks[..looks.rfind('}').unwrap()];
     let one = lit_floor_stage(looks, &ceiling_panel("Panel", 0.3, 1.3, "Paint"));
     let (path_two, path_one) = (write(&dir, "two.usda", &two), write(&dir, "one.usda", &one));
-    let reference = render_file(&path_two, (24, 24), 256, 3, None);
+    let reference = render_file(&path_two, (24, 24), 256, Some(3), None);
     for integrator in [Integrator::Path, Integrator::Light] {
         let scene = spectral_render::scene::load(&path_one, Some((24, 24))).unwrap();
         let opts = spectral_render::session::RenderOptions {
             spp: Some(256),
             seed: 11,
-            max_depth: 3,
+            max_depth: Some(3),
             integrator,
             ..Default::default()
         };
@@ -492,7 +510,7 @@ fn a_flat_normal_map_is_the_identity() {
     let opts = spectral_render::session::RenderOptions {
         spp: Some(8),
         seed: 7,
-        max_depth: 5,
+        max_depth: Some(5),
         ..Default::default()
     };
     let (ia, ib) = (
@@ -626,7 +644,7 @@ fn degenerate_st_and_zero_area_triangles_give_no_nan() {
             "{ns}"
         );
     }
-    render_file(&path, (16, 16), 8, 5, None);
+    render_file(&path, (16, 16), 8, Some(5), None);
 }
 
 // ---- Textures on spectral:* shaders ------------------------------------------------------
@@ -844,7 +862,7 @@ fn per_pixel_stats(
             let opts = spectral_render::session::RenderOptions {
                 spp: Some(spp),
                 seed,
-                max_depth: 3,
+                max_depth: Some(3),
                 filter_textures,
                 ..Default::default()
             };
@@ -971,5 +989,5 @@ fn footprints_are_finite_and_follow_distance() {
         let tc = bad.tex_coord(&surface_at(&bad, x, y), filter);
         assert_eq!((tc.duvdx, tc.duvdy), (Vec2::ZERO, Vec2::ZERO), "{tc:?}");
     }
-    render_file(&path, (16, 16), 2, 3, None);
+    render_file(&path, (16, 16), 2, Some(3), None);
 }

@@ -64,7 +64,7 @@ fn lux(dir: &Path, text: &str, points: &[[f32; 3]], integrator: &str) -> Vec<(f6
     let opts = MeterOptions {
         stop: Stop::Samples(1 << 15),
         seed: 3,
-        max_depth: 1,
+        max_depth: Some(1),
         integrator: Integrator::from_name(integrator).unwrap(),
         ..MeterOptions::default()
     };

@@ -235,7 +235,7 @@ fn image_mean(scene: &Scene, integrator: Integrator, spp: u32, runs: u64) -> (f6
             let opts = RenderOptions {
                 spp: Some(spp),
                 seed: 100 + seed,
-                max_depth: MAX_DEPTH,
+                max_depth: Some(MAX_DEPTH),
                 integrator,
                 ..Default::default()
             };
@@ -439,7 +439,7 @@ fn vcm_meter_reads_the_lux_under_a_glass_slab() {
     let meter = spectral_render::Meter::illuminance(glam::Vec3::ZERO, glam::Vec3::Y).unwrap();
     let opts = spectral_render::session::MeterOptions {
         stop: spectral_render::session::Stop::RelError(0.03),
-        max_depth: 10,
+        max_depth: Some(10),
         seed: 5,
         integrator: vcm,
         ..Default::default()

@@ -80,9 +80,18 @@ impl PreviewBxdf {
         let pc = self.base.coat_probability(wo);
         let base = self.base.albedo.eval(wo.z)
             + self.base.albedo.transmittance(wo.z) * self.base.diffuse_albedo;
+        // A lobe of weight 0 costs nothing (its albedo is not evaluated).
         let weights = [
-            c * self.clearcoat_albedo.eval(wo.z),
-            a * m * self.metal.mirror_reflectance(wo).average(),
+            if c > 0.0 {
+                c * self.clearcoat_albedo.eval(wo.z)
+            } else {
+                0.0
+            },
+            if m > 0.0 {
+                a * m * self.metal.mirror_reflectance(wo).average()
+            } else {
+                0.0
+            },
             a * (1.0 - m) * base * pc,
             a * (1.0 - m) * base * (1.0 - pc),
         ];

@@ -3,10 +3,12 @@
 //! wrong name says which names there are), the one-line load summary, and warnings.
 
 use crate::error::{Error, Result};
+use crate::integrator::cut;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::exr::ExrMetadata;
-use crate::scene::Scene;
+use crate::scene::{Machinery, Scene};
+use crate::session::{AutoReport, DepthCut};
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::ValueEnum;
 use std::ffi::OsStr;
@@ -55,8 +57,8 @@ impl ValueEnum for VcmMode {
 /// The flags that set an integrator's settings, as the commands take them.
 #[derive(clap::Args, Debug, Clone)]
 pub struct IntegratorArgs {
-    /// Light-transport algorithm.
-    #[arg(long, default_value = "path", value_parser = named::<Integrator>("integrator"))]
+    /// Light-transport algorithm (auto: chosen from the scene analysis and a short pilot).
+    #[arg(long, default_value = "auto", value_parser = named::<Integrator>("integrator"))]
     pub integrator: Integrator,
     /// MIS heuristic of the integrators that combine techniques (bdpt, vcm).
     #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
@@ -123,6 +125,36 @@ impl IntegratorArgs {
             meter_light_paths: self.vcm_light_paths.unwrap_or(p.meter_light_paths),
             ..p
         }))
+    }
+}
+
+/// Prints what `--integrator auto` chose (`AutoReport::summary`), when it was asked for.
+pub fn print_auto(auto: Option<&AutoReport>) {
+    if let Some(a) = auto {
+        eprintln!("{}", a.summary());
+    }
+}
+
+/// The integrator's name for the EXR metadata: `auto→bdpt` when auto chose it.
+pub fn metadata_name(integrator: &Integrator, auto: Option<&AutoReport>) -> String {
+    match auto {
+        Some(a) => format!("auto→{}", a.choice.name()),
+        None => integrator.name().into(),
+    }
+}
+
+/// Machinery the scene does not need, forced on: a hidden flag for the tests and
+/// `tools/bench_pruning.sh`, which show that it changes only time (`scene::machinery`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct MachineryArgs {
+    /// Keep machinery the scene does not need: all, lobes, light-table, dispersion.
+    #[arg(long = "force-machinery", hide = true, value_name = "LIST", value_parser = Machinery::parse)]
+    pub force_machinery: Option<Machinery>,
+}
+
+impl MachineryArgs {
+    pub fn machinery(&self) -> Machinery {
+        self.force_machinery.unwrap_or_default()
     }
 }
 
@@ -216,6 +248,64 @@ pub fn warn_limits(integrator: &Integrator, scene: &Scene, images: bool) {
     }
 }
 
+/// Warns about what a depth cap cut of `what` ("the image's mean luminance", "the reading"),
+/// when a path reached it (`session::DepthCut`).
+pub fn warn_depth_cut(cut: Option<&DepthCut>, what: &str) {
+    if let Some(c) = cut {
+        eprintln!("warning: {}", depth_cut_message(c, what));
+    }
+}
+
+/// The line [`warn_depth_cut`] prints.
+pub fn depth_cut_message(c: &DepthCut, what: &str) -> String {
+    let amount = format!(
+        "{}{} ± {} of {what}",
+        if c.lower_bound { "at least " } else { "" },
+        percent(c.fraction),
+        percent(c.ci95)
+    );
+    if c.user {
+        format!(
+            "--max-depth {} cut {amount} ({} paths reached it; estimated by continuing a \
+             random {} of them past it)",
+            c.max_depth,
+            c.capped,
+            fraction_name(cut::Q)
+        )
+    } else {
+        format!(
+            "{} paths reached the safety cap of {} bounces (no --max-depth was given), which \
+             cut {amount}: Russian roulette does not end paths whose throughput does not \
+             fall (reflectances of 1)",
+            c.capped, c.max_depth
+        )
+    }
+}
+
+/// A fraction as a percentage with a precision that shows small values.
+fn percent(x: f64) -> String {
+    let p = 100.0 * x;
+    if !p.is_finite() {
+        return "? %".into();
+    }
+    if p.abs() >= 0.1 || p == 0.0 {
+        return format!("{p:.1} %");
+    }
+    // Two significant digits.
+    let decimals = (1.0 - p.abs().log10().floor()).min(12.0) as usize;
+    format!("{p:.decimals$} %")
+}
+
+/// "1/8" for q = 0.125.
+fn fraction_name(q: f32) -> String {
+    let inv = 1.0 / q;
+    if inv.fract() == 0.0 {
+        format!("1/{inv}")
+    } else {
+        format!("{:.1} %", 100.0 * q)
+    }
+}
+
 /// Warns about samples dropped for a non-finite value.
 pub fn warn_dropped(dropped: u64) {
     if dropped > 0 {
@@ -278,7 +368,7 @@ pub struct Made<'a> {
     pub scene: &'a Scene,
     pub integrator: &'a Integrator,
     pub seed: u64,
-    pub max_depth: u32,
+    pub max_depth: Option<u32>,
     pub spp: u64,
     pub wall_time_s: f64,
 }
@@ -310,5 +400,6 @@ fn mis_name(integrator: &Integrator) -> Option<String> {
         Integrator::Light => None,
         Integrator::Bdpt { mis } => Some(mis.name().into()),
         Integrator::Vcm(p) => Some(p.mis.name().into()),
+        Integrator::Auto { mis } => Some(mis.name().into()),
     }
 }

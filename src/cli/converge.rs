@@ -95,9 +95,9 @@ struct ConvergeArgs {
     /// Image size WxH, overriding RenderSettings.
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
-    /// Maximum number of scattering events.
-    #[arg(long = "max-depth", default_value_t = 7)]
-    max_depth: u32,
+    /// Maximum number of scattering events (default: unlimited, as for rendering).
+    #[arg(long = "max-depth")]
+    max_depth: Option<u32>,
     /// MIS heuristic of bdpt and vcm.
     #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
     mis: MisHeuristic,

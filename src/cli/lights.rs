@@ -64,7 +64,8 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
         Err(e) if !e.use_stderr() => e.exit(),
         Err(e) => return Err(Error::option(clap_message(&e))),
     };
-    let scene = scene::load_at(&args.scene, None, args.when.read_time())?;
+    let time = args.when.read_time();
+    let scene = scene::load_at(&args.scene, None, scene::Machinery::default(), time)?;
     print_summary(&scene);
     let reports = report::report(&scene.lights);
     let out = if args.json {

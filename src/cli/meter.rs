@@ -17,8 +17,8 @@
 //! line and exit 1; so is a luminance meter asked of light tracing, which cannot estimate it.
 
 use super::common::{
-    at_least, clap_message, max_memory, print_report, print_summary, warn_dropped, warn_limits,
-    IntegratorArgs,
+    at_least, clap_message, max_memory, print_auto, print_report, print_summary, warn_depth_cut,
+    warn_dropped, warn_limits, IntegratorArgs, MachineryArgs,
 };
 use super::frames::FrameArgs;
 use super::interrupt;
@@ -78,9 +78,9 @@ struct MeterArgs {
     /// Worker threads (default: all cores).
     #[arg(long, allow_negative_numbers = true, value_parser = at_least::<usize>(1))]
     threads: Option<usize>,
-    /// Maximum number of scattering events (as for rendering).
-    #[arg(long = "max-depth", default_value_t = 7, allow_negative_numbers = true, value_parser = at_least::<u32>(0))]
-    max_depth: u32,
+    /// Maximum number of scattering events (as for rendering; default unlimited).
+    #[arg(long = "max-depth", allow_negative_numbers = true, value_parser = at_least::<u32>(0))]
+    max_depth: Option<u32>,
     /// Refuse to start a measurement estimated to need more memory than SIZE (e.g. 8G;
     /// default: the memory available).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = max_memory, allow_hyphen_values = true)]
@@ -92,6 +92,8 @@ struct MeterArgs {
     integrator: IntegratorArgs,
     #[command(flatten)]
     when: FrameArgs,
+    #[command(flatten)]
+    machinery: MachineryArgs,
 }
 
 /// Where meters are and what they measure (`meter` and `converge` take them alike).
@@ -158,7 +160,12 @@ fn run(args: &MeterArgs) -> Result<()> {
         ])?;
     }
     interrupt::install()?;
-    let scene = scene::load_at(&args.scene, Some((1, 1)), args.when.read_time())?;
+    let scene = scene::load_at(
+        &args.scene,
+        Some((1, 1)),
+        args.machinery.machinery(),
+        args.when.read_time(),
+    )?;
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before measuring; nothing written");
@@ -283,7 +290,9 @@ pub(super) fn world_meter(m: &DMat4, kind: MeterKind, p: DVec3, d: DVec3) -> Res
 
 /// Warnings about dropped samples and readings a cap stopped.
 fn warn(run: &MeterRun, opts: &MeterOptions) {
+    print_auto(run.auto.as_ref());
     warn_dropped(run.dropped);
+    warn_meter_depth_cut(&run.readings);
     print_report(&run.report);
     for (cap, what) in [
         (Cap::Samples, "the sample cap (--max-spp)"),
@@ -302,6 +311,22 @@ fn warn(run: &MeterRun, opts: &MeterOptions) {
             };
             eprintln!("warning: {k} readings were stopped by {what} {target}");
         }
+    }
+}
+
+/// What the depth cap cut: of the one reading, or of the reading it cut most.
+fn warn_meter_depth_cut(readings: &[Reading]) {
+    let cut = readings
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.depth_cut.map(|c| (i, c)))
+        .max_by(|a, b| a.1.fraction.total_cmp(&b.1.fraction));
+    if let Some((i, c)) = cut {
+        let what = match readings.len() {
+            1 => "the reading".to_string(),
+            n => format!("reading {} (the largest cut of the {n} readings)", i + 1),
+        };
+        warn_depth_cut(Some(&c), &what);
     }
 }
 
@@ -326,6 +351,22 @@ struct ReadingJson {
     /// Under --rel-error: false when a cap stopped the reading.
     #[serde(skip_serializing_if = "Option::is_none")]
     converged: Option<bool>,
+    /// What the depth cap cut of the reading, when a path reached it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    depth_cut: Option<DepthCutJson>,
+}
+
+/// `session::DepthCut` in the JSON: the cap, whether the user set it, the fraction of the
+/// reading it cut with its ci95, the paths that reached it, and whether the fraction is a
+/// lower bound.
+#[derive(Serialize)]
+struct DepthCutJson {
+    max_depth: u32,
+    user: bool,
+    fraction: f64,
+    ci95: f64,
+    capped_paths: u64,
+    lower_bound: bool,
 }
 
 fn json_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading, rel: bool) -> ReadingJson {
@@ -344,6 +385,14 @@ fn json_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading, rel: bool) -> Re
         ci95: r.ci95,
         samples: r.samples,
         converged: rel.then_some(r.capped.is_none()),
+        depth_cut: r.depth_cut.map(|c| DepthCutJson {
+            max_depth: c.max_depth,
+            user: c.user,
+            fraction: c.fraction,
+            ci95: c.ci95,
+            capped_paths: c.capped,
+            lower_bound: c.lower_bound,
+        }),
     }
 }
 

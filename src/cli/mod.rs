@@ -9,6 +9,7 @@ mod checkpoints;
 mod common;
 mod converge;
 mod frames;
+mod info;
 mod interrupt;
 mod lights;
 mod meter;
@@ -26,6 +27,7 @@ type Command = fn(Vec<OsString>) -> Result<()>;
 /// list them from here.
 const SUBCOMMANDS: &[(&str, Command)] = &[
     ("converge", converge::main),
+    ("info", info::main),
     ("lights", lights::main),
     ("meter", meter::main),
 ];

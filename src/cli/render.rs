@@ -2,8 +2,8 @@
 
 use super::checkpoints::{self, Checkpoints};
 use super::common::{
-    at_least, clap_message, max_memory, print_report, print_summary, warn_dropped, warn_limits,
-    IntegratorArgs, Made,
+    at_least, clap_message, max_memory, metadata_name, print_auto, print_report, print_summary,
+    warn_depth_cut, warn_dropped, warn_limits, IntegratorArgs, MachineryArgs, Made,
 };
 use super::frames::{frame_path, parse_frames, FrameArgs, FrameRange};
 use super::interrupt;
@@ -46,10 +46,13 @@ struct RenderArgs {
     #[arg(long, value_parser = parse_resolution, allow_hyphen_values = true)]
     resolution: Option<(u32, u32)>,
     /// Maximum number of scattering events (pbrt's maxdepth; Mitsuba's max_depth − 1).
-    #[arg(long = "max-depth", default_value_t = 7, allow_negative_numbers = true, value_parser = at_least::<u32>(0))]
-    max_depth: u32,
+    /// Default: unlimited (Russian roulette ends paths); a cap that cuts light says how much.
+    #[arg(long = "max-depth", allow_negative_numbers = true, value_parser = at_least::<u32>(0))]
+    max_depth: Option<u32>,
     #[command(flatten)]
     integrator: IntegratorArgs,
+    #[command(flatten)]
+    machinery: MachineryArgs,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
     strategies: Option<PathBuf>,
@@ -142,7 +145,12 @@ fn run(args: &RenderArgs) -> Result<()> {
     target::check(&targets(args, &path, args.preview.as_deref()))?;
     let resume = args.resume.as_deref().map(checkpoints::read).transpose()?;
     interrupt::install()?;
-    let scene = scene::load_at(&args.scene, args.resolution, args.when.read_time())?;
+    let scene = scene::load_at(
+        &args.scene,
+        args.resolution,
+        args.machinery.machinery(),
+        args.when.read_time(),
+    )?;
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before rendering; nothing written");
@@ -178,7 +186,8 @@ fn run_sequence(args: &RenderArgs, opts: &RenderOptions, frames: &FrameRange) ->
     interrupt::install()?;
     let stage = scene::open(&args.scene)?;
     for (t, exr, preview) in &outputs {
-        let scene = scene::build(&stage.read(args.when.at(Some(*t)))?, args.resolution)?;
+        let desc = stage.read(args.when.at(Some(*t)))?;
+        let scene = scene::build_with(&desc, args.resolution, args.machinery.machinery())?;
         eprintln!("frame {t}");
         print_summary(&scene);
         if let Some(signal) = interrupt::received() {
@@ -213,7 +222,13 @@ fn render_frame(
     resume: Option<crate::session::checkpoint::Checkpoint>,
 ) -> Result<Option<&'static str>> {
     warn_limits(&opts.integrator, scene, true);
+    // auto continues with the integrator the checkpoint was rendered with, no pilot.
+    let opts = &match &resume {
+        Some(c) => session::auto::for_checkpoint(scene, opts, c),
+        None => opts.clone(),
+    };
     let mut session = ImageSession::new(scene, opts)?;
+    print_auto(session.auto());
     if let (Some(c), Some(file)) = (resume, &args.resume) {
         let done = c.samples;
         session
@@ -232,6 +247,7 @@ fn render_frame(
     progress.finish();
     let out = session.output();
     warn_dropped(out.dropped_samples);
+    warn_depth_cut(out.depth_cut.as_ref(), "the image's mean luminance");
     print_report(&out.report);
     if let Some(signal) = interrupted {
         if let Some(file) = saves.write(&session)? {
@@ -291,16 +307,18 @@ fn write_outputs(
     out: &RenderOutput,
 ) -> Result<()> {
     let path = output.exr;
-    let meta = Made {
+    let chosen = out.auto.as_ref().map_or(opts.integrator, |a| a.choice);
+    let mut meta = Made {
         stage: &args.scene,
         scene,
-        integrator: &opts.integrator,
+        integrator: &chosen,
         seed: opts.seed,
         max_depth: opts.max_depth,
         spp: out.spp,
         wall_time_s: out.wall_time_s,
     }
     .metadata();
+    meta.integrator = metadata_name(&chosen, out.auto.as_ref());
     let white = spectral::color::white_xy().map(|c| c as f32);
     exr::write(
         path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,

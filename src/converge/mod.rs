@@ -68,7 +68,8 @@ pub struct RunOptions {
     pub max_samples: Option<u64>,
     pub seed: u64,
     pub threads: Option<usize>,
-    pub max_depth: u32,
+    /// Maximum scattering events; None: unlimited (as `RenderOptions::max_depth`).
+    pub max_depth: Option<u32>,
     pub filter_textures: bool,
 }
 
@@ -79,7 +80,7 @@ impl Default for RunOptions {
             max_samples: None,
             seed: 0,
             threads: None,
-            max_depth: 7,
+            max_depth: None,
             filter_textures: true,
         }
     }

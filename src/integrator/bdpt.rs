@@ -19,11 +19,13 @@ use super::bidir::{
     splat_light_subpath, trace_light_subpath, BidirContext, Mis, MisHeuristic, PathVertex, Walk,
     Workspace,
 };
+use super::cut::continuation;
+use super::path::PathIntegrator;
 use super::{Estimator, Settings};
 use crate::bxdf::TransportMode;
 use crate::light::LightHit;
 use crate::sampling::Sampler;
-use crate::scene::{Hit, Scene};
+use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::meter::MeterSensor;
 use crate::sensor::Sensor;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
@@ -132,6 +134,7 @@ impl BdptIntegrator {
                 }
             }
             if walk.depth > ctx.max_depth {
+                continue_past_cap(ctx, &walk, &si, lambda, sampler, ws);
                 return;
             }
             let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
@@ -176,6 +179,32 @@ impl BdptIntegrator {
             }
         }
     }
+}
+
+/// A camera subpath stopped by the depth cap at `si` (z_{max_depth+1}, its emission counted):
+/// counted, and with probability q continued past the cap by the path tracer on a stream of
+/// its own, into the sample's cut (`cut.rs`). Every path longer than the cap has such a
+/// camera prefix, so this estimates all the light the cap cut (what the path tracer can
+/// sample of it).
+fn continue_past_cap(
+    ctx: &BidirContext,
+    walk: &Walk,
+    si: &SurfaceHit,
+    lambda: &SampledWavelengths,
+    sampler: &Sampler,
+    ws: &mut Workspace,
+) {
+    ws.record.cut.capped += 1;
+    let Some(mut ext) = continuation(sampler) else {
+        return;
+    };
+    let pt = PathIntegrator {
+        max_depth: ctx.max_depth,
+        filter: ctx.filter,
+    };
+    let depth = walk.depth - 1;
+    let (l, limited) = pt.continue_from_vertex(ctx.scene, si, -walk.ray.d, depth, lambda, &mut ext);
+    ws.record.cut.add(walk.beta * l, 1.0, limited);
 }
 
 /// An emitter found by the camera walk (s = 0, strategy (0, t)): weighted by MIS with

@@ -7,16 +7,27 @@
 //! lens); everything they light is. Samples are indexed like the path tracer's: one light path
 //! per (pixel, sample), with the pixel's sampler stream.
 //!
+//! A light subpath stopped by the depth cap is counted, and a fraction q of them continued
+//! past it on a stream of their own, each further vertex connected to the sensor, into the
+//! sample's cut (`cut.rs`).
+//!
 //! The sensor may also be an irradiance meter ([`LightEstimator`]'s `meter_sample`: its
 //! origin and every vertex connected to the meter point, E = Σ β f |cos θ_y| cos θ / d²,
 //! Veach 1997 §10.2 with a point sensor), which does see infinite lights directly
 //! (`bidir::connect::infinite_to_sensor`); a luminance meter, a delta in position and
 //! direction, cannot be estimated by light tracing at all (`Capabilities::luminance_meters`).
 
-use super::bidir::{splat_light_subpath, trace_light_subpath, BidirContext, Mis, Workspace};
+use super::bidir::connect::vertex_to_sensor;
+use super::bidir::vertex::bsdf_at;
+use super::bidir::{
+    splat_light_subpath, trace_light_subpath, BidirContext, CappedSubpath, Mis, PathVertex, Walk,
+    Workspace,
+};
+use super::cut::{continuation, continuation_limit};
 use super::{Estimator, MisHeuristic, Settings};
+use crate::bxdf::TransportMode;
 use crate::sampling::Sampler;
-use crate::scene::Scene;
+use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::meter::MeterSensor;
 use crate::sensor::Sensor;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
@@ -37,7 +48,75 @@ impl LightTracer {
     ) {
         trace_light_subpath(ctx, lambda, sampler, &mut ws.light);
         splat_light_subpath(ctx, lambda, sampler, ws, false);
+        if let Some(capped) = ws.light.capped {
+            ws.record.cut.capped += 1;
+            if let Some(mut ext) = continuation(sampler) {
+                let (l, limited) = continue_past_cap(ctx, &capped, lambda, &mut ext);
+                ws.record.cut.add(l, 1.0, limited);
+            }
+        }
     }
+}
+
+/// The light a light subpath stopped by the depth cap at `capped` would have brought to the
+/// sensor beyond it: the walk continued on `ext`, each vertex beyond the cap connected to the
+/// sensor (`cut.rs`). Relative to `lambda`'s pdfs; true when the continuation reached its own
+/// limit.
+fn continue_past_cap(
+    ctx: &BidirContext,
+    capped: &CappedSubpath,
+    lambda: &SampledWavelengths,
+    ext: &mut Sampler,
+) -> (SampledSpectrum, bool) {
+    let mut lambda_ext = *lambda;
+    let mut walk = capped.walk;
+    let mut sum = SampledSpectrum::ZERO;
+    let limit = continuation_limit(ctx.max_depth);
+    let connect = !capped.within_cap;
+    let mut v = vertex_at(
+        ctx,
+        &capped.si,
+        &walk,
+        &mut lambda_ext,
+        ext,
+        connect,
+        &mut sum,
+    );
+    let limited = loop {
+        if walk.depth >= limit {
+            break true;
+        }
+        if !walk.scatter(&ctx.mis, &v, TransportMode::Importance, ext) {
+            break false;
+        }
+        let Some(Hit::Surface(si)) = ctx.scene.intersect(&walk.ray, walk.t_max) else {
+            break false;
+        };
+        walk.arrive(&ctx.mis, si.p, si.ng);
+        v = vertex_at(ctx, &si, &walk, &mut lambda_ext, ext, true, &mut sum);
+    };
+    (lambda.rebase(sum, &lambda_ext), limited)
+}
+
+/// The light subpath's vertex at `si` (the walk arrived there); with `connect`, its
+/// connection to the sensor is added to `sum` unless it is specular.
+fn vertex_at(
+    ctx: &BidirContext,
+    si: &SurfaceHit,
+    walk: &Walk,
+    lambda: &mut SampledWavelengths,
+    sampler: &mut Sampler,
+    connect: bool,
+    sum: &mut SampledSpectrum,
+) -> PathVertex {
+    let bsdf = bsdf_at(ctx.scene, si, ctx.filter, lambda);
+    let v = PathVertex::new(si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
+    if connect && !bsdf.is_specular() {
+        if let Some(sc) = vertex_to_sensor(ctx, &v, sampler.get_2d(), false) {
+            *sum += sc.c.weighted;
+        }
+    }
+    v
 }
 
 /// Light tracing as an [`Estimator`]: the render's context (camera as sensor) and the tracer.

@@ -17,6 +17,8 @@
 //!
 //! The meter is a sensor, not geometry: it sees the scene, the scene does not see it, and it
 //! has no BSDF. Depth counts as for a camera: `max_depth` = 0 measures direct light only.
+//! Paths that reach the depth cap are counted, and a fraction of them continued past it, in
+//! the caller's [`CutSample`] (`cut.rs`).
 //!
 //! **Radiance** along a ray (Mitsuba's `radiancemeter`) is [`PathIntegrator::li`] of that ray.
 //!
@@ -25,6 +27,7 @@
 //! `sensor::meter::origin_error`) and rays leave it through the same robust offset as surface
 //! hits ([`spawn_ray`], PBR 4ed §6.8.6). That makes a meter lying on a floor or a wall safe.
 
+use super::cut::CutSample;
 use super::path::{transmittance, PathIntegrator, Previous};
 use crate::geometry::offset::spawn_ray;
 use crate::light::LightSampleContext;
@@ -45,6 +48,7 @@ pub struct MeterIntegrator {
 impl MeterIntegrator {
     /// One sample of the irradiance (W·m⁻²·nm⁻¹ per lane) at `p` on a surface facing the unit
     /// normal `n`; `p_error` bounds the error of `p` per axis.
+    #[allow(clippy::too_many_arguments)]
     pub fn irradiance(
         &self,
         scene: &Scene,
@@ -53,6 +57,7 @@ impl MeterIntegrator {
         n: Vec3,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
+        cut: &mut CutSample,
     ) -> SampledSpectrum {
         let ctx = LightSampleContext { p, n };
         let direct = light_sample(scene, &ctx, p_error, lambda, sampler);
@@ -67,15 +72,26 @@ impl MeterIntegrator {
             specular: false,
         };
         let ray = spawn_ray(p, p_error, n, wi);
-        let li = self
-            .path
-            .li_from(scene, ray, f32::INFINITY, Some(prev), lambda, sampler);
+        let mut beyond = CutSample::default();
+        let li = self.path.li_from(
+            scene,
+            ray,
+            f32::INFINITY,
+            Some(prev),
+            lambda,
+            sampler,
+            Some(&mut beyond),
+        );
         // L cos θ / (cos θ / π) = π L.
+        cut.light += beyond.light * PI;
+        cut.capped += beyond.capped;
+        cut.limited += beyond.limited;
         direct + li * PI
     }
 
     /// One sample of the radiance arriving at `p` from the direction the unit vector `dir`
     /// points to (the ray p + t·dir), as a radiancemeter looking along `dir`.
+    #[allow(clippy::too_many_arguments)]
     pub fn radiance(
         &self,
         scene: &Scene,
@@ -84,9 +100,11 @@ impl MeterIntegrator {
         dir: Vec3,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
+        cut: &mut CutSample,
     ) -> SampledSpectrum {
         let ray = spawn_ray(p, p_error, dir, dir);
-        self.path.li(scene, ray, f32::INFINITY, lambda, sampler)
+        self.path
+            .li_from(scene, ray, f32::INFINITY, None, lambda, sampler, Some(cut))
     }
 }
 

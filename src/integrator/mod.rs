@@ -11,13 +11,17 @@
 //! - `vcm`: vertex connection and merging, BDPT plus merges with the iteration's light
 //!   vertices;
 //! - `bidir/`: what the bidirectional ones share (vertices, walks, MIS recurrences, the
-//!   light vertex store and its hash grid).
+//!   light vertex store and its hash grid);
+//! - `auto`: the candidates of `--integrator auto` from the scene analysis (its pilot, which
+//!   runs sessions, is `session::auto`).
 //!
 //! Adding an integrator: an arm of [`Integrator`] (its name, capabilities and estimator, all
 //! in this file) and its own module implementing [`Estimator`].
 
+pub mod auto;
 pub mod bdpt;
 pub mod bidir;
+pub mod cut;
 pub mod estimator;
 pub mod light_tracer;
 pub mod meter;
@@ -44,6 +48,10 @@ pub enum Integrator {
     Bdpt { mis: MisHeuristic },
     /// Vertex connection and merging (`vcm.rs`): BDPT plus merges, consistent.
     Vcm(VcmParams),
+    /// One of path, bdpt and vcm, chosen per scene: the analysis narrows the candidates
+    /// (`auto.rs`), a short pilot measures their efficiency (`session::auto`). Resolved
+    /// before a session runs; it has no estimator of its own.
+    Auto { mis: MisHeuristic },
 }
 
 /// What an integrator can and cannot do. Every check and warning about an integrator's
@@ -75,7 +83,7 @@ pub struct Capabilities {
 
 impl Integrator {
     /// Every integrator, with default settings, in the order the CLI lists them.
-    pub const ALL: [Integrator; 4] = [
+    pub const ALL: [Integrator; 5] = [
         Integrator::Path,
         Integrator::Light,
         Integrator::Bdpt {
@@ -88,6 +96,9 @@ impl Integrator {
             alpha: vcm::DEFAULT_ALPHA,
             meter_light_paths: vcm::DEFAULT_METER_LIGHT_PATHS,
         }),
+        Integrator::Auto {
+            mis: MisHeuristic::Power,
+        },
     ];
 
     /// The name the CLI and the EXR metadata use.
@@ -97,6 +108,7 @@ impl Integrator {
             Integrator::Light => "light",
             Integrator::Bdpt { .. } => "bdpt",
             Integrator::Vcm(_) => "vcm",
+            Integrator::Auto { .. } => "auto",
         }
     }
 
@@ -107,6 +119,9 @@ impl Integrator {
             Integrator::Light => "light tracing (light subpaths connected to the sensor)",
             Integrator::Bdpt { .. } => "bidirectional path tracing, all (s, t) with MIS",
             Integrator::Vcm(_) => "vertex connection and merging: BDPT plus merges (consistent)",
+            Integrator::Auto { .. } => {
+                "path, bdpt or vcm, chosen from the scene analysis and a short pilot (the default)"
+            }
         }
     }
 
@@ -120,6 +135,7 @@ impl Integrator {
         match self {
             Integrator::Bdpt { .. } => Integrator::Bdpt { mis },
             Integrator::Vcm(p) => Integrator::Vcm(VcmParams { mis, ..p }),
+            Integrator::Auto { .. } => Integrator::Auto { mis },
             other => other,
         }
     }
@@ -156,6 +172,15 @@ impl Integrator {
                 unbiased: p.mode == VcmMode::Vc,
                 ..bidirectional
             },
+            // What the chosen one can do: partial opacity makes the choice path
+            // (`auto.rs`), and vcm may be chosen.
+            Integrator::Auto { .. } => Capabilities {
+                partial_opacity: true,
+                splats: false,
+                mis_heuristic: true,
+                unbiased: false,
+                ..bidirectional
+            },
         }
     }
 
@@ -186,21 +211,27 @@ impl Integrator {
         }))
     }
 
-    /// The number of strategy images for `max_depth`, or why there are none.
-    pub fn check_strategies(&self, max_depth: u32) -> Result<usize> {
+    /// The number of strategy images for `max_depth` (None: unlimited), or why there are
+    /// none.
+    pub fn check_strategies(&self, max_depth: Option<u32>) -> Result<usize> {
         if !self.capabilities().strategy_images {
             let others = Integrator::names_with(|c| c.strategy_images);
             return Err(Error::option(format!(
                 "strategy images need --integrator {others}"
             )));
         }
-        if max_depth > bidir::strategies::MAX_DEPTH {
-            return Err(Error::option(format!(
+        match max_depth {
+            Some(d) if d <= bidir::strategies::MAX_DEPTH => Ok(bidir::strategies::count(d)),
+            Some(_) => Err(Error::option(format!(
                 "strategy images need --max-depth {} or less",
                 bidir::strategies::MAX_DEPTH
-            )));
+            ))),
+            None => Err(Error::option(format!(
+                "strategy images need --max-depth {} or less (one image per technique and \
+                 depth; the default depth is unlimited)",
+                bidir::strategies::MAX_DEPTH
+            ))),
         }
-        Ok(bidir::strategies::count(max_depth))
     }
 
     /// What this integrator will not render in `scene` as the scene describes it, one line
@@ -227,9 +258,14 @@ impl Integrator {
         out
     }
 
-    /// A run of this integrator on `scene`.
-    pub fn estimator<'a>(&self, scene: &'a Scene, settings: Settings) -> Box<dyn Estimator + 'a> {
-        match *self {
+    /// A run of this integrator on `scene`; `Auto` has none (the sessions resolve it to a
+    /// concrete integrator first, `session::auto`).
+    pub fn estimator<'a>(
+        &self,
+        scene: &'a Scene,
+        settings: Settings,
+    ) -> Result<Box<dyn Estimator + 'a>> {
+        Ok(match *self {
             Integrator::Path => Box::new(path::PathEstimator::new(scene, settings)),
             Integrator::Light => Box::new(light_tracer::LightEstimator::new(scene, settings)),
             Integrator::Bdpt { mis } => Box::new(bdpt::BdptEstimator::new(scene, settings, mis)),
@@ -238,7 +274,13 @@ impl Integrator {
                 Box::new(bdpt::BdptEstimator::new(scene, settings, p.mis))
             }
             Integrator::Vcm(p) => Box::new(vcm::VcmEstimator::new(scene, settings, p)),
-        }
+            Integrator::Auto { .. } => {
+                return Err(Error::option(
+                    "--integrator auto has no estimator of its own: it is resolved to path, \
+                     bdpt or vcm before a run (session::auto)",
+                ))
+            }
+        })
     }
 
     fn long_name(&self) -> &'static str {
@@ -247,14 +289,16 @@ impl Integrator {
             Integrator::Light => "light tracing",
             Integrator::Bdpt { .. } => "bidirectional path tracing",
             Integrator::Vcm(_) => "vertex connection and merging",
+            Integrator::Auto { .. } => "the integrator auto chooses",
         }
     }
 
-    /// The names of the integrators that have capability `has`, as "a or b".
+    /// The names of the concrete integrators (not `auto`) that have capability `has`, as
+    /// "a or b".
     pub fn names_with(has: impl Fn(&Capabilities) -> bool) -> String {
         let names: Vec<&str> = Integrator::ALL
             .iter()
-            .filter(|i| has(&i.capabilities()))
+            .filter(|i| !matches!(i, Integrator::Auto { .. }) && has(&i.capabilities()))
             .map(|i| i.name())
             .collect();
         names.join(" or ")
@@ -270,7 +314,11 @@ mod tests {
         for i in Integrator::ALL {
             assert_eq!(Integrator::from_name(i.name()), Some(i));
         }
-        assert_eq!(Integrator::from_name("auto"), None);
+        assert_eq!(Integrator::from_name("magic"), None);
+        assert!(matches!(
+            Integrator::from_name("auto"),
+            Some(Integrator::Auto { .. })
+        ));
     }
 
     #[test]
@@ -289,12 +337,13 @@ mod tests {
 
     #[test]
     fn strategy_images_are_bdpt_only() {
-        assert!(Integrator::Path.check_strategies(5).is_err());
+        assert!(Integrator::Path.check_strategies(Some(5)).is_err());
         let bdpt = Integrator::ALL[2];
-        assert_eq!(bdpt.check_strategies(2).unwrap(), 9);
+        assert_eq!(bdpt.check_strategies(Some(2)).unwrap(), 9);
         assert!(bdpt
-            .check_strategies(bidir::strategies::MAX_DEPTH + 1)
+            .check_strategies(Some(bidir::strategies::MAX_DEPTH + 1))
             .is_err());
+        assert!(bdpt.check_strategies(None).is_err());
     }
 
     #[test]

@@ -3,7 +3,10 @@
 //! (PBR 4ed §13.4, the PathIntegrator).
 //!
 //! Depth counts scattering events as pbrt's `maxdepth`: depth 0 sees emitters directly,
-//! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8).
+//! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8). Without a cap from the
+//! user, Russian roulette ends paths and the safety cap `cut::SAFETY_DEPTH` stands behind it;
+//! a path that reaches a cap is continued past it with probability q into a separate
+//! accumulator, so the run can say what the cap cut (`cut.rs`).
 //!
 //! Two material hooks (`material/mod.rs`):
 //! - **Opacity.** A surface is present with probability `Material::opacity()`; otherwise the
@@ -16,6 +19,7 @@
 //!   caller's `sampled_to_xyz(l, lambda)` stays unbiased without seeing the termination.
 
 use super::bidir::Contribution;
+use super::cut::{continuation, continuation_limit, CutSample};
 use super::meter::MeterIntegrator;
 use super::{Estimator, Settings, Workspace};
 use crate::bxdf::{Bsdf, TransportMode};
@@ -46,11 +50,44 @@ pub(crate) struct Previous {
     pub(crate) specular: bool,
 }
 
+/// Where a path stands between vertices: what the loop carries from one to the next.
+#[derive(Clone, Copy)]
+struct PathState {
+    ray: Ray,
+    t_max: f32,
+    prev: Option<Previous>,
+    beta: SampledSpectrum,
+    /// Product of η'² over the refractions so far: radiance is scaled by 1/η'² across an
+    /// interface, which Russian roulette must not mistake for absorption (pbrt-v4
+    /// `etaScale`, PBR 4ed §14.1.3).
+    eta_scale: f32,
+    /// Scattering events so far.
+    depth: u32,
+    /// Surfaces passed through (opacity) so far.
+    pass_throughs: u32,
+}
+
+impl PathState {
+    fn new(ray: Ray, t_max: f32, prev: Option<Previous>) -> PathState {
+        PathState {
+            ray,
+            t_max,
+            prev,
+            beta: SampledSpectrum::ONE,
+            eta_scale: 1.0,
+            depth: 0,
+            pass_throughs: 0,
+        }
+    }
+}
+
 impl PathIntegrator {
     /// Radiance arriving along `ray` (limited to t < t_max for the camera ray), at the path's
     /// wavelengths. Not yet divided by the wavelength pdfs. If the path terminated the
     /// secondary wavelengths (dispersion), the estimate is scaled by p(λ)/p'(λ) per lane, so
-    /// that it is relative to `lambda_in`'s pdfs (the hero lane ×N, the others 0).
+    /// that it is relative to `lambda`'s pdfs (the hero lane ×N, the others 0). A path that
+    /// reaches the depth cap ends there (nothing is estimated beyond it).
+    #[cfg(any(test, feature = "testing"))]
     pub fn li(
         &self,
         scene: &Scene,
@@ -59,12 +96,30 @@ impl PathIntegrator {
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
     ) -> SampledSpectrum {
-        self.li_from(scene, ray, t_max, None, lambda, sampler)
+        self.li_from(scene, ray, t_max, None, lambda, sampler, None)
+    }
+
+    /// [`li`](Self::li) that also continues a capped path past the cap into `cut`.
+    #[cfg(any(test, feature = "testing"))]
+    pub fn li_cut(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        lambda: &SampledWavelengths,
+        sampler: &mut Sampler,
+        cut: &mut CutSample,
+    ) -> SampledSpectrum {
+        self.li_from(scene, ray, t_max, None, lambda, sampler, Some(cut))
     }
 
     /// [`li`](Self::li) for a ray whose direction was sampled at vertex `prev` (None: a camera
     /// ray), so that emitters it finds are MIS-weighted against light sampling at that vertex.
-    /// The light meters (`integrator::meter`) start paths here from their sensor point.
+    /// The light meters (`integrator::meter`) start paths here from their sensor point. With
+    /// `cut`, a path that reaches the cap is counted there and continued past it with
+    /// probability q (`cut.rs`), its light added to `cut` (relative to `lambda_in`, as the
+    /// returned estimate).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn li_from(
         &self,
         scene: &Scene,
@@ -73,53 +128,131 @@ impl PathIntegrator {
         prev: Option<Previous>,
         lambda_in: &SampledWavelengths,
         sampler: &mut Sampler,
+        cut: Option<&mut CutSample>,
     ) -> SampledSpectrum {
         let mut lambda = *lambda_in;
-        let l = self.trace(scene, ray, t_max, prev, &mut lambda, sampler);
-        if lambda.secondary_terminated() && !lambda_in.secondary_terminated() {
-            return l * lambda_in.pdf().safe_div(lambda.pdf());
+        let mut l = SampledSpectrum::ZERO;
+        let mut st = PathState::new(ray, t_max, prev);
+        let capped = if scene.dispersive {
+            self.walk::<true>(scene, &mut st, self.max_depth, &mut lambda, sampler, &mut l)
+        } else {
+            self.walk::<false>(scene, &mut st, self.max_depth, &mut lambda, sampler, &mut l)
+        };
+        if let (Some(si), Some(cut)) = (capped, cut) {
+            cut.capped += 1;
+            if let Some(mut ext) = continuation(sampler) {
+                let (c, limited) = self.continue_past_cap(scene, &si, &st, &lambda, &mut ext);
+                cut.add(lambda_in.rebase(c, &lambda), 1.0, limited);
+            }
         }
-        l
+        lambda_in.rebase(l, &lambda)
     }
 
-    /// The path-tracing loop; may terminate the secondary wavelengths of `lambda`.
-    fn trace(
+    /// The light a path capped at vertex `si` (its state `st`, its wavelengths `lambda`) would
+    /// have found beyond the cap, on the continuation's sampler `ext`, relative to `lambda`'s
+    /// pdfs; true when the continuation reached its own limit (`cut::continuation_limit`).
+    fn continue_past_cap(
         &self,
         scene: &Scene,
-        mut ray: Ray,
-        mut t_max: f32,
-        mut prev: Option<Previous>,
+        si: &SurfaceHit,
+        st: &PathState,
+        lambda: &SampledWavelengths,
+        ext: &mut Sampler,
+    ) -> (SampledSpectrum, bool) {
+        let mut st = *st;
+        let mut l = SampledSpectrum::ZERO;
+        let mut lambda_ext = *lambda;
+        let limit = continuation_limit(self.max_depth);
+        let limited = if scene.dispersive {
+            self.scatter::<true>(scene, si, &mut st, &mut lambda_ext, ext, &mut l)
+                && self
+                    .walk::<true>(scene, &mut st, limit, &mut lambda_ext, ext, &mut l)
+                    .is_some()
+        } else {
+            self.scatter::<false>(scene, si, &mut st, &mut lambda_ext, ext, &mut l)
+                && self
+                    .walk::<false>(scene, &mut st, limit, &mut lambda_ext, ext, &mut l)
+                    .is_some()
+        };
+        (lambda.rebase(l, &lambda_ext), limited)
+    }
+
+    /// The light beyond the cap of a path capped at vertex `si`, reached along `-wo` with
+    /// `depth` scattering events before it, per unit throughput: the path tracer continued
+    /// from there on `ext` (BDPT's and VCM's camera subpaths, `cut.rs`). Relative to
+    /// `lambda`'s pdfs; true when it reached its own limit.
+    pub(crate) fn continue_from_vertex(
+        &self,
+        scene: &Scene,
+        si: &SurfaceHit,
+        wo: Vec3,
+        depth: u32,
+        lambda: &SampledWavelengths,
+        ext: &mut Sampler,
+    ) -> (SampledSpectrum, bool) {
+        // Only the arriving ray's direction is read at `si` (wo = −d).
+        let mut st = PathState::new(Ray::new(si.p + wo, -wo), f32::INFINITY, None);
+        st.depth = depth;
+        self.continue_past_cap(scene, si, &st, lambda, ext)
+    }
+
+    /// The path-tracing loop from `st` until the path ends (None) or reaches a vertex at
+    /// depth `limit` (that vertex, its emission counted, `st` as it arrived there). With
+    /// `DISPERSION` (the scene has a dispersive material) each vertex checks whether to
+    /// terminate the secondary wavelengths of `lambda`; without, no check runs.
+    #[inline]
+    fn walk<const DISPERSION: bool>(
+        &self,
+        scene: &Scene,
+        st: &mut PathState,
+        limit: u32,
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
-    ) -> SampledSpectrum {
-        let mut l = SampledSpectrum::ZERO;
-        let mut beta = SampledSpectrum::ONE;
-        // Product of η'² over the refractions so far: radiance is scaled by 1/η'² across an
-        // interface, which Russian roulette must not mistake for absorption (pbrt-v4
-        // `etaScale`, PBR 4ed §14.1.3).
-        let mut eta_scale = 1.0;
-        let mut depth = 0;
-        let mut pass_throughs = 0;
+        l: &mut SampledSpectrum,
+    ) -> Option<SurfaceHit> {
         loop {
-            let Some(hit) = scene.intersect(&ray, t_max) else {
-                l += beta * self.escaped(scene, ray.d, prev, lambda);
-                break;
+            let si = self.next_vertex(scene, st, lambda, sampler, l)?;
+            if st.depth == limit {
+                return Some(si);
+            }
+            if !self.scatter::<DISPERSION>(scene, &si, st, lambda, sampler, l) {
+                return None;
+            }
+        }
+    }
+
+    /// Follows `st.ray` to the next surface the path scatters at (passing through surfaces
+    /// that are absent for this path), adding the emission it finds to `l`; None when the
+    /// path ends (escaped, an analytic light, too many pass-throughs).
+    #[inline]
+    fn next_vertex(
+        &self,
+        scene: &Scene,
+        st: &mut PathState,
+        lambda: &SampledWavelengths,
+        sampler: &mut Sampler,
+        l: &mut SampledSpectrum,
+    ) -> Option<SurfaceHit> {
+        loop {
+            let Some(hit) = scene.intersect(&st.ray, st.t_max) else {
+                *l += st.beta * self.escaped(scene, st.ray.d, st.prev, lambda);
+                return None;
             };
             let si = match hit {
                 Hit::Light { light, hit } => {
-                    l += beta * self.emitted(scene, light, &hit, -ray.d, prev, lambda);
-                    break;
+                    *l += st.beta * self.emitted(scene, light, &hit, -st.ray.d, st.prev, lambda);
+                    return None;
                 }
                 Hit::Surface(si) => si,
             };
             let material = &scene.materials[si.material as usize];
             if !surface_present(material, si.uv, sampler) {
-                pass_throughs += 1;
-                if pass_throughs > MAX_PASS_THROUGHS {
-                    break;
+                st.pass_throughs += 1;
+                if st.pass_throughs > MAX_PASS_THROUGHS {
+                    return None;
                 }
-                ray = spawn_ray(si.p, si.p_error, si.ng, ray.d);
-                t_max -= si.t;
+                st.ray = spawn_ray(si.p, si.p_error, si.ng, st.ray.d);
+                st.t_max -= si.t;
                 continue;
             }
             if let Some(light) = si.light {
@@ -128,40 +261,50 @@ impl PathIntegrator {
                     n: si.ng,
                     t: si.t,
                 };
-                l += beta * self.emitted(scene, light, &lh, -ray.d, prev, lambda);
+                *l += st.beta * self.emitted(scene, light, &lh, -st.ray.d, st.prev, lambda);
             }
-            if depth == self.max_depth {
-                break;
-            }
-            depth += 1;
-            let wo = -ray.d;
-            if material.is_dispersive() {
-                lambda.terminate_secondary();
-            }
-            let bsdf = material.bsdf(scene.tex_coord(&si, self.filter), si.ns, lambda);
-            if !bsdf.is_specular() {
-                l += beta * self.sample_ld(scene, &si, &bsdf, wo, lambda, sampler);
-            }
-            let (uc, u) = (sampler.get_1d(), sampler.get_2d());
-            let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
-                break;
-            };
-            beta *= bs.f * (bs.wi.dot(si.ns).abs() / bs.pdf_w);
-            if bs.transmission {
-                eta_scale *= bs.eta * bs.eta;
-            }
-            prev = Some(Previous {
-                ctx: LightSampleContext { p: si.p, n: si.ng },
-                pdf_bsdf_w: bs.pdf_w,
-                specular: bs.specular,
-            });
-            ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
-            t_max = f32::INFINITY;
-            if !russian_roulette(&mut beta, eta_scale, depth, sampler) {
-                break;
-            }
+            return Some(si);
         }
-        l
+    }
+
+    /// One scattering event at `si`: next-event estimation into `l`, a BSDF-sampled
+    /// direction and Russian roulette; false when the path ends.
+    #[inline]
+    fn scatter<const DISPERSION: bool>(
+        &self,
+        scene: &Scene,
+        si: &SurfaceHit,
+        st: &mut PathState,
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        l: &mut SampledSpectrum,
+    ) -> bool {
+        st.depth += 1;
+        let wo = -st.ray.d;
+        let material = &scene.materials[si.material as usize];
+        if DISPERSION && material.is_dispersive() {
+            lambda.terminate_secondary();
+        }
+        let bsdf = material.bsdf(scene.tex_coord(si, self.filter), si.ns, lambda);
+        if !bsdf.is_specular() {
+            *l += st.beta * self.sample_ld(scene, si, &bsdf, wo, lambda, sampler);
+        }
+        let (uc, u) = (sampler.get_1d(), sampler.get_2d());
+        let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
+            return false;
+        };
+        st.beta *= bs.f * (bs.wi.dot(si.ns).abs() / bs.pdf_w);
+        if bs.transmission {
+            st.eta_scale *= bs.eta * bs.eta;
+        }
+        st.prev = Some(Previous {
+            ctx: LightSampleContext { p: si.p, n: si.ng },
+            pdf_bsdf_w: bs.pdf_w,
+            specular: bs.specular,
+        });
+        st.ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
+        st.t_max = f32::INFINITY;
+        russian_roulette(&mut st.beta, st.eta_scale, st.depth, sampler)
     }
 
     /// Emission from an area light met by the path, MIS-weighted against light sampling.
@@ -366,7 +509,10 @@ impl Estimator for PathEstimator<'_> {
         ws: &mut Workspace,
     ) {
         let (ray, t_max) = self.scene.camera.generate_ray(film, u_lens);
-        let l = self.pt.li(self.scene, ray, t_max, lambda, sampler);
+        let cut = Some(&mut ws.record.cut);
+        let l = self
+            .pt
+            .li_from(self.scene, ray, t_max, None, lambda, sampler, cut);
         ws.record.camera = Contribution::new(l, 1.0);
     }
 
@@ -375,15 +521,16 @@ impl Estimator for PathEstimator<'_> {
         m: &MeterSensor,
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
-        _ws: &mut Workspace,
+        ws: &mut Workspace,
     ) -> SampledSpectrum {
         let meter = MeterIntegrator { path: self.pt };
+        let cut = &mut ws.record.cut;
         match m.kind {
             MeterKind::Illuminance => {
-                meter.irradiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler)
+                meter.irradiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler, cut)
             }
             MeterKind::Luminance => {
-                meter.radiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler)
+                meter.radiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler, cut)
             }
         }
     }

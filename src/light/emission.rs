@@ -120,6 +120,10 @@ fn normalized_spd(spd: &SpdDesc) -> Reason<Spectrum> {
     })
 }
 
+/// The colour temperatures (K) a tint is computed for; others are clamped to it (and the
+/// scene builder says so).
+pub const COLOR_TEMPERATURE_RANGE: (f32, f32) = (1000.0, 10000.0);
+
 /// UsdLux colour temperature as a linear Rec.709 tint: the blackbody's chromaticity
 /// converted to RGB, divided by that of 6500 K so that the default is exactly white
 /// (the normalisation `UsdLuxBlackbodyTemperatureAsRgb` specifies), scaled to luminance 1.
@@ -128,7 +132,8 @@ pub fn color_temperature_rgb(kelvin: f32) -> [f32; 3] {
         let xyz = xyz::dense_to_xyz(&DenseSpectrum::from_fn(|l| blackbody::planck(l, k)));
         color::xyz_to_rgb(xyz)
     };
-    let t = rgb_of(kelvin.clamp(1000.0, 10000.0));
+    let (lo, hi) = COLOR_TEMPERATURE_RANGE;
+    let t = rgb_of(kelvin.clamp(lo, hi));
     let w = rgb_of(6500.0);
     let rel = [t[0] / w[0], t[1] / w[1], t[2] / w[2]];
     let y = color::rgb_to_xyz(rel)[1];

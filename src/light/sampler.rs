@@ -1,40 +1,91 @@
 //! Choosing a light for next-event estimation in proportion to its luminous power
-//! (PBR 4ed §12.6.2, PowerLightSampler).
+//! (PBR 4ed §12.6.2, PowerLightSampler). A scene with a single light needs no table: it is
+//! chosen with probability 1 without a lookup (the table would give the same index and pmf,
+//! exactly: its CDF is [0, 1]).
 
 use super::Light;
 use crate::sampling::Distribution1D;
 
 #[derive(Clone, Debug, Default)]
-pub struct LightSampler {
-    distribution: Distribution1D,
+pub enum LightSampler {
+    /// No lights.
+    #[default]
+    Empty,
+    /// One light: index 0, probability 1.
+    Single,
+    /// A table of the lights' luminous powers.
+    Power(Distribution1D),
 }
 
 impl LightSampler {
+    /// The sampler of `lights`: a table only when there is more than one.
     pub fn new(lights: &[Light], scene_radius: f32) -> LightSampler {
+        match lights.len() {
+            0 => LightSampler::Empty,
+            1 => LightSampler::Single,
+            _ => LightSampler::table(lights, scene_radius),
+        }
+    }
+
+    /// The power table whatever the number of lights (a single light's too).
+    pub fn table(lights: &[Light], scene_radius: f32) -> LightSampler {
+        if lights.is_empty() {
+            return LightSampler::Empty;
+        }
         let weights: Vec<f32> = lights
             .iter()
             .map(|l| l.luminous_power(scene_radius))
             .collect();
-        LightSampler {
-            distribution: Distribution1D::new(&weights),
-        }
+        LightSampler::Power(Distribution1D::new(&weights))
     }
 
     /// (light index, probability), or None when there are no lights.
     #[inline]
     pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
-        if self.distribution.is_empty() {
-            return None;
+        match self {
+            LightSampler::Empty => None,
+            LightSampler::Single => Some((0, 1.0)),
+            LightSampler::Power(d) => {
+                let (i, pmf, _) = d.sample_discrete(u);
+                (pmf > 0.0).then_some((i, pmf))
+            }
         }
-        let (i, pmf, _) = self.distribution.sample_discrete(u);
-        (pmf > 0.0).then_some((i, pmf))
     }
 
     #[inline]
     pub fn pmf(&self, light: usize) -> f32 {
-        if self.distribution.is_empty() {
-            return 0.0;
+        match self {
+            LightSampler::Empty => 0.0,
+            LightSampler::Single => 1.0,
+            LightSampler::Power(d) => d.discrete_pmf(light),
         }
-        self.distribution.discrete_pmf(light)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::{DistantLight, Light};
+    use crate::spectral::Spectrum;
+    use glam::Vec3;
+
+    #[test]
+    fn a_single_light_is_chosen_as_its_table_would_choose_it() {
+        let sun = Light::Distant(DistantLight {
+            prim_path: "/Sun".into(),
+            to_light: Vec3::Y,
+            cos_theta_max: 1.0,
+            one_minus_cos: 0.0,
+            radiance: Spectrum::Constant(1.0),
+        });
+        let (single, table) = (
+            LightSampler::new(std::slice::from_ref(&sun), 1.0),
+            LightSampler::table(std::slice::from_ref(&sun), 1.0),
+        );
+        assert!(matches!(single, LightSampler::Single));
+        for u in [0.0, 0.3, 0.999_999] {
+            assert_eq!(single.sample(u), table.sample(u));
+        }
+        assert_eq!(single.pmf(0), table.pmf(0));
     }
 }

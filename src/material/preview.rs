@@ -12,6 +12,12 @@
 //! | `opacity`, `opacityThreshold` | threshold > 0: present where opacity ≥ threshold, a cutout elsewhere; threshold 0: present with probability `opacity` |
 //! | `normal` | a tangent-space normal (constant or a normal map), applied to the shading normal in the tangent frame of st by the scene (`normal_map.rs`) |
 //!
+//! **Pruning.** Lobes whose weight is exactly zero at every hit are left out when the material
+//! is built ([`PreviewLobes`]): `clearcoat` 0 has no coat, `metallic` 0 (or the specular
+//! workflow) no metal, and then the material is the plastic alone — or, in the metallic
+//! workflow with `ior` 1, whose coat reflects nothing, a Lambertian. `specularColor` 0 keeps
+//! its coat: the specification's edge colour is white, F90 = 1.
+//!
 //! **Textures.** Every input but `useSpecularWorkflow`, `ior` and `opacityThreshold` may be
 //! connected to a `UsdUVTexture` ([`PreviewTextures`]): the BSDF's inputs are looked up at the
 //! hit's st per BSDF, filtered over the pixel footprint, colours uplifted per lookup
@@ -37,7 +43,8 @@ use super::normal_map;
 use crate::bxdf::coat::ScalarFresnel;
 use crate::bxdf::fresnel::diffuse_fresnel;
 use crate::bxdf::{
-    Bsdf, Bxdf, CoatAlbedo, CoatFresnel, PlasticBxdf, PreviewBxdf, SpecularCoat, TrowbridgeReitz,
+    Bsdf, Bxdf, CoatAlbedo, CoatFresnel, DiffuseBxdf, PlasticBxdf, PreviewBxdf, SpecularCoat,
+    TrowbridgeReitz,
 };
 use crate::desc::PreviewSurfaceDesc;
 use crate::spectral::uplift::reflectance_lookup;
@@ -73,6 +80,24 @@ pub struct PreviewMaterial {
     pub normal: Vec3,
     /// Inputs read from textures at the hit (override the constants above).
     pub textures: PreviewTextures,
+    /// The lobes that can carry weight, decided when the material is built.
+    pub lobes: PreviewLobes,
+}
+
+/// Which BSDF a UsdPreviewSurface becomes: its lobes whose weight is exactly zero for every
+/// hit (from constant inputs) are pruned when the material is built, so no hit evaluates
+/// them. The pruned model is the same function up to float round-off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PreviewLobes {
+    /// No clearcoat, no metal and a plastic coat that reflects nothing (the metallic
+    /// workflow with `ior` 1, where the dielectric Fresnel is 0, its albedo 0 and the
+    /// diffuse term ρ/π exactly): Lambertian reflection of `diffuseColor`.
+    Lambert,
+    /// No clearcoat (`clearcoat` 0) and no metal (`metallic` 0, or the specular workflow):
+    /// the plastic alone (its coat and diffuse base).
+    Plastic,
+    /// Clearcoat, metal and plastic as inputs and textures may weigh them.
+    Full,
 }
 
 /// The textured inputs of a UsdPreviewSurface; `None` where the input is a constant. After
@@ -153,7 +178,7 @@ impl PreviewMaterial {
             clearcoat_distrib,
             ScalarFresnel::Dielectric { eta: CLEARCOAT_IOR },
         );
-        PreviewMaterial {
+        let mut m = PreviewMaterial {
             diffuse,
             metallic: if specular.is_some() {
                 0.0
@@ -176,6 +201,25 @@ impl PreviewMaterial {
                 opacity_threshold: d.opacity_threshold,
                 ..PreviewTextures::default()
             },
+            lobes: PreviewLobes::Full,
+        };
+        m.lobes = m.lobes_with_weight();
+        m
+    }
+
+    /// The [`PreviewLobes`] of the inputs: a lobe is pruned only when its weight is exactly
+    /// zero at every hit (a constant 0, untextured). `specularColor` 0 in
+    /// the specular workflow does not prune the coat: the specification's edge colour is
+    /// white (F90 = 1), so Schlick's F = (1 − cos θ)⁵ still reflects at grazing angles.
+    fn lobes_with_weight(&self) -> PreviewLobes {
+        let t = &self.textures;
+        let no_clearcoat = self.clearcoat == 0.0 && t.clearcoat.is_none();
+        let no_metal = self.specular.is_some() || (self.metallic == 0.0 && t.metallic.is_none());
+        let dark_coat = self.specular.is_none() && self.ior == 1.0;
+        match (no_clearcoat && no_metal, dark_coat) {
+            (true, true) => PreviewLobes::Lambert,
+            (true, false) => PreviewLobes::Plastic,
+            (false, _) => PreviewLobes::Full,
         }
     }
 
@@ -203,6 +247,7 @@ impl PreviewMaterial {
                 eta: CLEARCOAT_IOR,
             }))
         });
+        self.lobes = self.lobes_with_weight();
     }
 
     /// The base GGX distribution, its coat albedo and average transmittance at `tc`;
@@ -304,29 +349,57 @@ impl PreviewMaterial {
         }
     }
 
-    /// The BSDF at a hit with texture coordinates `tc` and shading normal `ns`.
+    /// The BSDF at a hit with texture coordinates `tc` and shading normal `ns`: the model of
+    /// [`PreviewMaterial::lobes`].
     #[inline]
     pub fn bsdf(&self, tc: TexCoord, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
         let rho = self.rho(tc, lambda);
+        let bxdf = match self.lobes {
+            PreviewLobes::Lambert => Bxdf::Diffuse(DiffuseBxdf { r: rho }),
+            PreviewLobes::Plastic => Bxdf::Plastic(self.plastic(tc, rho, lambda)),
+            PreviewLobes::Full => Bxdf::Preview(self.composite(tc, rho, lambda)),
+        };
+        Bsdf::new(bxdf, ns)
+    }
+
+    /// The plastic (coat over the diffuse base) at `tc` with diffuse reflectance `rho`.
+    #[inline]
+    fn plastic(
+        &self,
+        tc: TexCoord,
+        rho: SampledSpectrum,
+        lambda: &SampledWavelengths,
+    ) -> PlasticBxdf {
+        let (fresnel, f0_bound) = self.base_fresnel(tc, lambda);
+        let (distrib, albedo, t_avg) = self.base_coat(tc, f0_bound);
+        PlasticBxdf::with_coat(
+            SpecularCoat::new(distrib, fresnel),
+            albedo,
+            rho,
+            self.base_fdr_internal,
+            t_avg,
+        )
+    }
+
+    /// Every lobe: clearcoat over the metallic blend of metal and plastic.
+    #[inline]
+    fn composite(
+        &self,
+        tc: TexCoord,
+        rho: SampledSpectrum,
+        lambda: &SampledWavelengths,
+    ) -> PreviewBxdf {
         let metallic = if self.specular.is_some() {
             0.0
         } else {
             Self::scalar(self.textures.metallic.as_ref(), self.metallic, tc)
         };
         let clearcoat = Self::scalar(self.textures.clearcoat.as_ref(), self.clearcoat, tc);
-        let (fresnel, f0_bound) = self.base_fresnel(tc, lambda);
-        let (distrib, albedo, t_avg) = self.base_coat(tc, f0_bound);
-        let base = PlasticBxdf::with_coat(
-            SpecularCoat::new(distrib, fresnel),
-            albedo,
-            rho,
-            self.base_fdr_internal,
-            t_avg,
-        );
+        let base = self.plastic(tc, rho, lambda);
         let (cc_distrib, cc_albedo) = self.clearcoat_coat(tc);
-        let bxdf = PreviewBxdf {
+        PreviewBxdf {
             base,
-            metal: SpecularCoat::new(distrib, CoatFresnel::Schlick { f0: rho }),
+            metal: SpecularCoat::new(base.coat.distrib, CoatFresnel::Schlick { f0: rho }),
             metallic,
             clearcoat: SpecularCoat::new(
                 cc_distrib,
@@ -334,8 +407,7 @@ impl PreviewMaterial {
             ),
             clearcoat_albedo: cc_albedo,
             clearcoat_weight: clearcoat,
-        };
-        Bsdf::new(Bxdf::Preview(bxdf), ns)
+        }
     }
 
     /// True when an input of the BSDF is textured (not `normal`, `opacity` or

@@ -18,7 +18,7 @@
 //! | `software` | string | `spectral-render <version>` |
 //! | `spectralRender:spp` | int | samples per pixel |
 //! | `spectralRender:seed` | int | sampler seed; a seed above 2^31 − 1 is a string of its decimal digits (EXR's int is 32-bit) |
-//! | `spectralRender:maxDepth` | int | maximum number of scattering events |
+//! | `spectralRender:maxDepth` | int | maximum number of scattering events; −1: unlimited (Russian roulette and the safety cap) |
 //! | `spectralRender:exposure` | float | the camera's exposure in stops |
 //! | `spectralRender:integrator` | string | integrator name |
 //! | `spectralRender:mis` | string | the MIS heuristic (`power`, `balance`), for integrators that combine techniques |
@@ -80,7 +80,8 @@ pub struct ExrMetadata {
     /// The MIS heuristic, for integrators that combine techniques.
     pub mis: Option<String>,
     pub seed: u64,
-    pub max_depth: u32,
+    /// The depth cap; None: unlimited (written as −1).
+    pub max_depth: Option<u32>,
     /// The camera's exposure in stops: the image was scaled by 2^exposure.
     pub exposure: f32,
     pub wall_time_s: f64,
@@ -322,7 +323,10 @@ fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
         ),
         (
             MAX_DEPTH_ATTRIBUTE,
-            int(u64::from(meta.max_depth)).unwrap_or(AttributeValue::I32(i32::MAX)),
+            match meta.max_depth {
+                Some(d) => int(u64::from(d)).unwrap_or(AttributeValue::I32(i32::MAX)),
+                None => AttributeValue::I32(-1),
+            },
         ),
         (EXPOSURE_ATTRIBUTE, AttributeValue::F32(meta.exposure)),
         (INTEGRATOR_ATTRIBUTE, string(&meta.integrator)),
@@ -429,7 +433,7 @@ mod tests {
             integrator: "vcm".into(),
             mis: Some("balance".into()),
             seed: u64::MAX,
-            max_depth: 12,
+            max_depth: Some(12),
             exposure: -8.0,
             wall_time_s: 12.345678901234567,
             version: "0.1.0".into(),

@@ -476,6 +476,7 @@ mod tests {
             ci95: 0.01 * value,
             samples: 64,
             capped: None,
+            depth_cut: None,
         }
     }
 

@@ -24,7 +24,8 @@ pub struct Report {
     pub resolution: Option<[usize; 2]>,
     pub time_budget_s: f64,
     pub seed: u64,
-    pub max_depth: u32,
+    /// None: unlimited.
+    pub max_depth: Option<u32>,
     /// How the reference was made or where it came from, one sentence.
     pub reference: String,
     /// Pixels masked as emitters seen directly (images).
@@ -251,10 +252,10 @@ pub fn markdown(report: &Report) -> String {
     if let Some([w, h]) = report.resolution {
         facts.push(format!("{w}×{h} pixels"));
     }
-    facts.push(format!(
-        "seed {}, max depth {}",
-        report.seed, report.max_depth
-    ));
+    let depth = report
+        .max_depth
+        .map_or("unlimited".to_string(), |d| d.to_string());
+    facts.push(format!("seed {}, max depth {depth}", report.seed));
     let _ = writeln!(s, "{}.\n", facts.join(", "));
     let _ = writeln!(s, "Reference: {}\n", report.reference);
     if let Some(m) = report.masked_pixels {

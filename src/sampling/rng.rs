@@ -47,6 +47,16 @@ impl Sampler {
     pub fn get_2d(&mut self) -> [f32; 2] {
         [self.get_1d(), self.get_1d()]
     }
+
+    /// A stream of its own, derived from this one's current state and `stream` without
+    /// advancing this one: what this sampler draws next does not change.
+    pub fn fork(&self, stream: u64) -> Sampler {
+        let key = mix64(self.state ^ mix64(stream ^ self.inc));
+        let inc = (mix64(key ^ stream) << 1) | 1;
+        let mut s = Sampler { state: key, inc };
+        s.next_u32();
+        s
+    }
 }
 
 /// SplitMix64 finaliser (Steele, Lea, Flood 2014).
@@ -78,6 +88,19 @@ mod tests {
             .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
+    }
+
+    #[test]
+    fn a_fork_is_reproducible_and_leaves_its_parent_alone() {
+        let mut a = Sampler::new(1, 2, 3);
+        a.get_1d();
+        let (mut f, mut g) = (a.fork(7), a.fork(7));
+        let (x, y) = (f.get_1d(), g.get_1d());
+        assert_eq!(x, y);
+        let parent: Vec<f32> = (0..4).map(|_| a.get_1d()).collect();
+        let fork: Vec<f32> = (0..4).map(|_| f.get_1d()).collect();
+        assert_ne!(parent, fork);
+        assert_ne!(a.fork(8).get_1d(), a.fork(7).get_1d());
     }
 
     #[test]

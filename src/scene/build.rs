@@ -1,7 +1,9 @@
 //! From the plain [`SceneDescription`] to the render [`Scene`]: spectra resolved and
 //! validated, lights built in absolute units, triangles put behind the BVH, a camera chosen.
 
+use super::analysis::{self, SceneFeatures};
 use super::limits;
+use super::machinery::Machinery;
 use super::render_scene::{Mesh, Scene, Summary, TriRef};
 use crate::accel::bvh::Bvh;
 use crate::bxdf::TrowbridgeReitz;
@@ -18,7 +20,7 @@ use crate::light::shaping::Shaping;
 use crate::light::EmissiveTexture;
 use crate::light::*;
 use crate::material::normal_map::Tangents;
-use crate::material::preview::PreviewTextures;
+use crate::material::preview::{PreviewLobes, PreviewTextures};
 use crate::material::{
     AlphaTexture, ColorInput, FloatInput, Material, PlasticMaterial, PreviewMaterial,
 };
@@ -36,9 +38,20 @@ use std::sync::Arc;
 /// Image width when neither RenderSettings nor the command line gives a resolution.
 const DEFAULT_WIDTH: u32 = 640;
 
+/// The render scene of `desc`; `resolution` overrides RenderSettings.
 pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<Scene> {
+    build_with(desc, resolution, Machinery::default())
+}
+
+/// [`build`] with the pieces of `machinery` kept where the scene does not need them.
+pub fn build_with(
+    desc: &SceneDescription,
+    resolution: Option<(u32, u32)>,
+    machinery: Machinery,
+) -> Result<Scene> {
     let file = &desc.source;
     let mut warnings = desc.warnings.clone();
+    warn_clamped_temperatures(desc, &mut warnings);
     let mut textures = TextureCache::default();
     let mut materials = desc
         .materials
@@ -48,6 +61,13 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
                 .map_err(|r| Error::prim(file, &m.prim_path, r))
         })
         .collect::<Result<Vec<_>>>()?;
+    if machinery.all_lobes {
+        for m in &mut materials {
+            if let Material::Preview(p) = m {
+                p.lobes = PreviewLobes::Full;
+            }
+        }
+    }
     let emissive = emissive_textures(desc, &mut textures)?;
     let default_material = materials.len() as u32;
     materials.push(Material::Diffuse {
@@ -83,7 +103,11 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         );
     }
     let camera = camera(desc, resolution, center, radius)?;
-    let light_sampler = LightSampler::new(&lights, radius);
+    let light_sampler = if machinery.light_table {
+        LightSampler::table(&lights, radius)
+    } else {
+        LightSampler::new(&lights, radius)
+    };
     let infinite_lights = indices_where(&lights, Light::is_infinite);
     let shape_lights = indices_where(&lights, Light::is_analytic_shape);
     let summary = Summary {
@@ -96,12 +120,14 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         time: desc.time,
     };
     let all_opaque = materials.iter().all(Material::is_opaque);
-    Ok(Scene {
+    let dispersive = machinery.dispersion_checks || materials.iter().any(Material::is_dispersive);
+    let mut scene = Scene {
         source: file.clone(),
         meshes,
         tri_refs,
         bvh,
         all_opaque,
+        dispersive,
         materials,
         lights,
         light_sampler,
@@ -113,7 +139,34 @@ pub fn build(desc: &SceneDescription, resolution: Option<(u32, u32)>) -> Result<
         summary,
         stage_to_world: desc.stage_to_world,
         content_hash: desc.content_hash,
-    })
+        features: SceneFeatures::default(),
+    };
+    let material_paths: Vec<String> = desc.materials.iter().map(|m| m.prim_path.clone()).collect();
+    scene.features = analysis::analyze(&scene, &material_paths);
+    Ok(scene)
+}
+
+/// A colour temperature outside the range its tint is defined for is clamped to it
+/// (`emission::color_temperature_rgb`): said in the load summary rather than silently.
+fn warn_clamped_temperatures(desc: &SceneDescription, warnings: &mut Vec<String>) {
+    let lights = desc.lights.iter().map(|l| (&l.prim_path, &l.emission));
+    let meshes = desc
+        .meshes
+        .iter()
+        .filter_map(|m| m.light.as_ref().map(|e| (&m.prim_path, e)));
+    for (path, e) in lights.chain(meshes) {
+        let Some(k) = e.color_temperature else {
+            continue;
+        };
+        let (lo, hi) = emission::COLOR_TEMPERATURE_RANGE;
+        if !(lo..=hi).contains(&k) {
+            warnings.push(format!(
+                "{path}: inputs:colorTemperature {k} K is outside {lo}–{hi} K; the tint of \
+                 {} K is used",
+                k.clamp(lo, hi)
+            ));
+        }
+    }
 }
 
 fn indices_where(lights: &[Light], f: impl Fn(&Light) -> bool) -> Vec<u32> {
@@ -1023,5 +1076,35 @@ fn default_camera(center: Vec3, radius: f32) -> CameraDesc {
         focus_distance: 0.0,
         lens_radius: 0.0,
         exposure: 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_clamped_colour_temperature_is_named_in_the_summary() {
+        let bulb = |name: &str, k: f32| LightDesc {
+            prim_path: name.into(),
+            kind: LightKind::Sphere { radius: 0.05 },
+            to_world: Mat4::IDENTITY,
+            emission: EmissionDesc {
+                intensity: 10.0,
+                color_temperature: Some(k),
+                ..Default::default()
+            },
+            shaping: None,
+        };
+        let desc = SceneDescription {
+            lights: vec![bulb("/Warm", 2700.0), bulb("/Blue", 20000.0)],
+            ..Default::default()
+        };
+        let w = build(&desc, Some((1, 1))).unwrap().summary.warnings;
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with("/Blue: inputs:colorTemperature 20000 K"),
+            "{w:?}"
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! The immutable, `Sync` scene the integrators read: triangles behind the BVH, materials,
 //! lights with their sampler, the camera; plus closest-hit and shadow queries.
 
+use super::analysis::SceneFeatures;
 use crate::accel::bvh::Bvh;
 use crate::geometry::triangle::hit_point_error;
 use crate::geometry::Ray;
@@ -99,15 +100,22 @@ pub struct Scene {
     pub summary: Summary,
     /// True when no material has an opacity below 1 (shadow rays then need no pass-through).
     pub all_opaque: bool,
+    /// True when a material refracts wavelengths apart (`Material::is_dispersive`): only then
+    /// do the integrators check at each vertex whether to terminate the secondary
+    /// wavelengths.
+    pub dispersive: bool,
     /// Stage space to world space (see `SceneDescription::stage_to_world`).
     pub stage_to_world: DMat4,
     /// The hash of the stage's layers (`SceneDescription::content_hash`).
     pub content_hash: u64,
+    /// What the stage calls for (`scene::analysis`), found once when the scene is built.
+    pub features: SceneFeatures,
 }
 
 impl Scene {
     /// Closest hit with t in (0, t_max).
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        super::ray_count::count();
         let mut best = self
             .bvh
             .intersect(ray, t_max)
@@ -124,6 +132,7 @@ impl Scene {
     /// True when something blocks the ray before t_max; `skip` is the light being sampled
     /// (its own shape must not shadow the point sampled on it).
     pub fn occluded(&self, ray: &Ray, t_max: f32, skip: Option<u32>) -> bool {
+        super::ray_count::count();
         if self.bvh.occluded(ray, t_max) {
             return true;
         }

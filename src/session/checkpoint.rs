@@ -10,11 +10,14 @@
 //!
 //! File layout (`raw_bytes`): the magic line [`MAGIC`], the format version, the identity as
 //! (key, value) strings, samples, dropped, seconds, the film state, a strategy flag and the
-//! strategy sums, and an FNV-1a hash of everything before it (a damaged file is refused).
+//! strategy sums, the sums of what the depth cap cut (`integrator::cut::BatchedRatio`: per
+//! batch samples, cut and total, then the capped paths and limited continuations), and an
+//! FNV-1a hash of everything before it (a damaged file is refused).
 
 use crate::desc::ContentHash;
 use crate::error::Reason;
 use crate::integrator::bidir::strategies::StrategySums;
+use crate::integrator::cut::{BatchedRatio, BATCHES};
 use crate::scene::Scene;
 use crate::sensor::film_state::FilmState;
 use crate::sensor::raw_bytes::{ByteReader, ByteWriter};
@@ -24,7 +27,7 @@ use super::RenderOptions;
 /// The first bytes of a checkpoint file.
 pub const MAGIC: &[u8] = b"spectral-render checkpoint\n";
 /// The version of the layout.
-const FORMAT: u64 = 1;
+const FORMAT: u64 = 2;
 
 /// An image session's state under its run's identity.
 #[derive(Clone, Debug, PartialEq)]
@@ -39,6 +42,8 @@ pub struct Checkpoint {
     pub wall_time_s: f64,
     pub film: FilmState,
     pub strategies: Option<StrategySums>,
+    /// What the depth cap cut so far, for the resumed run's report.
+    pub depth_cut: BatchedRatio,
 }
 
 /// What decides the image of `scene` under `opts` for a given sample count.
@@ -56,7 +61,11 @@ pub fn identity(scene: &Scene, opts: &RenderOptions) -> Vec<(String, String)> {
         ),
         ("seed", opts.seed.to_string()),
         ("spp", spp),
-        ("max depth", opts.max_depth.to_string()),
+        (
+            "max depth",
+            opts.max_depth
+                .map_or("unlimited".to_string(), |d| d.to_string()),
+        ),
         ("integrator", format!("{:?}", opts.integrator)),
         ("texture filtering", opts.filter_textures.to_string()),
         ("strategy images", opts.strategies.to_string()),
@@ -106,6 +115,12 @@ impl Checkpoint {
                 }
             }
         }
+        let b = &self.depth_cut.batches;
+        w.u64s(&b.map(|x| x.0));
+        w.f64s(&b.map(|x| x.1));
+        w.f64s(&b.map(|x| x.2));
+        w.u64(self.depth_cut.capped);
+        w.u64(self.depth_cut.limited);
         let mut hash = ContentHash::default();
         hash.add(&w.bytes);
         w.u64(hash.0);
@@ -139,6 +154,7 @@ impl Checkpoint {
             wall_time_s: r.f64()?,
             film: FilmState::decode(&mut r)?,
             strategies: read_strategies(&mut r)?,
+            depth_cut: read_depth_cut(&mut r)?,
         };
         if r.remaining() != 0 {
             return Err("the checkpoint has trailing data".into());
@@ -157,6 +173,18 @@ fn read_identity(r: &mut ByteReader) -> Reason<Vec<(String, String)>> {
         pairs.push((k, v));
     }
     Ok(pairs)
+}
+
+fn read_depth_cut(r: &mut ByteReader) -> Reason<BatchedRatio> {
+    let (n, c, t) = (r.u64s()?, r.f64s()?, r.f64s()?);
+    if [n.len(), c.len(), t.len()] != [BATCHES; 3] {
+        return Err("the checkpoint's depth-cut sums have the wrong size".into());
+    }
+    Ok(BatchedRatio {
+        batches: std::array::from_fn(|i| (n[i], c[i], t[i])),
+        capped: r.u64()?,
+        limited: r.u64()?,
+    })
 }
 
 fn read_strategies(r: &mut ByteReader) -> Reason<Option<StrategySums>> {
@@ -205,6 +233,11 @@ mod tests {
                 unweighted: vec![vec![[2.0; 3]]],
                 samples_per_pixel: 4,
             }),
+            depth_cut: BatchedRatio {
+                batches: std::array::from_fn(|i| (i as u64, 0.5 * i as f64, 2.0 * i as f64)),
+                capped: 7,
+                limited: 1,
+            },
         }
     }
 

@@ -25,11 +25,13 @@
 //! also end at iteration boundaries, and each iteration is prepared (`begin_iteration`) on
 //! the session's threads before its first sample.
 
+use super::auto::AutoReport;
 use super::checkpoint::{self, Checkpoint};
-use super::{pool, PassStats, Progressive};
+use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
+use crate::integrator::cut::{depth_cap, BatchedRatio};
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -40,9 +42,17 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 const TILE_SIZE: usize = 16;
-/// Samples per chunk of a splatting integrator (bounds the splat lists held at once: at most
-/// max-depth + 1 splats of 16 bytes per sample).
+/// Samples per chunk of a splatting integrator at depth caps up to 7 (bounds the splat lists
+/// held at once: at most max-depth + 1 splats of 16 bytes per sample).
 pub const SPLAT_CHUNK_SAMPLES: u64 = 1 << 18;
+/// Splats a chunk may hold at most (8 per sample of [`SPLAT_CHUNK_SAMPLES`]: 32 MiB): deeper
+/// caps make chunks smaller ([`splat_chunk_samples`]), down to one sample per pixel.
+pub const SPLATS_PER_CHUNK: u64 = SPLAT_CHUNK_SAMPLES * 8;
+
+/// Samples over the image per chunk of a splatting integrator with depth cap `cap`.
+pub fn splat_chunk_samples(cap: u32) -> u64 {
+    (SPLATS_PER_CHUNK / (u64::from(cap) + 1)).clamp(1, SPLAT_CHUNK_SAMPLES)
+}
 /// Samples per pixel when neither a count nor a time budget is given.
 pub const DEFAULT_SPP: u32 = 64;
 /// The most samples per pixel a render takes (a time budget stops there too): the EXR
@@ -58,7 +68,10 @@ pub struct RenderOptions {
     pub time_budget: Option<f64>,
     pub seed: u64,
     pub threads: Option<usize>,
-    pub max_depth: u32,
+    /// Maximum scattering events (pbrt's maxdepth); None: unlimited — Russian roulette ends
+    /// paths, behind the safety cap `SAFETY_DEPTH`. Whatever the cap, the output says what
+    /// it cut when a path reached it ([`RenderOutput::depth_cut`]).
+    pub max_depth: Option<u32>,
     /// The light-transport algorithm and its settings.
     pub integrator: Integrator,
     /// Record the per-(s, t) decomposition (`Capabilities::strategy_images`).
@@ -87,7 +100,7 @@ impl Default for RenderOptions {
             time_budget: None,
             seed: 0,
             threads: None,
-            max_depth: 7,
+            max_depth: None,
             integrator: Integrator::Path,
             strategies: false,
             filter_textures: true,
@@ -112,6 +125,10 @@ pub struct RenderOutput {
     pub strategies: Option<Vec<StrategyImage>>,
     /// The integrator's report on its settings and resources (`Estimator::report`).
     pub report: Option<String>,
+    /// What `--integrator auto` chose and why (`session::auto`).
+    pub auto: Option<AutoReport>,
+    /// What the depth cap cut of the image's mean luminance, when a path reached it.
+    pub depth_cut: Option<DepthCut>,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -134,6 +151,10 @@ pub struct ImageSession<'a> {
     strategy_films: Option<StrategyFilms>,
     /// Samples per pixel per chunk.
     chunk: u64,
+    /// The effective depth cap.
+    cap: u32,
+    /// The samples' luminance within and past the cap, merged in tile order.
+    cut: BatchedRatio,
     target: u64,
     done: u64,
     dropped: u64,
@@ -141,10 +162,16 @@ pub struct ImageSession<'a> {
     start: Instant,
     /// Seconds spent before this session started (a resumed checkpoint's).
     prior_s: f64,
+    auto: Option<AutoReport>,
 }
 
 impl<'a> ImageSession<'a> {
+    /// A session of `opts.integrator`; `Integrator::Auto` is resolved first by its pilot
+    /// (`session::auto`), whose winning session this then is.
     pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageSession<'a>> {
+        if let Integrator::Auto { .. } = opts.integrator {
+            return super::auto::image(scene, opts);
+        }
         if !WAVELENGTH_COUNTS.contains(&opts.wavelengths) {
             return Err(crate::error::Error::option(format!(
                 "{} wavelengths per sample: 4 (hero sampling) or 1 (the hero alone)",
@@ -161,10 +188,11 @@ impl<'a> ImageSession<'a> {
             &super::memory::image(scene, opts),
             opts.max_memory,
         )?;
+        let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h);
         let settings = Settings {
-            max_depth: opts.max_depth,
+            max_depth: cap,
             filter: texture_filter(opts),
             meters: false,
         };
@@ -172,17 +200,19 @@ impl<'a> ImageSession<'a> {
         Ok(ImageSession {
             scene,
             pool: pool::new(opts.threads)?,
-            estimator: opts.integrator.estimator(scene, settings),
+            estimator: opts.integrator.estimator(scene, settings)?,
             splats,
             tiles: film.tiles(TILE_SIZE),
             film,
             strategy_count,
-            strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, opts.max_depth)),
+            strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, cap)),
             chunk: if splats {
-                (SPLAT_CHUNK_SAMPLES / (w * h) as u64).max(1)
+                splat_chunk(w * h, cap)
             } else {
                 u64::MAX
             },
+            cap,
+            cut: BatchedRatio::default(),
             target: match (opts.spp, opts.time_budget) {
                 (Some(n), _) => u64::from(n),
                 (None, Some(_)) => MAX_SPP,
@@ -193,8 +223,63 @@ impl<'a> ImageSession<'a> {
             passes: 0,
             start: Instant::now(),
             prior_s: 0.0,
+            auto: None,
             opts: opts.clone(),
         })
+    }
+
+    /// The samples per pixel a pause of a session of `integrator` on `scene` must be a
+    /// multiple of for its image to stay what an unpaused session gives: a chunk for
+    /// splatting integrators (their splats are summed pass by pass, so passes cover whole
+    /// chunks), 1 otherwise (the open chunk continues across passes).
+    pub(crate) fn pause_quantum(
+        integrator: &Integrator,
+        scene: &Scene,
+        max_depth: Option<u32>,
+    ) -> u64 {
+        if integrator.capabilities().splats {
+            let pixels = scene.camera.width as usize * scene.camera.height as usize;
+            splat_chunk(pixels, depth_cap(max_depth))
+        } else {
+            1
+        }
+    }
+
+    /// Goes on after `auto`'s pilot (`session::auto`) under `time_budget`, counted from
+    /// `clock` (the pilot's start: its time counts), reporting `auto`.
+    pub(crate) fn continue_after_pilot(
+        &mut self,
+        time_budget: Option<f64>,
+        clock: Instant,
+        auto: AutoReport,
+    ) {
+        self.opts.time_budget = time_budget;
+        self.start = clock;
+        self.auto = Some(auto);
+    }
+
+    /// Ray queries the session's samples have made so far (`scene::ray_count`): the same for
+    /// the same samples on any machine and thread count.
+    pub fn ray_queries(&self) -> u64 {
+        self.pool
+            .broadcast(|_| crate::scene::ray_count::on_this_thread())
+            .into_iter()
+            .sum()
+    }
+
+    /// Samples per pixel so far.
+    pub fn samples(&self) -> u64 {
+        self.done
+    }
+
+    /// The integrator the session runs (the one `auto` chose, if it was asked for).
+    pub fn integrator(&self) -> Integrator {
+        self.opts.integrator
+    }
+
+    /// What `--integrator auto` chose and why, when it was asked for.
+    pub fn auto(&self) -> Option<&AutoReport> {
+        self.auto.as_ref()
     }
 
     /// The session's state under its run's identity (`session::checkpoint`).
@@ -206,6 +291,7 @@ impl<'a> ImageSession<'a> {
             wall_time_s: self.elapsed(),
             film: self.film.state(),
             strategies: self.strategy_films.as_ref().map(StrategyFilms::sums),
+            depth_cut: self.cut,
         }
     }
 
@@ -227,6 +313,7 @@ impl<'a> ImageSession<'a> {
         self.film = film;
         self.done = c.samples;
         self.dropped = c.dropped;
+        self.cut = c.depth_cut;
         self.prior_s = c.wall_time_s;
         Ok(())
     }
@@ -251,6 +338,13 @@ impl<'a> ImageSession<'a> {
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
             report: self.estimator.report(),
+            auto: self.auto.clone(),
+            depth_cut: DepthCut::new(
+                self.opts.max_depth,
+                &self.cut.sums(),
+                self.cut.capped,
+                self.cut.limited,
+            ),
         }
     }
 
@@ -306,7 +400,7 @@ impl<'a> ImageSession<'a> {
             hero_only: self.opts.wavelengths == 1,
         };
         let (film, estimator) = (&self.film, &*self.estimator);
-        let max_depth = self.opts.max_depth;
+        let max_depth = self.cap;
         let results: Vec<TileAccumulator> = self.pool.install(|| {
             self.tiles
                 .par_iter()
@@ -327,6 +421,7 @@ impl<'a> ImageSession<'a> {
         for (tile, r) in self.tiles.iter().zip(results) {
             self.film.store_tile(tile, &r.sums, &r.odd_y, count);
             self.film.add_splats(&r.splats, &r.odd_splats);
+            self.cut.merge(&r.cut);
             if let (Some(sf), Some(st)) = (&mut self.strategy_films, &r.strategies) {
                 sf.merge_tile(tile, st);
             }
@@ -397,6 +492,12 @@ impl Progressive for ImageSession<'_> {
     }
 }
 
+/// Samples per pixel of a chunk of a splatting integrator on an image of `pixels` under the
+/// depth cap `cap` ([`splat_chunk_samples`]).
+fn splat_chunk(pixels: usize, cap: u32) -> u64 {
+    (splat_chunk_samples(cap) / pixels.max(1) as u64).max(1)
+}
+
 /// The camera's texture footprint for the render's sample count (unknown under a time
 /// budget: `TextureFilter::camera`).
 fn texture_filter(opts: &RenderOptions) -> TextureFilter {
@@ -457,7 +558,7 @@ fn render_tile<const HERO_ONLY: bool>(
                     // VCM replaces the sample's wavelengths by its iteration's tuple.
                     lambda.terminate_secondary();
                 }
-                acc.add(k, &ws.record, &lambda, s % 2 == 1);
+                acc.add(k, &ws.record, &lambda, s);
             }
             k += 1;
         }

@@ -11,7 +11,8 @@
 //!   splats' Y (32 B more);
 //! - a pass: the tiles' continued sums (32 B per pixel) and the per-pixel variance (8 B), and
 //!   for splatting integrators the splat lists of one chunk, up to max-depth + 1 splats of
-//!   24 B (with their odd-sample copy) per sample, `max(SPLAT_CHUNK_SAMPLES, pixels)` samples;
+//!   24 B (with their odd-sample copy) per sample, `max(splat_chunk_samples(cap), pixels)`
+//!   samples (2¹⁸ at caps up to 7, fewer for deeper ones);
 //! - the output: XYZ and RGB as f32, the EXR's channels and their compressed copy (72 B per
 //!   pixel);
 //! - strategy images (`--strategies`): per strategy, f64 weighted and unweighted sums, the
@@ -22,18 +23,20 @@
 //! - meters: per meter its sensor, state and reading, and a map cell's share of the CSV,
 //!   JSON and PNG (512 B).
 //!
-//! Path lengths enter as min(max-depth, [`TYPICAL_DEPTH`]): with Russian roulette a path
-//! rarely goes deeper, and a depth cap of 1000 (a furnace test) must not count as a thousand
-//! vertices per path. Within that, the figures are bounds.
+//! Path lengths enter as min(max-depth, [`TYPICAL_DEPTH`]) (an unlimited run's cap is the
+//! safety cap): with Russian roulette a path rarely goes deeper, and a cap of 1000 (a furnace
+//! test) must not count as a thousand vertices per path. Within that, the figures are
+//! bounds.
 //!
 //! The default limit is what the process holds plus the machine's available memory
 //! (`MemAvailable` of `/proc/meminfo`), or [`FALLBACK_LIMIT`] where that cannot be read.
 
-use super::image::SPLAT_CHUNK_SAMPLES;
+use super::image::splat_chunk_samples;
 use super::{MeterOptions, RenderOptions};
 use crate::error::{Error, Result};
 use crate::integrator::bidir::merge::MergeVertex;
 use crate::integrator::bidir::strategies;
+use crate::integrator::cut::depth_cap;
 use crate::integrator::Integrator;
 use crate::scene::Scene;
 
@@ -88,18 +91,19 @@ impl MemoryEstimate {
 pub fn image(scene: &Scene, opts: &RenderOptions) -> MemoryEstimate {
     let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
     let caps = opts.integrator.capabilities();
-    let depth = u64::from(opts.max_depth.min(TYPICAL_DEPTH));
+    let cap = depth_cap(opts.max_depth);
+    let depth = u64::from(cap.min(TYPICAL_DEPTH));
     let mut e = MemoryEstimate::default();
     let per_pixel = FILM + if caps.splats { FILM_SPLATS } else { 0 };
     e.add("film", pixels.saturating_mul(per_pixel));
     e.add("passes", pixels.saturating_mul(PASS));
     if caps.splats {
-        let samples = pixels.max(SPLAT_CHUNK_SAMPLES);
+        let samples = pixels.max(splat_chunk_samples(cap));
         e.add("splat lists", samples.saturating_mul((depth + 1) * SPLAT));
     }
     e.add("output", pixels.saturating_mul(OUTPUT));
     if opts.strategies {
-        let n = strategies::count(opts.max_depth) as u64;
+        let n = strategies::count(cap.min(strategies::MAX_DEPTH)) as u64;
         e.add("strategy images", pixels.saturating_mul(n * STRATEGY));
     }
     e.add(
@@ -117,7 +121,7 @@ pub fn meters(meters: usize, opts: &MeterOptions) -> MemoryEstimate {
         Integrator::Vcm(p) => p.meter_light_paths,
         _ => 0,
     };
-    let depth = u64::from(opts.max_depth.min(TYPICAL_DEPTH));
+    let depth = u64::from(depth_cap(opts.max_depth).min(TYPICAL_DEPTH));
     e.add(
         "light vertices",
         light_vertices(&opts.integrator, paths, depth),

@@ -54,9 +54,11 @@
 //! assert!((reading.value / 1000.0 - 1.0).abs() < 0.02);
 //! ```
 
+use super::auto::AutoReport;
 use super::image::PASS_SECONDS;
-use super::{pool, PassStats, Progressive};
+use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::Result;
+use crate::integrator::cut::{depth_cap, CutSample, RatioSums};
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -95,7 +97,8 @@ pub struct MeterOptions {
     /// Wall-clock cap in seconds (rounds stop once it is spent).
     pub time_budget: Option<f64>,
     pub seed: u64,
-    pub max_depth: u32,
+    /// Maximum scattering events; None: unlimited (as [`super::RenderOptions::max_depth`]).
+    pub max_depth: Option<u32>,
     pub threads: Option<usize>,
     /// The estimator: path tracing (default), light tracing or BDPT, with its settings.
     pub integrator: Integrator,
@@ -111,7 +114,7 @@ impl Default for MeterOptions {
             max_samples: DEFAULT_MAX_SAMPLES,
             time_budget: None,
             seed: 0,
-            max_depth: 7,
+            max_depth: None,
             threads: None,
             integrator: Integrator::Path,
             max_memory: None,
@@ -141,6 +144,8 @@ pub struct Reading {
     pub samples: u64,
     /// Set when a cap stopped the reading short of its sample count or relative error.
     pub capped: Option<Cap>,
+    /// What the depth cap cut of the reading, when a path reached it.
+    pub depth_cut: Option<DepthCut>,
 }
 
 /// The readings of a run, in the order of the meters.
@@ -152,6 +157,8 @@ pub struct MeterRun {
     pub wall_time_s: f64,
     /// The integrator's report on its settings and resources (`Estimator::report`).
     pub report: Option<String>,
+    /// What `--integrator auto` chose and why (`session::auto`).
+    pub auto: Option<AutoReport>,
 }
 
 /// Measures every meter to the end (sample count, relative error or time budget).
@@ -174,6 +181,33 @@ struct State {
     taken: u64,
     finished: bool,
     capped: Option<Cap>,
+    /// The observations' cut past the depth cap and total (`integrator::cut`).
+    cut: BlockCut,
+}
+
+/// What a block's samples found past the depth cap: paired sums per sample (or, for an
+/// estimator with iterations, the block's means as one pair), and the paths that reached it.
+#[derive(Clone, Copy, Debug, Default)]
+struct BlockCut {
+    sums: RatioSums,
+    capped: u64,
+    limited: u64,
+}
+
+impl BlockCut {
+    fn merge(&mut self, o: &BlockCut) {
+        self.sums.merge(&o.sums);
+        self.capped += o.capped;
+        self.limited += o.limited;
+    }
+}
+
+/// What one block returns: its statistics, its cut and the non-finite samples dropped.
+#[derive(Clone, Copy, Debug, Default)]
+struct BlockResult {
+    stats: Stats,
+    cut: BlockCut,
+    dropped: u64,
 }
 
 /// Samples [first, end) of one meter.
@@ -191,36 +225,43 @@ pub struct MeterSession<'a> {
     estimator: Box<dyn Estimator + 'a>,
     sensors: Vec<MeterSensor>,
     states: Vec<State>,
+    auto: Option<AutoReport>,
     dropped: u64,
     passes: u32,
     start: Instant,
 }
 
 impl<'a> MeterSession<'a> {
-    /// Refuses meters the integrator cannot estimate (`Integrator::check_meter`).
+    /// Refuses meters the integrator cannot estimate (`Integrator::check_meter`);
+    /// `Integrator::Auto` is resolved first by its pilot (`session::auto`), whose winning
+    /// session this then is.
     pub fn new(
         scene: &'a Scene,
         meters: &[Meter],
         opts: &MeterOptions,
     ) -> Result<MeterSession<'a>> {
+        if let Integrator::Auto { .. } = opts.integrator {
+            return super::auto::meters(scene, meters, opts);
+        }
         for m in meters {
             opts.integrator.check_meter(m.kind)?;
         }
         let estimate = super::memory::meters(meters.len(), opts);
         super::memory::check("the measurement", &estimate, opts.max_memory)?;
         let settings = Settings {
-            max_depth: opts.max_depth,
+            max_depth: depth_cap(opts.max_depth),
             filter: TextureFilter::Finest,
             meters: true,
         };
         Ok(MeterSession {
             pool: pool::new(opts.threads)?,
-            estimator: opts.integrator.estimator(scene, settings),
+            estimator: opts.integrator.estimator(scene, settings)?,
             sensors: meters
                 .iter()
                 .map(|m| MeterSensor::new(m, scene.point_error(m.p)))
                 .collect(),
             states: vec![State::default(); meters.len()],
+            auto: None,
             dropped: 0,
             passes: 0,
             start: Instant::now(),
@@ -239,12 +280,51 @@ impl<'a> MeterSession<'a> {
 
     /// The readings so far, in the order of the meters.
     pub fn readings(&self) -> MeterRun {
+        let depth = self.opts.max_depth;
         MeterRun {
-            readings: self.states.iter().map(reading).collect(),
+            readings: self.states.iter().map(|s| reading(s, depth)).collect(),
             dropped: self.dropped,
             wall_time_s: self.start.elapsed().as_secs_f64(),
             report: self.estimator.report(),
+            auto: self.auto.clone(),
         }
+    }
+
+    /// Samples per reading of the first round under a relative-error target: a pause there
+    /// (`step_to`) leaves the rounds, and so the readings, as they would have been.
+    pub(crate) fn first_round(&self) -> u64 {
+        self.min_samples_rel().min(self.opts.max_samples)
+    }
+
+    /// Goes on after `auto`'s pilot (`session::auto`) under `time_budget`, counted from
+    /// `clock` (the pilot's start: its time counts), reporting `auto`.
+    pub(crate) fn continue_after_pilot(
+        &mut self,
+        time_budget: Option<f64>,
+        clock: Instant,
+        auto: AutoReport,
+    ) {
+        self.opts.time_budget = time_budget;
+        self.start = clock;
+        self.auto = Some(auto);
+    }
+
+    /// Ray queries the session's samples have made so far (`scene::ray_count`).
+    pub fn ray_queries(&self) -> u64 {
+        self.pool
+            .broadcast(|_| crate::scene::ray_count::on_this_thread())
+            .into_iter()
+            .sum()
+    }
+
+    /// The options the session runs with (the integrator `auto` chose, if it was asked for).
+    pub fn options(&self) -> &MeterOptions {
+        &self.opts
+    }
+
+    /// What `--integrator auto` chose and why, when it was asked for.
+    pub fn auto(&self) -> Option<&AutoReport> {
+        self.auto.as_ref()
     }
 }
 
@@ -259,15 +339,16 @@ impl MeterSession<'_> {
     }
 
     /// The statistics of `blocks`, in parallel, in their order.
-    fn sample_blocks(&self, blocks: &[Block]) -> Vec<(Stats, u64)> {
+    fn sample_blocks(&self, blocks: &[Block]) -> Vec<BlockResult> {
         let (estimator, sensors, seed) = (&*self.estimator, &self.sensors, self.opts.seed);
-        let max_depth = self.opts.max_depth;
+        let max_depth = depth_cap(self.opts.max_depth);
+        let per_block = self.estimator.iteration_samples().is_some();
         self.pool.install(|| {
             blocks
                 .par_iter()
                 .map_init(
                     || Workspace::new(max_depth, 0),
-                    |ws, b| sample_block(estimator, &sensors[b.meter], b, seed, ws),
+                    |ws, b| sample_block(estimator, &sensors[b.meter], b, seed, per_block, ws),
                 )
                 .collect()
         })
@@ -275,8 +356,8 @@ impl MeterSession<'_> {
 
     /// The statistics of `blocks` (each within one iteration of `k` samples), iteration by
     /// iteration in increasing order, each prepared first (`Estimator::begin_iteration`).
-    fn sample_blocks_by_iteration(&mut self, blocks: &[Block], k: u64) -> Vec<(Stats, u64)> {
-        let mut results = vec![(Stats::default(), 0); blocks.len()];
+    fn sample_blocks_by_iteration(&mut self, blocks: &[Block], k: u64) -> Vec<BlockResult> {
+        let mut results = vec![BlockResult::default(); blocks.len()];
         let mut iterations: Vec<u64> = blocks.iter().map(|b| b.first / k).collect();
         iterations.sort_unstable();
         iterations.dedup();
@@ -339,16 +420,17 @@ impl MeterSession<'_> {
             None => self.sample_blocks(&blocks),
             Some(k) => self.sample_blocks_by_iteration(&blocks, k),
         };
-        for (b, (stats, bad)) in blocks.iter().zip(results) {
+        for (b, r) in blocks.iter().zip(results) {
             let st = &mut self.states[b.meter];
-            st.samples += stats.n;
-            if iteration.is_some() && stats.n > 0 {
-                st.stats.push(stats.mean);
+            st.samples += r.stats.n;
+            if iteration.is_some() && r.stats.n > 0 {
+                st.stats.push(r.stats.mean);
             } else {
-                st.stats.merge(&stats);
+                st.stats.merge(&r.stats);
             }
+            st.cut.merge(&r.cut);
             st.taken = b.end;
-            self.dropped += bad;
+            self.dropped += r.dropped;
         }
         self.passes += 1;
         Some(PassStats {
@@ -366,12 +448,13 @@ impl MeterSession<'_> {
     }
 }
 
-fn reading(s: &State) -> Reading {
+fn reading(s: &State, max_depth: Option<u32>) -> Reading {
     Reading {
         value: s.stats.mean,
         ci95: s.stats.ci95(),
         samples: s.samples,
         capped: s.capped,
+        depth_cut: DepthCut::new(max_depth, &s.cut.sums, s.cut.capped, s.cut.limited),
     }
 }
 
@@ -502,30 +585,50 @@ fn blocks(states: &[State], targets: &[u64], iteration: Option<u64>) -> Vec<Bloc
     out
 }
 
-/// The statistics of one block of samples and the number of non-finite ones dropped. Each
-/// sample's photometric Y (lx or cd/m²) uses the final wavelengths, so a termination applies
-/// to the whole estimate.
+/// The statistics of one block of samples, what they found past the depth cap, and the
+/// number of non-finite ones dropped. Each sample's photometric Y (lx or cd/m²) uses the
+/// final wavelengths, so a termination applies to the whole estimate. `per_block`: the cut's
+/// observation is the block (its samples share an iteration) rather than each sample.
 fn sample_block(
     estimator: &dyn Estimator,
     m: &MeterSensor,
     b: &Block,
     seed: u64,
+    per_block: bool,
     ws: &mut Workspace,
-) -> (Stats, u64) {
-    let mut stats = Stats::default();
-    let mut dropped = 0;
+) -> BlockResult {
+    let mut r = BlockResult::default();
+    let mut block = RatioSums::default();
     for s in b.first..b.end {
         let mut sampler = Sampler::new(seed, b.meter as u64, s);
         let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+        ws.record.cut = CutSample::default();
         let l = estimator.meter_sample(m, &mut lambda, &mut sampler, ws);
         let y = sampled_to_xyz(l, &lambda)[1];
-        if y.is_finite() {
-            stats.push(f64::from(y));
-        } else {
-            dropped += 1;
+        if !y.is_finite() {
+            r.dropped += 1;
+            continue;
         }
+        r.stats.push(f64::from(y));
+        let cut = ws.record.cut;
+        r.cut.capped += u64::from(cut.capped);
+        r.cut.limited += u64::from(cut.limited);
+        // A non-finite continuation leaves the reading alone and counts as 0.
+        let c = if cut.light.is_black() {
+            0.0
+        } else {
+            f64::from(sampled_to_xyz(cut.light, &lambda)[1])
+        };
+        let c = if c.is_finite() { c } else { 0.0 };
+        block.push(c, f64::from(y) + c);
     }
-    (stats, dropped)
+    if per_block && block.n > 0 {
+        let n = block.n as f64;
+        r.cut.sums.push(block.c / n, block.t / n);
+    } else {
+        r.cut.sums = block;
+    }
+    r
 }
 
 #[cfg(test)]

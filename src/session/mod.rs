@@ -10,12 +10,16 @@
 //! seed and each reading's sample count (blocks of fixed boundaries), whatever the pass sizes
 //! and the number of threads.
 
+pub mod auto;
 pub mod checkpoint;
+pub mod depth_cut;
 pub mod image;
 pub mod memory;
 pub mod meter;
 mod pool;
 
+pub use auto::{AutoReport, PilotFigures};
+pub use depth_cut::DepthCut;
 pub use image::{render, ImageSession, RenderOptions, RenderOutput, DEFAULT_SPP};
 pub use meter::{measure, Cap, MeterOptions, MeterRun, MeterSession, Reading, Stop};
 

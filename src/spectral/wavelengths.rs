@@ -65,6 +65,18 @@ impl SampledWavelengths {
     pub fn secondary_terminated(&self) -> bool {
         self.pdf[1..].iter().all(|&p| p == 0.0)
     }
+
+    /// An estimate `x` made with `later`, a copy of these wavelengths that may have terminated
+    /// its secondaries since, re-expressed against these pdfs (× p(λ)/p'(λ) per lane: the
+    /// hero lane × N, the others 0), so that converting it with these stays unbiased.
+    #[inline]
+    pub fn rebase(&self, x: SampledSpectrum, later: &SampledWavelengths) -> SampledSpectrum {
+        if later.secondary_terminated() && !self.secondary_terminated() {
+            x * self.pdf().safe_div(later.pdf())
+        } else {
+            x
+        }
+    }
 }
 
 /// Inverse CDF of p(λ) ∝ sech²(0.0072 (λ − 538)) on [360, 830] nm (Radziszewski et al. 2009).

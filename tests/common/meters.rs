@@ -77,6 +77,8 @@ pub fn polygon_area(p: &[DVec3]) -> f64 {
 /// An integrating sphere: a UV sphere of reflectance `rho` around a small isotropic lamp, and
 /// meters on facet centres next to the pole, at 45° and at the equator.
 pub struct IntegratingSphere {
+    /// The stage's text and the scene built from it.
+    pub text: String,
     pub scene: Scene,
     pub meters: Vec<Meter>,
     /// The exact illuminance at each meter.
@@ -135,6 +137,7 @@ pub fn integrating_sphere(rho: f64) -> IntegratingSphere {
         "the reference is not uniform"
     );
     IntegratingSphere {
+        text: s,
         scene,
         meters: points
             .iter()

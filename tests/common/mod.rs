@@ -60,7 +60,7 @@ pub fn render_file(
     path: &Path,
     resolution: (u32, u32),
     spp: u32,
-    max_depth: u32,
+    max_depth: Option<u32>,
     threads: Option<usize>,
 ) -> RenderOutput {
     let scene = scene::load(path, Some(resolution)).unwrap_or_else(|e| panic!("{e}"));

@@ -37,7 +37,7 @@ pub use merge::{LightVertexStore, MergeParams, MergeVertex};
 pub use mis::{Mis, MisHeuristic};
 pub use record::{SampleRecord, TileAccumulator};
 pub use splat::splat_light_subpath;
-pub use subpath::{trace_light_subpath, BidirContext, LightSubpath, Walk};
+pub use subpath::{trace_light_subpath, BidirContext, CappedSubpath, LightSubpath, Walk};
 pub use vertex::PathVertex;
 
 /// Per-thread buffers of a bidirectional integrator, reused for every sample.

@@ -9,6 +9,7 @@
 
 use super::connect::Contribution;
 use super::strategies;
+use crate::integrator::cut::{BatchedRatio, CutSample};
 use crate::sensor::film::Splat;
 use crate::spectral::xyz::sampled_to_xyz;
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
@@ -34,6 +35,9 @@ pub struct SampleRecord {
     pub splats: Vec<PendingSplat>,
     /// Per strategy (s, t), the sample's own-pixel contributions; empty when not recorded.
     pub strategies: Vec<Contribution>,
+    /// What the sample's continuations past the depth cap found (`integrator::cut`), over
+    /// all the bins it reached.
+    pub cut: CutSample,
 }
 
 impl SampleRecord {
@@ -44,6 +48,7 @@ impl SampleRecord {
             hero_only: SampledSpectrum::ZERO,
             splats: Vec::new(),
             strategies: vec![Contribution::default(); strategy_count],
+            cut: CutSample::default(),
         }
     }
 
@@ -52,6 +57,7 @@ impl SampleRecord {
         self.hero_only = SampledSpectrum::ZERO;
         self.splats.clear();
         self.strategies.fill(Contribution::default());
+        self.cut = CutSample::default();
     }
 
     /// The weighted sum of everything the sample contributed, whatever the bin: a meter's
@@ -114,6 +120,9 @@ pub struct TileAccumulator {
     /// (pixel, Y) of the odd-numbered samples' splats.
     pub odd_splats: Vec<(u32, f32)>,
     pub strategies: Option<StrategyTile>,
+    /// The luminance the samples' continuations found past the depth cap, and theirs within
+    /// it, in batches (`integrator::cut`).
+    pub cut: BatchedRatio,
 }
 
 /// Per-strategy sums of a tile: `weighted[strategy * pixels + k]`, and tagged splats.
@@ -155,21 +164,24 @@ impl TileAccumulator {
                 unweighted: vec![[0.0; 3]; pixels * strategy_count],
                 splats: Vec::new(),
             }),
+            cut: BatchedRatio::default(),
         }
     }
 
-    /// Adds the finished sample of tile pixel `k` (see the module docs); `odd` when its
-    /// sample index is odd.
-    pub fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths, odd: bool) {
+    /// Adds the finished sample `s` of tile pixel `k` (see the module docs).
+    pub fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths, s: u64) {
+        let odd = s % 2 == 1;
         let xyz = |s| sampled_to_xyz(s, lambda);
         let own = xyz(rec.own(lambda));
         let mut ok = finite(&own);
         let first_splat = self.splats.len();
-        for s in &rec.splats {
-            let v = xyz(s.c.weighted);
+        let mut total_y = f64::from(own[1]);
+        for sp in &rec.splats {
+            let v = xyz(sp.c.weighted);
             ok &= finite(&v);
+            total_y += f64::from(v[1]);
             self.splats.push(Splat {
-                pixel: s.bin,
+                pixel: sp.bin,
                 xyz: v,
             });
         }
@@ -186,6 +198,14 @@ impl TileAccumulator {
             return;
         }
         add3(&mut self.sums[k], own);
+        // A non-finite continuation leaves the capped estimate alone and counts as 0.
+        let cut_y = if rec.cut.light.is_black() {
+            0.0
+        } else {
+            f64::from(xyz(rec.cut.light)[1])
+        };
+        let cut_y = if cut_y.is_finite() { cut_y } else { 0.0 };
+        self.cut.push(s, total_y, &rec.cut, cut_y);
         if odd {
             self.odd_y[k] += f64::from(own[1]);
             let new = &self.splats[first_splat..];
@@ -247,7 +267,7 @@ mod tests {
         let mut lambda = SampledWavelengths::sample_visible(0.37);
         lambda.terminate_secondary();
         let mut acc = TileAccumulator::new(1, 0);
-        acc.add(0, &rec, &lambda, false);
+        acc.add(0, &rec, &lambda, 0);
         let hero = sampled_to_xyz(SampledSpectrum([1.0, 0.0, 0.0, 0.0]), &lambda);
         assert_eq!(acc.splats[0].xyz, hero);
         assert_eq!(acc.sums[0], hero.map(f64::from));
@@ -264,7 +284,7 @@ mod tests {
             Contribution::new(SampledSpectrum::splat(f32::NAN), 1.0),
         );
         let mut acc = TileAccumulator::new(1, 0);
-        acc.add(0, &rec, &SampledWavelengths::sample_visible(0.5), true);
+        acc.add(0, &rec, &SampledWavelengths::sample_visible(0.5), 1);
         assert_eq!(
             (acc.dropped, acc.splats.len(), acc.sums[0]),
             (1, 0, [0.0; 3])

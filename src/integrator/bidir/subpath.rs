@@ -15,7 +15,7 @@ use crate::geometry::Ray;
 use crate::light::emit::{LightLeSample, SceneSphere};
 use crate::light::{LightHit, LightSampleContext};
 use crate::sampling::Sampler;
-use crate::scene::{Hit, Scene};
+use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::{Sensor, SensorRay};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use crate::texture::TextureFilter;
@@ -62,18 +62,32 @@ impl<'a> BidirContext<'a> {
 }
 
 /// A light subpath: its origin y_0 and its non-specular scattering vertices y_1, y_2, …
-/// (specular ones cannot be connected to and are not stored).
+/// (specular ones cannot be connected to and are not stored), and where the depth cap
+/// stopped it, if it did.
 #[derive(Clone, Debug, Default)]
 pub struct LightSubpath {
     pub origin: Option<LightOrigin>,
     pub vertices: Vec<PathVertex>,
+    pub capped: Option<CappedSubpath>,
 }
 
 impl LightSubpath {
     pub fn clear(&mut self) {
         self.origin = None;
         self.vertices.clear();
+        self.capped = None;
     }
+}
+
+/// Where the depth cap stopped a light subpath: the walk as it arrived at the surface `si`
+/// (light tracing continues it past the cap, `cut.rs`).
+#[derive(Clone, Copy, Debug)]
+pub struct CappedSubpath {
+    pub walk: Walk,
+    pub si: SurfaceHit,
+    /// The vertex at `si` is y_{max_depth}, part of the subpath; false with a cap of 0, where
+    /// the first hit already lies beyond it.
+    pub within_cap: bool,
 }
 
 /// The state carried from one vertex of a subpath to the next.
@@ -259,6 +273,12 @@ pub fn trace_light_subpath(
         }
         walk.arrive(&ctx.mis, si.p, si.ng);
         if walk.depth > ctx.max_depth {
+            let within_cap = false;
+            path.capped = Some(CappedSubpath {
+                walk,
+                si,
+                within_cap,
+            });
             return;
         }
         let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
@@ -266,9 +286,16 @@ pub fn trace_light_subpath(
         if !bsdf.is_specular() {
             path.vertices.push(v);
         }
-        if walk.depth >= ctx.max_depth
-            || !walk.scatter(&ctx.mis, &v, TransportMode::Importance, sampler)
-        {
+        if walk.depth >= ctx.max_depth {
+            let within_cap = true;
+            path.capped = Some(CappedSubpath {
+                walk,
+                si,
+                within_cap,
+            });
+            return;
+        }
+        if !walk.scatter(&ctx.mis, &v, TransportMode::Importance, sampler) {
             return;
         }
     }

@@ -150,7 +150,7 @@ pub fn bsdf_at(
     lambda: &mut SampledWavelengths,
 ) -> Bsdf {
     let material = &scene.materials[si.material as usize];
-    if material.is_dispersive() {
+    if scene.dispersive && material.is_dispersive() {
         lambda.terminate_secondary();
     }
     material.bsdf(scene.tex_coord(si, filter), si.ns, lambda)

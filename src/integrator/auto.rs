@@ -1,0 +1,172 @@
+//! The static half of `--integrator auto`: from the scene analysis (`scene::analysis`), the
+//! integrators worth a pilot, with the reasons. The pilot that measures them and picks one is
+//! `session::auto`.
+//!
+//! | the scene | candidates |
+//! |---|---|
+//! | no lights | path (the answer is 0 whatever the integrator) |
+//! | partially opaque surfaces | path (bdpt and vcm treat them as opaque) |
+//! | caustics of point-like lights on diffuse surfaces, seen through specular surfaces (SDS) or reaching a meter | vcm (only merging samples them) |
+//! | caustics of point-like lights on diffuse surfaces, seen directly (L S+ D) | bdpt, vcm |
+//! | otherwise (no specular chains, large lights behind them, or near-specular receivers) | path, bdpt |
+//!
+//! Path tracing finds a caustic on a diffuse surface only by a BSDF-sampled ray hitting the
+//! light after the specular surfaces, which a point-like light makes rare; a pilot cannot see
+//! that (its few samples miss the caustic and look low in variance), so the table excludes
+//! path there (`SceneFeatures::hard_caustics`). On a near-specular receiver the narrow lobe
+//! aims at the light and path tracing is the efficient one (`scenes/prism.usda`).
+//! Likewise bdpt cannot connect to a specular vertex, so an SDS path from a point-like light
+//! is out of its reach, as is light reaching a meter (a point) through glass; only vcm's
+//! merges sample them.
+
+use super::vcm::VcmParams;
+use super::{Integrator, MisHeuristic};
+use crate::scene::SceneFeatures;
+
+/// What the integrator will estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    Image,
+    Meters,
+}
+
+/// The integrators a pilot compares, in order of preference for ties, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Candidates {
+    pub integrators: Vec<Integrator>,
+    pub reasons: Vec<String>,
+}
+
+/// The candidates for `target` in a scene with features `f`; bdpt and vcm get `mis`.
+pub fn candidates(f: &SceneFeatures, target: Target, mis: MisHeuristic) -> Candidates {
+    let path = Integrator::Path;
+    let bdpt = Integrator::Bdpt { mis };
+    let vcm = Integrator::Vcm(VcmParams {
+        mis,
+        ..VcmParams::default()
+    });
+    let (integrators, reason) = if f.lights.is_empty() {
+        (
+            vec![path],
+            "no lights: the answer is 0 whatever the integrator".to_string(),
+        )
+    } else if f.opacity.on {
+        (
+            vec![path],
+            "partially opaque surfaces: only path renders them (bdpt and vcm treat them as \
+             opaque)"
+                .to_string(),
+        )
+    } else if f.hard_caustics {
+        point_like_caustics(f, target, bdpt, vcm)
+    } else if f.caustics.on && f.delta_lights.on {
+        (
+            vec![path, bdpt],
+            "caustics of point-like lights fall on near-specular surfaces only, whose narrow \
+             lobes aim BSDF sampling at the light: path or bdpt by the pilot"
+                .to_string(),
+        )
+    } else if f.specular.on {
+        (
+            vec![path, bdpt],
+            "specular chains, but no point-like light behind them: BSDF sampling finds their \
+             light; path or bdpt by the pilot"
+                .to_string(),
+        )
+    } else {
+        (
+            vec![path, bdpt],
+            "no specular chains: path, or bdpt where the pilot finds light arriving by \
+             indirect routes more efficiently"
+                .to_string(),
+        )
+    };
+    Candidates {
+        integrators,
+        reasons: vec![reason],
+    }
+}
+
+/// Caustics of point-like lights: vcm where only merging samples them, else bdpt or vcm.
+fn point_like_caustics(
+    f: &SceneFeatures,
+    target: Target,
+    bdpt: Integrator,
+    vcm: Integrator,
+) -> (Vec<Integrator>, String) {
+    match target {
+        Target::Meters => (
+            vec![vcm],
+            "caustics of point-like lights: light reaching a meter through specular surfaces \
+             is sampled only by vcm's merges"
+                .to_string(),
+        ),
+        Target::Image if f.sds.on => (
+            vec![vcm],
+            "caustics of point-like lights seen through specular surfaces (SDS): only vcm's \
+             merges sample them"
+                .to_string(),
+        ),
+        Target::Image => (
+            vec![bdpt, vcm],
+            "caustics of point-like lights seen directly (L S+ D): light subpaths find them; \
+             bdpt or vcm by the pilot"
+                .to_string(),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::analysis::lights::LightInfo;
+    use crate::scene::Feature;
+
+    fn on() -> Feature {
+        Feature {
+            on: true,
+            ..Default::default()
+        }
+    }
+
+    fn lit() -> SceneFeatures {
+        SceneFeatures {
+            lights: vec![LightInfo {
+                prim: "/L".into(),
+                kind: "sphere",
+                share: 1e-4,
+                point_like: true,
+                infinite: false,
+                textured: false,
+                shaped: false,
+            }],
+            ..Default::default()
+        }
+    }
+
+    fn names(c: &Candidates) -> Vec<&'static str> {
+        c.integrators.iter().map(|i| i.name()).collect()
+    }
+
+    #[test]
+    fn the_table() {
+        let mis = MisHeuristic::Power;
+        let image = |f: &SceneFeatures| names(&candidates(f, Target::Image, mis));
+        assert_eq!(image(&SceneFeatures::default()), ["path"]);
+        let mut f = lit();
+        assert_eq!(image(&f), ["path", "bdpt"]);
+        f.specular = on();
+        assert_eq!(image(&f), ["path", "bdpt"]);
+        f.caustics = on();
+        assert_eq!(image(&f), ["path", "bdpt"]);
+        f.delta_lights = on();
+        assert_eq!(image(&f), ["path", "bdpt"]);
+        f.hard_caustics = true;
+        assert_eq!(image(&f), ["bdpt", "vcm"]);
+        assert_eq!(names(&candidates(&f, Target::Meters, mis)), ["vcm"]);
+        f.sds = on();
+        assert_eq!(image(&f), ["vcm"]);
+        f.opacity = on();
+        assert_eq!(image(&f), ["path"]);
+    }
+}

@@ -1,0 +1,219 @@
+//! What a depth cap cuts, estimated without touching the capped estimate.
+//!
+//! A depth cap (`--max-depth`, or the safety cap [`SAFETY_DEPTH`] when none is given) ends
+//! every path that reaches it, and the light of the longer paths is lost: a bias. To say how
+//! much, a random fraction [`Q`] of the capped paths is continued past the cap — on a
+//! sampler stream of its own ([`continuation`], forked from the path's without advancing it,
+//! so the capped estimate keeps its random numbers and its bits) — and what the continuation
+//! finds, weighted 1/q, goes to a separate accumulator ([`CutSample::light`]). Its expectation
+//! is the light of the paths longer than the cap (up to the continuation's own limit, the cap
+//! plus [`SAFETY_DEPTH`]): Russian roulette with survival probability q (PBR 4ed §13.4.1,
+//! "Russian roulette"), applied once, at the cap.
+//!
+//! The drivers report the fraction cut, cut / (capped + cut), as a ratio estimate (Cochran
+//! 1977, "Sampling Techniques", §6.3–6.4: the ratio estimator R = ȳ/x̄ and its variance
+//! s²(y − R x) / (n x̄²)) from paired sums: per sample for meters ([`RatioSums`]), per batch of
+//! samples for images ([`BatchedRatio`]: a sample's pixel is not random, so the batches — all
+//! pixels' samples of one residue of the sample index — are the independent observations).
+//!
+//! The path tracer continues its own path; BDPT and VCM continue their camera subpath with
+//! the path tracer (every path longer than the cap has such a camera prefix), light tracing
+//! its light subpath, connecting each further vertex to the sensor.
+
+use crate::sampling::Sampler;
+use crate::sensor::meter::stats::Z95;
+use crate::spectral::SampledSpectrum;
+
+/// The depth cap when none is given: Russian roulette ends paths long before it in any scene
+/// whose reflectances stay below 1; reaching it is reported with what it cut.
+pub const SAFETY_DEPTH: u32 = 1024;
+
+/// The fraction of capped paths continued past the cap.
+pub const Q: f32 = 0.125;
+
+/// Offsets the continuation's sampler stream from the path's.
+const STREAM: u64 = 0x4355_545f_5041_5354;
+
+/// Batches of an image's samples for the interval of the fraction cut ([`BatchedRatio`]).
+pub const BATCHES: usize = 16;
+
+/// The effective depth cap of a run: the user's, or the safety cap.
+#[inline]
+pub fn depth_cap(max_depth: Option<u32>) -> u32 {
+    max_depth.unwrap_or(SAFETY_DEPTH)
+}
+
+/// The limit of a continuation that starts at the cap `cap`.
+#[inline]
+pub fn continuation_limit(cap: u32) -> u32 {
+    cap.saturating_add(SAFETY_DEPTH)
+}
+
+/// The sampler of a continuation past the cap, with probability [`Q`]: a stream derived from
+/// the path's current state, which is left as it is.
+#[inline]
+pub fn continuation(sampler: &Sampler) -> Option<Sampler> {
+    let mut s = sampler.fork(STREAM);
+    (s.get_1d() < Q).then_some(s)
+}
+
+/// What one sample's continuations past the cap found.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CutSample {
+    /// The light beyond the cap, weighted 1/q, relative to the sample's final wavelengths
+    /// (as its capped estimate).
+    pub light: SampledSpectrum,
+    /// Paths (or subpaths) of the sample that reached the cap.
+    pub capped: u32,
+    /// Continuations that reached their own limit: the light beyond it is not counted.
+    pub limited: u32,
+}
+
+impl CutSample {
+    /// Adds a continuation's light `l` (not yet weighted by 1/q) times `k`; `limited` when it
+    /// reached its own limit.
+    #[inline]
+    pub fn add(&mut self, l: SampledSpectrum, k: f32, limited: bool) {
+        self.light += l * (k / Q);
+        self.limited += u32::from(limited);
+    }
+}
+
+/// Paired sums of per-observation values (c: the cut, t: capped + cut) for the ratio
+/// R = Σc / Σt and its interval.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RatioSums {
+    pub n: u64,
+    pub c: f64,
+    pub t: f64,
+    pub cc: f64,
+    pub ct: f64,
+    pub tt: f64,
+}
+
+impl RatioSums {
+    #[inline]
+    pub fn push(&mut self, c: f64, t: f64) {
+        self.n += 1;
+        self.c += c;
+        self.t += t;
+        self.cc += c * c;
+        self.ct += c * t;
+        self.tt += t * t;
+    }
+
+    pub fn merge(&mut self, o: &RatioSums) {
+        self.n += o.n;
+        self.c += o.c;
+        self.t += o.t;
+        self.cc += o.cc;
+        self.ct += o.ct;
+        self.tt += o.tt;
+    }
+
+    /// R = Σc / Σt (0 when nothing was measured).
+    pub fn ratio(&self) -> f64 {
+        if self.t != 0.0 {
+            self.c / self.t
+        } else {
+            0.0
+        }
+    }
+
+    /// The 95 % half-width of R: 1.96 √(s²(c − R t) / (n t̄²)) (Cochran 1977, eq. 6.9);
+    /// infinite with fewer than two observations.
+    pub fn ci95(&self) -> f64 {
+        if self.n < 2 || self.t == 0.0 {
+            return f64::INFINITY;
+        }
+        let r = self.ratio();
+        let n = self.n as f64;
+        let s2 = ((self.cc - 2.0 * r * self.ct + r * r * self.tt) / (n - 1.0)).max(0.0);
+        let t_mean = self.t / n;
+        Z95 * (s2 / n).sqrt() / t_mean.abs()
+    }
+}
+
+/// Sums of an image's samples in [`BATCHES`] batches by sample index (each batch holds every
+/// pixel's samples of one residue), for the ratio of the cut to the whole image.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BatchedRatio {
+    /// Per batch: samples, Σ cut, Σ (capped + cut) of the samples' luminance.
+    pub batches: [(u64, f64, f64); BATCHES],
+    /// Paths that reached the cap and continuations that reached their own limit.
+    pub capped: u64,
+    pub limited: u64,
+}
+
+impl BatchedRatio {
+    /// Adds a sample of index `s` whose capped estimate has luminance `main` and whose
+    /// continuations (`cut`) found luminance `cut_y`.
+    #[inline]
+    pub fn push(&mut self, s: u64, main: f64, cut: &CutSample, cut_y: f64) {
+        let b = &mut self.batches[(s % BATCHES as u64) as usize];
+        b.0 += 1;
+        b.1 += cut_y;
+        b.2 += main + cut_y;
+        self.capped += u64::from(cut.capped);
+        self.limited += u64::from(cut.limited);
+    }
+
+    pub fn merge(&mut self, o: &BatchedRatio) {
+        for (a, b) in self.batches.iter_mut().zip(&o.batches) {
+            a.0 += b.0;
+            a.1 += b.1;
+            a.2 += b.2;
+        }
+        self.capped += o.capped;
+        self.limited += o.limited;
+    }
+
+    /// The batches as observations of a ratio: the sums of each non-empty batch.
+    pub fn sums(&self) -> RatioSums {
+        let mut r = RatioSums::default();
+        for &(n, c, t) in &self.batches {
+            if n > 0 {
+                r.push(c, t);
+            }
+        }
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_continuation_leaves_the_path_stream_alone_and_runs_a_fraction_q() {
+        let mut hits = 0;
+        let n = 80_000;
+        for k in 0..n {
+            let s = Sampler::new(3, k, 1);
+            let before = s.clone().get_1d();
+            if continuation(&s).is_some() {
+                hits += 1;
+            }
+            assert_eq!(s.clone().get_1d(), before);
+        }
+        // Binomial(n, 1/8): σ = √(n q (1 − q)) ≈ 94.
+        let expected = n as f64 * Q as f64;
+        assert!((hits as f64 - expected).abs() < 5.0 * 94.0, "{hits}");
+    }
+
+    #[test]
+    fn the_ratio_interval_covers_a_known_fraction() {
+        // c = 0.3 t + noise: R → 0.3; the interval shrinks as 1/√n.
+        let mut s = Sampler::new(9, 0, 0);
+        let mut r = RatioSums::default();
+        for _ in 0..10_000 {
+            let t = 1.0 + s.get_1d() as f64;
+            let c = 0.3 * t + 0.2 * (s.get_1d() as f64 - 0.5);
+            r.push(c, t);
+        }
+        let (ratio, h) = (r.ratio(), r.ci95());
+        assert!((ratio - 0.3).abs() < h, "{ratio} ± {h}");
+        assert!(h > 0.0 && h < 0.01, "{h}");
+        assert!(RatioSums::default().ci95().is_infinite());
+    }
+}

@@ -1,0 +1,283 @@
+//! `--integrator auto` and `spectral-render info` (issue 11, "Choices"): the choice and the
+//! features `info --json` gives on the project's stages; that `auto` is deterministic for a
+//! seed and that its result under `--spp` is bit for bit the chosen integrator's (the winner's
+//! pilot samples are its first samples, the losers' are discarded), for images and meters.
+//! The "Pilot" benchmark (auto against the best fixed integrator at equal time) is
+//! `tools/equal_time.sh … --integrators path,bdpt,vcm,auto`, not a test.
+
+mod common;
+use common::*;
+use spectral_render::scene::{self, Scene};
+use spectral_render::session::{self, MeterOptions, RenderOptions, RenderOutput, Stop};
+use spectral_render::{Integrator, Meter, MisHeuristic};
+use std::path::{Path, PathBuf};
+
+fn stage(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+}
+
+/// `info --json` on a stage: the document, checked for the issue's shape.
+fn info(path: &Path) -> serde_json::Value {
+    info_with(path, &[])
+}
+
+/// `info --json` with more options.
+fn info_with(path: &Path, options: &[&str]) -> serde_json::Value {
+    let dir = temp_dir("auto-info");
+    let mut args = vec!["info", path.to_str().unwrap(), "--json"];
+    args.extend_from_slice(options);
+    let o = spectral_render(&args, &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let keys: Vec<&String> = doc.as_object().unwrap().keys().collect();
+    assert_eq!(keys, ["features", "integrator", "max_depth"], "{doc}");
+    for name in [
+        "dispersion",
+        "caustics",
+        "sds",
+        "textures",
+        "opacity",
+        "delta_lights",
+        "infinite_lights",
+    ] {
+        let f = &doc["features"][name];
+        assert!(f["on"].is_boolean(), "{name}: {f}");
+        assert!(!f["reason"].as_str().unwrap().is_empty(), "{name}: {f}");
+        assert!(f["prims"].is_array(), "{name}: {f}");
+        assert_eq!(
+            f["on"].as_bool(),
+            Some(!f["prims"].as_array().unwrap().is_empty())
+        );
+    }
+    assert!(doc["integrator"]["reasons"].as_array().unwrap().len() >= 2);
+    assert!(doc["max_depth"].get("value").is_some() && doc["max_depth"].get("bound_cut").is_some());
+    doc
+}
+
+fn on(doc: &serde_json::Value, feature: &str) -> bool {
+    doc["features"][feature]["on"].as_bool().unwrap()
+}
+
+fn choice(doc: &serde_json::Value) -> &str {
+    doc["integrator"]["choice"].as_str().unwrap()
+}
+
+/// The pilot's lines among the reasons (one per candidate), e.g. `pilot bdpt: 3 spp, …`.
+fn piloted(doc: &serde_json::Value) -> usize {
+    let reasons = doc["integrator"]["reasons"].as_array().unwrap();
+    reasons
+        .iter()
+        .filter(|r| r.as_str().unwrap().starts_with("pilot "))
+        .count()
+}
+
+#[test]
+fn cornell_boxes_have_no_caustics_and_the_pilot_chooses() {
+    // At its 512 × 512, path and bdpt are about as efficient on the box lit by a RectLight,
+    // and path, the simpler, is kept. On the peers' box, lit by an emissive mesh, at 640 ×
+    // 640 the pilot finds bdpt more efficient, as equal-time runs do (tools/bench_auto.sh).
+    for (path, expected) in [
+        (stage("cornell-box.usda"), Some("path")),
+        (cbox_path(), None),
+    ] {
+        let doc = info(&path);
+        assert!(!on(&doc, "caustics") && !on(&doc, "sds"), "{doc}");
+        assert!(
+            !on(&doc, "dispersion") && !on(&doc, "delta_lights"),
+            "{doc}"
+        );
+        assert_eq!(piloted(&doc), 2, "{doc}");
+        if let Some(c) = expected {
+            assert_eq!(choice(&doc), c, "{}: {doc}", path.display());
+        }
+        // No cap by default: only the safety cap's ρ^1024 / (1 − ρ), nothing.
+        assert!(doc["max_depth"]["value"].is_null(), "{doc}");
+        let bound = doc["max_depth"]["bound_cut"].as_f64().unwrap();
+        assert!(bound < 1e-100, "{doc}");
+        // ρ_max = 0.74 (the white walls' luminous albedo): a cap of 7 cuts at most
+        // ρ^7 / (1 − ρ) of the direct light.
+        let small = ["--max-depth", "7", "--resolution", "32x32", "--spp", "4"];
+        let doc = info_with(&path, &small);
+        assert_eq!(doc["max_depth"]["value"], 7, "{doc}");
+        let bound = doc["max_depth"]["bound_cut"].as_f64().unwrap();
+        assert!(bound > 0.3 && bound < 0.7, "{doc}");
+    }
+}
+
+#[test]
+fn the_prism_disperses_and_casts_a_caustic() {
+    let doc = info(&stage("prism.usda"));
+    assert!(on(&doc, "dispersion") && on(&doc, "caustics"), "{doc}");
+    let prims = doc["features"]["dispersion"]["prims"].to_string();
+    assert!(prims.contains("/Prism/Looks/BK7"), "{doc}");
+    // The caustic falls on the satin screen, whose narrow lobe finds the light: not the
+    // point-like-caustic rule, so path and bdpt go to the pilot.
+    assert_eq!(piloted(&doc), 2, "{doc}");
+    // Glass scatters all it receives: no bound on what a cap cuts.
+    assert!(doc["max_depth"]["bound_cut"].is_null(), "{doc}");
+}
+
+#[test]
+fn a_glass_ball_on_a_floor_is_left_to_light_subpaths() {
+    let doc = info(&stage("caustic.usda"));
+    assert!(on(&doc, "caustics") && on(&doc, "delta_lights"), "{doc}");
+    assert!(["bdpt", "vcm"].contains(&choice(&doc)), "{doc}");
+}
+
+#[test]
+fn a_caustic_seen_in_a_mirror_is_merged() {
+    let doc = info(&stage("caustic-mirror.usda"));
+    assert!(on(&doc, "sds"), "{doc}");
+    let seen = doc["features"]["sds"]["prims"].to_string();
+    assert!(seen.contains("/Scene/Mirror"), "{doc}");
+    assert_eq!(choice(&doc), "vcm", "{doc}");
+}
+
+#[test]
+fn light_through_a_door_gap_is_bidirectional_by_the_pilot() {
+    let doc = info(&stage("gap.usda"));
+    assert!(!on(&doc, "caustics"), "{doc}");
+    assert_eq!(piloted(&doc), 2, "{doc}");
+    assert_eq!(choice(&doc), "bdpt", "{doc}");
+    let summary = doc["integrator"]["reasons"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap();
+    assert!(
+        summary
+            .as_str()
+            .unwrap()
+            .starts_with("auto: bdpt (efficiency "),
+        "{doc}"
+    );
+}
+
+fn auto() -> Integrator {
+    Integrator::Auto {
+        mis: MisHeuristic::Power,
+    }
+}
+
+fn render(scene: &Scene, integrator: Integrator, spp: u32, threads: usize) -> RenderOutput {
+    let opts = RenderOptions {
+        spp: Some(spp),
+        seed: 5,
+        threads: Some(threads),
+        integrator,
+        ..Default::default()
+    };
+    let out = session::render(scene, &opts).unwrap();
+    assert_finite(&out);
+    out
+}
+
+/// auto's image is the chosen integrator's, bit for bit, whatever the threads; `spp` is
+/// chosen above a splatting chunk so that the winner is paused and resumed.
+fn auto_is_its_choice(path: &Path, res: (u32, u32), spp: u32, expected: &str) {
+    let scene = scene::load(path, Some(res)).unwrap();
+    let a = render(&scene, auto(), spp, 2);
+    let report = a.auto.clone().expect("auto reports its choice");
+    assert_eq!(report.choice.name(), expected, "{}", report.summary());
+    assert_eq!(report.pilot.len(), 2, "{report:?}");
+    assert!(
+        report.pilot.iter().all(|p| p.samples < u64::from(spp)),
+        "{report:?}"
+    );
+    let fixed = render(&scene, report.choice, spp, 2);
+    assert_eq!(a.spp, fixed.spp);
+    assert!(a.xyz == fixed.xyz, "auto's image differs from {expected}'s");
+    let one_thread = render(&scene, auto(), spp, 1);
+    assert_eq!(one_thread.auto.unwrap().choice, report.choice);
+    assert!(one_thread.xyz == a.xyz, "auto depends on the thread count");
+}
+
+#[test]
+fn auto_renders_exactly_what_its_choice_renders() {
+    // bdpt wins here. At the default unlimited depth a splatting chunk is one sample per
+    // pixel at these sizes (`splat_chunk_samples`): a pilot of 2, then 62 more.
+    auto_is_its_choice(&stage("gap.usda"), (80, 60), 64, "bdpt");
+    // path wins here (a pilot of 2, then 30 more; bdpt's pilot finds no light at all).
+    auto_is_its_choice(&stage("prism.usda"), (240, 120), 32, "path");
+}
+
+#[test]
+fn auto_meters_read_what_their_choice_reads() {
+    let scene = scene::load(&cbox_path(), Some((1, 1))).unwrap();
+    let meters = [
+        Meter::illuminance(glam::Vec3::new(0.0, 0.0, 0.0), glam::Vec3::Y).unwrap(),
+        Meter::illuminance(glam::Vec3::new(0.3, 0.5, 0.2), glam::Vec3::Z).unwrap(),
+    ];
+    for stop in [Stop::Samples(4096), Stop::RelError(0.02)] {
+        let opts = |integrator| MeterOptions {
+            stop,
+            seed: 2,
+            threads: Some(2),
+            integrator,
+            ..Default::default()
+        };
+        let a = session::measure(&scene, &meters, &opts(auto())).unwrap();
+        let report = a.auto.clone().expect("auto reports its choice");
+        assert_eq!(report.pilot.len(), 2, "{report:?}");
+        let fixed = session::measure(&scene, &meters, &opts(report.choice)).unwrap();
+        assert_eq!(a.readings, fixed.readings, "{stop:?}: {}", report.summary());
+    }
+}
+
+#[test]
+fn auto_has_no_estimator_of_its_own() {
+    let scene = scene::load(&cbox_path(), Some((4, 4))).unwrap();
+    let settings = spectral_render::integrator::Settings {
+        max_depth: 7,
+        filter: spectral_render::texture::TextureFilter::Finest,
+        meters: false,
+    };
+    assert!(auto().estimator(&scene, settings).is_err());
+}
+
+#[test]
+fn the_command_line_says_what_auto_chose_and_records_it() {
+    let dir = temp_dir("auto-cli");
+    let gap = stage("gap.usda");
+    let o = spectral_render(
+        &[
+            gap.to_str().unwrap(),
+            "--resolution",
+            "40x30",
+            "--spp",
+            "8",
+            "-o",
+            "g.exr",
+        ],
+        &dir,
+    );
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let line = err.lines().find(|l| l.starts_with("auto: ")).expect(&err);
+    assert!(
+        line.contains("efficiency") && line.contains("% pilot"),
+        "{line}"
+    );
+    let chosen = line[6..].split(' ').next().unwrap();
+    let img = spectral_render::output::exr::read(&dir.join("g.exr")).unwrap();
+    let recorded = &img.attributes[spectral_render::output::exr::INTEGRATOR_ATTRIBUTE];
+    assert_eq!(recorded, &format!("auto→{chosen}"));
+    // The human report names every feature and the choice.
+    let o = spectral_render(
+        &["info", gap.to_str().unwrap(), "--resolution", "40x30"],
+        &dir,
+    );
+    let text = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for needle in [
+        "features:",
+        "caustics",
+        "integrator: ",
+        "max depth: unlimited",
+        "expected cost",
+    ] {
+        assert!(text.contains(needle), "{needle} not in {text}");
+    }
+}
