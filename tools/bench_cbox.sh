@@ -18,9 +18,9 @@ cargo build --release --quiet --manifest-path "$ROOT/Cargo.toml"
 BIN="$ROOT/target/release/spectral-render"
 
 ours=()
-"$BIN" "$SHARED/peers/cbox.usda" -o "$OUT/warm.exr" --spp 4 --resolution ${RES}x${RES} 2>/dev/null
+"$BIN" "$SHARED/peers/cbox.usda" -o "$OUT/warm.exr" --integrator path --spp 4 --resolution ${RES}x${RES} 2>/dev/null
 for i in $(seq 1 "$REPEATS"); do
-  line=$("$BIN" "$SHARED/peers/cbox.usda" -o "$OUT/ours.exr" --spp $SPP --resolution ${RES}x${RES} --max-depth 7 --seed "$i" 2>&1 | grep '^wrote')
+  line=$("$BIN" "$SHARED/peers/cbox.usda" -o "$OUT/ours.exr" --integrator path --spp $SPP --resolution ${RES}x${RES} --max-depth 7 --seed "$i" 2>&1 | grep '^wrote')
   secs=$(echo "$line" | sed -E 's/.*spp, ([0-9.]+) s,.*/\1/')
   ours+=("$secs")
   echo "ours run $i: $secs s"

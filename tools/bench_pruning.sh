@@ -10,7 +10,7 @@
 # (F90 = 1), a coat that reflects 0.3 % of diffuse light, which pruning must keep.
 #
 # Usage: tools/bench_pruning.sh [REPEATS [SPP [RES]]]   (default 5 repeats, 32 spp, 256x256;
-#        default depth: unlimited; writes nothing in the repo)
+#        path tracing, default depth: unlimited; writes nothing in the repo)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 REPEATS="${1:-5}"
@@ -30,9 +30,10 @@ sed -e 's/"UsdPreviewSurface"/"spectral:diffuse"/' -e 's/inputs:diffuseColor/inp
 SCENES=("$ROOT/tests/data/usd/cbox.usda" "$ROOT/scenes/cornell-box.usda"
         "$ROOT/scenes/materials.usda" "$ROOT/scenes/room.usda")
 
-# Seconds of the render itself, from the "wrote …, N spp, S s, …" line.
+# Seconds of the render itself, from the "wrote …, N spp, S s, …" line. The path tracer, not
+# the default auto, whose pilot would time two integrators.
 render_s() {
-  "$BIN" "$@" -o "$OUT/x.exr" --spp "$SPP" --resolution "${RES}x${RES}" 2>&1 |
+  "$BIN" "$@" -o "$OUT/x.exr" --spp "$SPP" --resolution "${RES}x${RES}" --integrator path 2>&1 |
     grep '^wrote' | sed -E 's/.*spp, ([0-9.]+) s,.*/\1/'
 }
 

@@ -258,13 +258,9 @@ impl<'a> ImageSession<'a> {
         self.auto = Some(auto);
     }
 
-    /// Ray queries the session's samples have made so far (`scene::ray_count`): the same for
-    /// the same samples on any machine and thread count.
+    /// Ray queries the session's samples have made so far (`pool::ray_queries`).
     pub fn ray_queries(&self) -> u64 {
-        self.pool
-            .broadcast(|_| crate::scene::ray_count::on_this_thread())
-            .into_iter()
-            .sum()
+        pool::ray_queries(&self.pool)
     }
 
     /// Samples per pixel so far.

@@ -309,12 +309,9 @@ impl<'a> MeterSession<'a> {
         self.auto = Some(auto);
     }
 
-    /// Ray queries the session's samples have made so far (`scene::ray_count`).
+    /// Ray queries the session's samples have made so far (`pool::ray_queries`).
     pub fn ray_queries(&self) -> u64 {
-        self.pool
-            .broadcast(|_| crate::scene::ray_count::on_this_thread())
-            .into_iter()
-            .sum()
+        pool::ray_queries(&self.pool)
     }
 
     /// The options the session runs with (the integrator `auto` chose, if it was asked for).

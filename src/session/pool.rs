@@ -12,3 +12,11 @@ pub(super) fn new(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .build()
         .map_err(|e| Error::resource(format!("cannot start worker threads: {e}")))
 }
+
+/// Ray queries the pool's threads have made so far (`scene::ray_count`, one counter per
+/// thread): the same for the same samples on any machine and thread count.
+pub(super) fn ray_queries(pool: &rayon::ThreadPool) -> u64 {
+    pool.broadcast(|_| crate::scene::ray_count::on_this_thread())
+        .into_iter()
+        .sum()
+}
