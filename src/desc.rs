@@ -32,6 +32,50 @@ pub struct SceneDescription {
     /// A hash of every layer the stage was composed from, in the order they were read
     /// (identifies the stage in a checkpoint); 0 for a description built in code.
     pub content_hash: u64,
+    /// The time the stage was read at.
+    pub time: TimeDesc,
+}
+
+/// The time a stage was read at.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TimeDesc {
+    /// The USD time code; `None`: the earliest time sample of each attribute.
+    pub code: Option<f64>,
+    /// Where the time came from.
+    pub origin: TimeOrigin,
+    /// Some attribute that was read has two or more time samples.
+    pub animated: bool,
+    /// Held interpolation between time samples (linear otherwise).
+    pub held: bool,
+}
+
+/// Where the time a stage was read at came from.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum TimeOrigin {
+    /// Given (`--frame`, `--frames`).
+    Given,
+    /// The stage's `startTimeCode`.
+    StartTimeCode,
+    /// No time given and no time range authored: the earliest sample of each attribute.
+    #[default]
+    Earliest,
+}
+
+impl TimeDesc {
+    /// A note for the load summary when the stage is animated and no time was given.
+    pub fn note(&self) -> Option<String> {
+        if !self.animated || self.origin == TimeOrigin::Given {
+            return None;
+        }
+        Some(match self.code {
+            Some(t) => format!(
+                "the stage is animated; read at its startTimeCode {t} (--frame picks another)"
+            ),
+            None => "the stage is animated; read at each attribute's earliest time sample \
+                     (--frame picks a time code)"
+                .to_string(),
+        })
+    }
 }
 
 /// A 64-bit FNV-1a hash of byte strings (Fowler, Noll, Vo; the IETF draft
@@ -405,6 +449,8 @@ pub enum LightKind {
     Rect {
         width: f32,
         height: f32,
+        /// `inputs:texture:file` (st along local +X and +Y), multiplying the emission.
+        texture: Option<Box<TextureDesc>>,
     },
     /// Centred on the origin in the local XY plane, emitting towards -Z.
     Disk {

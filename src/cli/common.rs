@@ -236,6 +236,9 @@ pub fn print_summary(scene: &Scene) {
             format!("; ignored: {}", s.warnings.join("; "))
         }
     );
+    if let Some(note) = s.time.note() {
+        eprintln!("note: {note}");
+    }
 }
 
 /// Prints what `integrator` will not render in `scene` (`Integrator::warnings`).

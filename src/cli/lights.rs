@@ -32,6 +32,7 @@
 //! ```
 
 use super::common::{clap_message, print_summary};
+use super::frames::FrameArgs;
 use crate::error::{Error, Result};
 use crate::light::report::{self, LightReport};
 use crate::output::json;
@@ -52,6 +53,8 @@ struct LightsArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    when: FrameArgs,
 }
 
 /// Entry point: `argv[0]` is "lights".
@@ -61,7 +64,8 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
         Err(e) if !e.use_stderr() => e.exit(),
         Err(e) => return Err(Error::option(clap_message(&e))),
     };
-    let scene = scene::load(&args.scene, None)?;
+    let time = args.when.read_time();
+    let scene = scene::load_at(&args.scene, None, scene::Machinery::default(), time)?;
     print_summary(&scene);
     let reports = report::report(&scene.lights);
     let out = if args.json {

@@ -20,6 +20,7 @@ use super::common::{
     at_least, clap_message, max_memory, print_auto, print_report, print_summary, warn_depth_cut,
     warn_dropped, warn_limits, IntegratorArgs, MachineryArgs,
 };
+use super::frames::FrameArgs;
 use super::interrupt;
 use crate::error::{Error, Result};
 use crate::output::json;
@@ -90,6 +91,8 @@ struct MeterArgs {
     #[command(flatten)]
     integrator: IntegratorArgs,
     #[command(flatten)]
+    when: FrameArgs,
+    #[command(flatten)]
     machinery: MachineryArgs,
 }
 
@@ -157,7 +160,12 @@ fn run(args: &MeterArgs) -> Result<()> {
         ])?;
     }
     interrupt::install()?;
-    let scene = scene::load_with(&args.scene, Some((1, 1)), args.machinery.machinery())?;
+    let scene = scene::load_at(
+        &args.scene,
+        Some((1, 1)),
+        args.machinery.machinery(),
+        args.when.read_time(),
+    )?;
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before measuring; nothing written");

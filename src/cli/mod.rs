@@ -8,6 +8,7 @@
 mod checkpoints;
 mod common;
 mod converge;
+mod frames;
 mod info;
 mod interrupt;
 mod lights;

@@ -5,6 +5,7 @@ use super::common::{
     at_least, clap_message, max_memory, metadata_name, print_auto, print_report, print_summary,
     warn_clamped, warn_depth_cut, warn_dropped, warn_limits, IntegratorArgs, MachineryArgs, Made,
 };
+use super::frames::{frame_path, parse_frames, FrameArgs, FrameRange};
 use super::interrupt;
 use super::parts::PartArgs;
 use super::progress::Progress;
@@ -89,6 +90,13 @@ struct RenderArgs {
     /// default: the memory available).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = max_memory, allow_hyphen_values = true)]
     max_memory: Option<u64>,
+    #[command(flatten)]
+    when: FrameArgs,
+    /// Render the time codes A, A + STEP, ... up to B into a sequence: -o (default
+    /// STAGE.####.exr) and --preview name each frame with a placeholder, #### or %04d.
+    #[arg(long, value_name = "A..B[:STEP]", value_parser = parse_frames, allow_hyphen_values = true,
+          conflicts_with_all = ["frame", "checkpoint", "resume", "strategies"])]
+    frames: Option<FrameRange>,
 }
 
 pub(super) fn parse_resolution(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -135,26 +143,102 @@ fn run(args: &RenderArgs) -> Result<()> {
         args.strategies.is_some(),
         args.checkpoint.is_some() || args.resume.is_some(),
     )?;
+    if let Some(frames) = &args.frames {
+        if args.part.part.is_some() {
+            return Err(Error::option("--part renders one frame: it cannot go with --frames"));
+        }
+        return run_sequence(args, &opts, frames);
+    }
     let path = args
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    target::check(&targets(args, &path))?;
+    target::check(&targets(args, &path, args.preview.as_deref()))?;
     let resume = args.resume.as_deref().map(checkpoints::read).transpose()?;
     interrupt::install()?;
-    let scene = scene::load_with(&args.scene, args.resolution, args.machinery.machinery())?;
+    let scene = scene::load_at(
+        &args.scene,
+        args.resolution,
+        args.machinery.machinery(),
+        args.when.read_time(),
+    )?;
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before rendering; nothing written");
         return Ok(());
     }
-    warn_limits(&opts.integrator, &scene, true);
-    // auto continues with the integrator the checkpoint was rendered with, no pilot.
-    let opts = match &resume {
-        Some(c) => session::auto::for_checkpoint(&scene, &opts, c),
-        None => opts,
+    let output = Output {
+        exr: &path,
+        preview: args.preview.as_deref(),
     };
-    let mut session = ImageSession::new(&scene, &opts)?;
+    render_frame(args, &opts, &scene, output, resume).map(|_| ())
+}
+
+/// `--frames`: every frame's outputs are checked first, the stage is opened once and read at
+/// each time code in turn; an interrupt ends the sequence after writing the frame under way.
+fn run_sequence(args: &RenderArgs, opts: &RenderOptions, frames: &FrameRange) -> Result<()> {
+    let pattern = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(&args.scene).with_extension("####.exr"));
+    let mut outputs = Vec::new();
+    let mut all_targets = Vec::new();
+    for t in frames.times() {
+        let exr = frame_path(&pattern, t)?;
+        let preview = args
+            .preview
+            .as_deref()
+            .map(|p| frame_path(p, t))
+            .transpose()?;
+        all_targets.extend(targets(args, &exr, preview.as_deref()));
+        outputs.push((t, exr, preview));
+    }
+    target::check(&all_targets)?;
+    interrupt::install()?;
+    let stage = scene::open(&args.scene)?;
+    for (t, exr, preview) in &outputs {
+        let desc = stage.read(args.when.at(Some(*t)))?;
+        let scene = scene::build_with(&desc, args.resolution, args.machinery.machinery())?;
+        eprintln!("frame {t}");
+        print_summary(&scene);
+        if let Some(signal) = interrupt::received() {
+            eprintln!("interrupted by {signal} before frame {t}; the sequence stops");
+            return Ok(());
+        }
+        let output = Output {
+            exr,
+            preview: preview.as_deref(),
+        };
+        if render_frame(args, opts, &scene, output, None)?.is_some() {
+            eprintln!("the sequence stops after frame {t}");
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// Where one frame is written.
+#[derive(Clone, Copy)]
+struct Output<'a> {
+    exr: &'a Path,
+    preview: Option<&'a Path>,
+}
+
+/// Renders `scene` and writes its outputs; the signal that interrupted it, if any.
+fn render_frame(
+    args: &RenderArgs,
+    opts: &RenderOptions,
+    scene: &scene::Scene,
+    output: Output,
+    resume: Option<crate::session::checkpoint::Checkpoint>,
+) -> Result<Option<&'static str>> {
+    warn_limits(&opts.integrator, scene, true);
+    // auto continues with the integrator the checkpoint was rendered with, no pilot.
+    let opts = &match &resume {
+        Some(c) => session::auto::for_checkpoint(scene, opts, c),
+        None => opts.clone(),
+    };
+    let mut session = ImageSession::new(scene, opts)?;
     print_auto(session.auto());
     if let (Some(c), Some(file)) = (resume, &args.resume) {
         let done = c.samples;
@@ -163,7 +247,7 @@ fn run(args: &RenderArgs) -> Result<()> {
             .map_err(|e| Error::io(file, format!("--resume: {e}")))?;
         eprintln!("resuming {} at {done} spp", file.display());
     }
-    args.part.start(&mut session, &opts)?;
+    args.part.start(&mut session, opts)?;
     let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
     let target = opts.spp.map(u64::from).or(match opts.time_budget {
         Some(_) => None,
@@ -185,22 +269,22 @@ fn run(args: &RenderArgs) -> Result<()> {
         eprintln!("interrupted by {signal} after {} spp", out.spp);
         if out.spp == 0 {
             eprintln!("nothing rendered; nothing written");
-            return Ok(());
+            return Ok(interrupted);
         }
     }
-    write_outputs(args, &opts, &scene, &path, &out)?;
+    write_outputs(args, opts, scene, output, &out)?;
     let chosen = opts.integrator;
     args.part.save(
-        &made(args, &opts, &scene, &chosen, &out),
-        &opts,
+        &made(args, opts, scene, &chosen, &out),
+        opts,
         &session,
-        &path,
+        output.exr,
         &out,
     )?;
     if interrupted.is_none() {
         saves.finished();
     }
-    Ok(())
+    Ok(interrupted)
 }
 
 /// Runs passes until the session is finished or a signal arrives (its name), saving
@@ -221,9 +305,9 @@ fn render_passes(
 }
 
 /// Every file and directory the render will write, in the order given.
-fn targets(args: &RenderArgs, output: &Path) -> Vec<Target> {
+fn targets(args: &RenderArgs, output: &Path, preview: Option<&Path>) -> Vec<Target> {
     let mut t = vec![Target::new("-o", output, Format::Exr)];
-    if let Some(p) = &args.preview {
+    if let Some(p) = preview {
         t.push(Target::new("--preview", p, Format::Png));
     }
     if let Some(p) = &args.checkpoint {
@@ -281,15 +365,16 @@ fn write_outputs(
     args: &RenderArgs,
     opts: &RenderOptions,
     scene: &scene::Scene,
-    path: &Path,
+    output: Output,
     out: &RenderOutput,
 ) -> Result<()> {
+    let path = output.exr;
     let chosen = out.auto.as_ref().map_or(opts.integrator, |a| a.choice);
     let meta = write_image(
         &made(args, opts, scene, &chosen, out),
         metadata_name(&chosen, out.auto.as_ref()),
         path,
-        args.preview.as_deref().map(|p| (p, args.preview_exposure)),
+        output.preview.map(|p| (p, args.preview_exposure)),
         out,
     )?;
     let white = spectral::color::white_xy().map(|c| c as f32);

@@ -118,7 +118,7 @@ impl Light {
     pub fn l(&self, hit: &LightHit, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
             Light::Triangle(l) => l.l(hit, w, lambda),
-            Light::Rect(l) => l.l(hit.n, w, lambda),
+            Light::Rect(l) => l.l(hit.p, w, lambda),
             Light::Disk(l) => l.l(hit.n, w, lambda),
             Light::Sphere(l) => l.l(w, lambda),
             Light::Cylinder(l) => l.l(hit.n, w, lambda),

@@ -1,11 +1,69 @@
 //! UsdLux RectLight: a one-sided rectangle emitting along its local −Z, sampled uniformly by
 //! area (PBR 4ed §12.5 for area lights; the pdf conversion is eq. 4.9).
+//!
+//! `inputs:texture:file` multiplies the emission by the texture, looked up at st = the
+//! point's coordinates along the rectangle's local +X and +Y edges (UsdLux: "the U axis along
+//! +X and V along +Y"). The texel's linear RGB is uplifted per lookup as an unbounded
+//! reflectance (scale · sigmoid, pbrt-v4 `RGBUnboundedSpectrum`; Jakob and Hanika 2019), so a
+//! grey texel v multiplies the spectrum by exactly v. As for textured mesh lights
+//! (`triangle.rs`), points are still sampled uniformly by area: only the radiance varies; the
+//! light sampler and the report use the texture's mean luminance.
 
 use super::shaping::{self, Shaping};
 use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
+use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
-use glam::Vec3;
+use crate::texture::TextureInput;
+use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+use std::sync::Arc;
+
+/// The texture of a RectLight and its mean luminance factor.
+#[derive(Clone, Debug)]
+pub struct RectTexture {
+    pub texture: Arc<TextureInput>,
+    /// The mean over the rectangle of the texel's luminance (Rec.709 Y of the RGB).
+    pub mean: f32,
+    /// The largest channel of any texel.
+    pub peak: f32,
+}
+
+/// Relative luminance Y of a linear Rec.709 RGB (ITU-R BT.709-6, item 3.2).
+fn luminance(rgb: [f32; 3]) -> f32 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+}
+
+impl RectTexture {
+    /// The texture with its mean and peak from a 64 × 64 grid of lookups.
+    pub fn new(texture: Arc<TextureInput>) -> RectTexture {
+        const N: usize = 64;
+        let (mut sum, mut peak) = (0.0f64, 0.0f32);
+        for k in 0..N * N {
+            let st = Vec2::new((k % N) as f32 + 0.5, (k / N) as f32 + 0.5) / N as f32;
+            let rgb = texture.rgb(st.into()).map(|c| c.max(0.0));
+            sum += f64::from(luminance(rgb));
+            peak = peak.max(rgb[0].max(rgb[1]).max(rgb[2]));
+        }
+        RectTexture {
+            texture,
+            mean: (sum / (N * N) as f64) as f32,
+            peak,
+        }
+    }
+
+    /// The spectral factor at st for the path's wavelengths.
+    #[inline]
+    fn factor(&self, st: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+        let rgb = self.texture.rgb(st.into()).map(|c| c.max(0.0));
+        let m = rgb[0].max(rgb[1]).max(rgb[2]);
+        if m.is_nan() || m <= 0.0 {
+            return SampledSpectrum::ZERO;
+        }
+        let scale = 2.0 * m;
+        let sigmoid = reflectance_lookup(rgb.map(|c| c / scale));
+        SampledSpectrum::from_fn(|i| scale * sigmoid.eval(lambda.lambda[i]))
+    }
+}
 
 #[derive(Clone, Debug)]
 pub struct RectLight {
@@ -20,6 +78,8 @@ pub struct RectLight {
     pub radiance: Spectrum,
     /// UsdLux ShapingAPI, if any.
     pub shaping: Option<Shaping>,
+    /// `inputs:texture:file`, if any.
+    pub texture: Option<RectTexture>,
 }
 
 impl RectLight {
@@ -41,7 +101,36 @@ impl RectLight {
             area,
             radiance,
             shaping: None,
+            texture: None,
         }
+    }
+
+    /// The light with `inputs:texture:file` `texture`.
+    pub fn with_texture(self, texture: Option<RectTexture>) -> RectLight {
+        RectLight { texture, ..self }
+    }
+
+    /// The unshaped radiance at the point of edge coordinates `st` ∈ [0, 1]².
+    #[inline]
+    fn radiance_at(&self, st: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+        let base = self.radiance.sample(lambda);
+        match &self.texture {
+            Some(t) => base * t.factor(st, lambda),
+            None => base,
+        }
+    }
+
+    /// The edge coordinates (a, b) of the point corner + a·edge_u + b·edge_v nearest `p`.
+    fn edge_coords(&self, p: Vec3) -> Vec2 {
+        let q = p - self.corner;
+        let (uu, uv, vv) = (
+            self.edge_u.dot(self.edge_u),
+            self.edge_u.dot(self.edge_v),
+            self.edge_v.dot(self.edge_v),
+        );
+        let (qu, qv) = (q.dot(self.edge_u), q.dot(self.edge_v));
+        let det = uu * vv - uv * uv;
+        Vec2::new((qu * vv - qv * uv) / det, (qv * uu - qu * uv) / det)
     }
 
     /// The light with ShapingAPI `shaping`.
@@ -57,7 +146,8 @@ impl RectLight {
     ) -> Option<LightLiSample> {
         let p = self.corner + u[0] * self.edge_u + u[1] * self.edge_v;
         sample_by_area(ctx, p, self.n, self.area, false, |w| {
-            shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
+            let radiance = self.radiance_at(Vec2::from(u), lambda);
+            shaping::shape(&self.shaping, w, radiance, lambda)
         })
     }
 
@@ -68,11 +158,16 @@ impl RectLight {
         area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n)
     }
 
-    pub fn l(&self, _n: Vec3, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
+    /// Radiance leaving the point `p` of the rectangle towards `w`.
+    pub fn l(&self, p: Vec3, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         if self.n.dot(w) <= 0.0 {
             return SampledSpectrum::ZERO;
         }
-        shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
+        let st = match self.texture {
+            Some(_) => self.edge_coords(p).clamp(Vec2::ZERO, Vec2::ONE),
+            None => Vec2::ZERO,
+        };
+        shaping::shape(&self.shaping, w, self.radiance_at(st, lambda), lambda)
     }
 
     /// Ray–parallelogram test (plane hit, then the two edge coordinates in [0,1]).
@@ -86,16 +181,7 @@ impl RectLight {
         if !(t > 0.0 && t < t_max) {
             return None;
         }
-        let q = o + t * d - self.corner;
-        let (uu, uv, vv) = (
-            self.edge_u.dot(self.edge_u),
-            self.edge_u.dot(self.edge_v),
-            self.edge_v.dot(self.edge_v),
-        );
-        let (qu, qv) = (q.dot(self.edge_u), q.dot(self.edge_v));
-        let det = uu * vv - uv * uv;
-        let a = (qu * vv - qv * uv) / det;
-        let b = (qv * uu - qu * uv) / det;
+        let Vec2 { x: a, y: b } = self.edge_coords(o + t * d);
         if !(0.0..=1.0).contains(&a) || !(0.0..=1.0).contains(&b) {
             return None;
         }
@@ -106,9 +192,14 @@ impl RectLight {
         })
     }
 
-    /// Φv = π A Lv, or the shaped integral.
+    /// The texture's mean luminance factor (1 without a texture).
+    pub fn texture_mean(&self) -> f32 {
+        self.texture.as_ref().map_or(1.0, |t| t.mean)
+    }
+
+    /// Φv = π A Lv, or the shaped integral; Lv with the texture's mean.
     pub fn luminous_power(&self) -> f32 {
-        let lv = xyz::luminance(&self.radiance.to_dense()) as f32;
+        let lv = xyz::luminance(&self.radiance.to_dense()) as f32 * self.texture_mean();
         shaping::luminous_power(&self.shaping, PI * self.area, lv)
     }
 }

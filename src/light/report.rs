@@ -93,8 +93,8 @@ fn single(light: &Light) -> LightReport {
             Finite {
                 kind: "RectLight",
                 area: l.area,
-                flux_per_nit: PI * l.area,
-                peak_per_nit: l.area,
+                flux_per_nit: PI * l.area * l.texture_mean(),
+                peak_per_nit: l.area * l.texture_mean(),
             },
             &l.radiance,
             &l.shaping,

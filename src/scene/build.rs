@@ -14,6 +14,7 @@ use crate::imageio;
 use crate::light::dome::LatLong;
 use crate::light::emission::{self, Photometric};
 use crate::light::ies::IesProfile;
+use crate::light::rect::RectTexture;
 use crate::light::report;
 use crate::light::shaping::Shaping;
 use crate::light::EmissiveTexture;
@@ -116,6 +117,7 @@ pub fn build_with(
         lights: desc.lights.len() + desc.meshes.iter().filter(|m| m.light.is_some()).count(),
         camera: camera.prim_path.clone(),
         warnings,
+        time: desc.time,
     };
     let all_opaque = materials.iter().all(Material::is_opaque);
     let dispersive = machinery.dispersion_checks || materials.iter().any(Material::is_dispersive);
@@ -640,20 +642,52 @@ fn bounding_sphere(bvh: &Bvh) -> (Vec3, f32) {
     (center, (0.5f32 * (hi - lo).length()).max(1e-3))
 }
 
-/// Uniform scale factor of an affine transform (geometric mean of the axis lengths).
-fn uniform_scale(m: &Mat4) -> f32 {
-    let s = Vec3::new(
-        m.x_axis.truncate().length(),
-        m.y_axis.truncate().length(),
-        m.z_axis.truncate().length(),
-    );
-    (s.x * s.y * s.z).cbrt()
+/// The scale a transform applies to the plane or space of `axes` (local axes, 0 = X), which
+/// must be uniform there: equal lengths, at right angles. A non-uniform scale or a shear
+/// turns a sphere into an ellipsoid and a circle into an ellipse, shapes these lights do not
+/// sample, so it is refused rather than rounded (`what` names the light type).
+fn round_scale(m: &Mat4, axes: &[usize], what: &str) -> Reason<f32> {
+    const TOLERANCE: f32 = 1e-4;
+    let columns = [m.x_axis, m.y_axis, m.z_axis].map(|c| c.truncate());
+    let lengths: Vec<f32> = axes.iter().map(|&a| columns[a].length()).collect();
+    let (lo, hi) = lengths
+        .iter()
+        .fold((f32::MAX, 0.0f32), |(lo, hi), &l| (lo.min(l), hi.max(l)));
+    let skew = axes.iter().enumerate().any(|(i, &a)| {
+        axes[i + 1..].iter().any(|&b| {
+            let cos = columns[a].dot(columns[b]) / (lengths[i] * columns[b].length());
+            cos.abs() > TOLERANCE
+        })
+    });
+    if hi - lo > TOLERANCE * hi || skew {
+        let names = ["x", "y", "z"];
+        let scales: Vec<String> = axes
+            .iter()
+            .zip(&lengths)
+            .map(|(&a, l)| format!("{} {l}", names[a]))
+            .collect();
+        return Err(format!(
+            "the transform scales this {what} non-uniformly ({}{}), which would make it {}; \
+             such lights are not supported (scale its radius instead)",
+            scales.join(", "),
+            if skew { ", with shear" } else { "" },
+            if axes.len() == 3 {
+                "an ellipsoid"
+            } else {
+                "an ellipse"
+            }
+        ));
+    }
+    Ok(lengths
+        .iter()
+        .product::<f32>()
+        .powf(1.0 / axes.len() as f32))
 }
 
 /// A UsdLux light in absolute units, with its shaping, within the bounds of `limits.rs`.
 fn light(l: &LightDesc) -> Reason<Light> {
     let size = match &l.kind {
-        LightKind::Rect { width, height } => width.max(*height),
+        LightKind::Rect { width, height, .. } => width.max(*height),
         LightKind::Disk { radius } | LightKind::Sphere { radius } => *radius,
         LightKind::Cylinder { radius, length } => radius.max(*length),
         LightKind::Distant { .. } | LightKind::Dome { .. } => 1.0,
@@ -672,7 +706,9 @@ fn peak_luminance(light: &Light) -> f64 {
                 .map_or(1.0, |s| f64::from(s.photometry.max_factor))
     };
     match light {
-        Light::Rect(l) => shaped(&l.radiance, &l.shaping),
+        Light::Rect(l) => {
+            shaped(&l.radiance, &l.shaping) * l.texture.as_ref().map_or(1.0, |t| f64::from(t.peak))
+        }
         Light::Disk(l) => shaped(&l.radiance, &l.shaping),
         Light::Sphere(l) => shaped(&l.radiance, &l.shaping),
         Light::Cylinder(l) => shaped(&l.radiance, &l.shaping),
@@ -706,7 +742,11 @@ fn texture_peak(t: &TextureInput) -> f64 {
 /// [`light`] without the bounds.
 fn build_light(l: &LightDesc) -> Reason<Light> {
     Ok(match &l.kind {
-        LightKind::Rect { width, height } => rect(l, *width, *height)?,
+        LightKind::Rect {
+            width,
+            height,
+            texture,
+        } => rect(l, *width, *height, texture.as_deref())?,
         LightKind::Disk { radius } => disk(l, *radius)?,
         LightKind::Sphere { radius } => sphere(l, *radius)?,
         LightKind::Cylinder { radius, length } => cylinder(l, *radius, *length)?,
@@ -717,7 +757,7 @@ fn build_light(l: &LightDesc) -> Reason<Light> {
 
 /// RectLight: the rectangle's corner and edges in world space, emitting along world −Z of
 /// the light (−(edge_u × edge_v)).
-fn rect(l: &LightDesc, width: f32, height: f32) -> Reason<Light> {
+fn rect(l: &LightDesc, width: f32, height: f32, texture: Option<&TextureDesc>) -> Reason<Light> {
     let m = &l.to_world;
     let corner = m.transform_point3(Vec3::new(-0.5 * width, -0.5 * height, 0.0));
     let eu = m.transform_vector3(Vec3::new(width, 0.0, 0.0));
@@ -731,15 +771,24 @@ fn rect(l: &LightDesc, width: f32, height: f32) -> Reason<Light> {
     };
     let (shaping, g) = shaped(l, flat, |w| area * n.dot(w).max(0.0))?;
     let radiance = emission::radiance(&l.emission, g)?;
+    let texture = match texture {
+        Some(t) => {
+            let input = TextureCache::default().input(t)?;
+            Some(RectTexture::new(Arc::new(input)))
+        }
+        None => None,
+    };
     Ok(Light::Rect(
-        RectLight::new(l.prim_path.clone(), corner, eu, ev, n, radiance).with_shaping(shaping),
+        RectLight::new(l.prim_path.clone(), corner, eu, ev, n, radiance)
+            .with_shaping(shaping)
+            .with_texture(texture),
     ))
 }
 
 /// DiskLight: radius scaled by the transform's uniform scale, emitting along local −Z.
 fn disk(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
-    let r = radius * uniform_scale(m);
+    let r = radius * round_scale(m, &[0, 1], "DiskLight")?;
     let area = PI * r * r;
     let n = -m.transform_vector3(Vec3::Z).normalize();
     let flat = Photometric {
@@ -761,7 +810,7 @@ fn disk(l: &LightDesc, radius: f32) -> Reason<Light> {
 /// SphereLight: Φ = π · 4πr² · L, projected area πr² in every direction.
 fn sphere(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
-    let r = (radius * uniform_scale(m)).max(1e-6);
+    let r = (radius * round_scale(m, &[0, 1, 2], "SphereLight")?).max(1e-6);
     let area = 4.0 * PI * r * r;
     let round = Photometric {
         area: Some(area),
@@ -784,10 +833,8 @@ fn sphere(l: &LightDesc, radius: f32) -> Reason<Light> {
 fn cylinder(l: &LightDesc, radius: f32, length: f32) -> Reason<Light> {
     let m = &l.to_world;
     let axis = m.transform_vector3(Vec3::X);
-    let ry = m.transform_vector3(Vec3::Y).length();
-    let rz = m.transform_vector3(Vec3::Z).length();
     let len = length * axis.length();
-    let r = (radius * (ry * rz).sqrt()).max(1e-6);
+    let r = (radius * round_scale(m, &[1, 2], "CylinderLight's cross-section")?).max(1e-6);
     let light = CylinderLight {
         prim_path: l.prim_path.clone(),
         center: m.transform_point3(Vec3::ZERO),

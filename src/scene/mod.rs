@@ -32,6 +32,8 @@ pub use render_scene::{Hit, Scene, SurfaceHit};
 use crate::error::Result;
 use std::path::Path;
 
+pub use usd::{OpenStage, ReadTime};
+
 /// Reads a stage and builds the render scene; `resolution` overrides RenderSettings.
 pub fn load(path: &Path, resolution: Option<(u32, u32)>) -> Result<Scene> {
     load_with(path, resolution, Machinery::default())
@@ -43,6 +45,20 @@ pub fn load_with(
     resolution: Option<(u32, u32)>,
     machinery: Machinery,
 ) -> Result<Scene> {
-    let desc = usd::load(path)?;
-    build_with(&desc, resolution, machinery)
+    load_at(path, resolution, machinery, ReadTime::default())
+}
+
+/// [`load_with`] at a time code: every attribute is evaluated at `time`.
+pub fn load_at(
+    path: &Path,
+    resolution: Option<(u32, u32)>,
+    machinery: Machinery,
+    time: ReadTime,
+) -> Result<Scene> {
+    build_with(&usd::open(path)?.read(time)?, resolution, machinery)
+}
+
+/// Opens a stage once to read it at several times ([`OpenStage::read`], then [`build_with`]).
+pub fn open(path: &Path) -> Result<OpenStage> {
+    usd::open(path)
 }

@@ -78,6 +78,8 @@ pub struct Summary {
     pub lights: usize,
     pub camera: String,
     pub warnings: Vec<String>,
+    /// The time the stage was read at.
+    pub time: crate::desc::TimeDesc,
 }
 
 pub struct Scene {

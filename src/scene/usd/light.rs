@@ -18,7 +18,10 @@ use openusd::usd;
 
 use super::values::Ctx;
 use super::vocab;
-use crate::desc::{EmissionDesc, IesDesc, LightDesc, LightKind, ShapingDesc, SpdDesc};
+use crate::desc::{
+    ColorSpace, EmissionDesc, IesDesc, LightDesc, LightKind, ShapingDesc, SpdDesc, TextureChannel,
+    TextureDesc, Wrap,
+};
 use crate::error::Result;
 
 /// The concrete UsdLux light types that become a [`LightDesc`].
@@ -145,18 +148,33 @@ fn size(ctx: &Ctx, prim: &usd::Prim, base: &str, default: f32) -> Result<f32> {
     Ok(value)
 }
 
-/// A RectLight; a texture on it is not supported (warned).
+/// A RectLight, with its `inputs:texture:file` (an empty asset path is no texture): read
+/// like a UsdUVTexture with the schema's defaults (colour space auto, clamped at the edges),
+/// st along the light's local +X and +Y.
 fn rect(ctx: &mut Ctx, prim: &usd::Prim) -> Result<LightKind> {
     let width = size(ctx, prim, "width", 1.0)?;
     let height = size(ctx, prim, "height", 1.0)?;
-    let texture = input_name(ctx, prim, "texture:file")?;
-    if ctx.raw(prim, &texture)?.is_some() {
-        ctx.warn(
-            prim,
-            "textured RectLights are not supported yet; the texture is ignored",
-        );
-    }
-    Ok(LightKind::Rect { width, height })
+    let file = ctx.asset(prim, &input_name(ctx, prim, "texture:file")?)?;
+    let texture = file.map(|file| {
+        Box::new(TextureDesc {
+            shader_path: prim.path().as_str().to_string(),
+            file,
+            st_primvar: "st".into(),
+            st_transform: None,
+            wrap_s: Wrap::Clamp,
+            wrap_t: Wrap::Clamp,
+            color_space: ColorSpace::Auto,
+            scale: [1.0; 4],
+            bias: [0.0; 4],
+            fallback: [1.0; 4],
+            channel: TextureChannel::Rgb,
+        })
+    });
+    Ok(LightKind::Rect {
+        width,
+        height,
+        texture,
+    })
 }
 
 /// The radius of a sphere or cylinder light (default 0.5). A zero radius or the
@@ -263,7 +281,7 @@ fn type_inputs(type_name: &str) -> &'static [&'static str] {
         "SphereLight" => &["radius"],
         "CylinderLight" => &["radius", "length"],
         "DistantLight" => &["angle"],
-        "DomeLight" | "DomeLight_1" => &["texture:file", "texture:format"],
+        "DomeLight" | "DomeLight_1" => &["texture:file", "texture:format", "guideRadius"],
         _ => &[],
     }
 }
@@ -326,8 +344,16 @@ pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result
             );
         }
     }
-    if !ctx.targets(prim, "light:filters")?.is_empty() {
-        ctx.warn(prim, "light filters are not supported; ignored");
+    let filters = ctx.targets(prim, "light:filters")?;
+    if !filters.is_empty() {
+        let names: Vec<&str> = filters.iter().map(|p| p.as_str()).collect();
+        ctx.warn(
+            prim,
+            format!(
+                "light filters are not supported; ignored: {}",
+                names.join(", ")
+            ),
+        );
     }
     Ok(())
 }

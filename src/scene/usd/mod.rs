@@ -17,6 +17,8 @@
 
 mod arcs;
 mod camera;
+#[cfg(feature = "testing")]
+pub mod every_value;
 mod guard;
 mod light;
 mod lz4;
@@ -39,7 +41,7 @@ use openusd::{sdf, usd};
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::desc::{ExtractedAssets, MeshDesc, SceneDescription};
+use crate::desc::{ExtractedAssets, MeshDesc, SceneDescription, TimeDesc, TimeOrigin};
 use crate::error::Result;
 use std::sync::Arc;
 use values::Ctx;
@@ -68,33 +70,100 @@ const NON_XFORMABLE_TYPES: [&str; 6] = [
     "RenderSettings",
 ];
 
-/// Reads a .usda/.usdc/.usdz stage (flattened, or with local references) into plain data.
+/// Reads a .usda/.usdc/.usdz stage (flattened, or with local references) into plain data, at
+/// the stage's own time (see [`ReadTime`]).
+#[cfg(any(test, feature = "testing"))]
 pub fn load(path: &Path) -> Result<SceneDescription> {
-    guard::catch_panics(path, || read(path))
+    open(path)?.read(ReadTime::default())
 }
 
-/// [`load`] without the panic guard.
-fn read(path: &Path) -> Result<SceneDescription> {
-    let (stage, content_hash) = stage::open(path)?;
-    arcs::check(path, &stage)?;
-    let meters_per_unit = stage::meters_per_unit(path, &stage)?;
-    let z_up = stage::z_up(path, &stage)?;
-    let ctx = Ctx {
-        file: path.to_path_buf(),
-        stage: &stage,
-        time: stage::read_time(&stage),
-        meters_per_unit,
-        z_up,
-        stage_to_world: stage::stage_to_world(meters_per_unit, z_up),
-        warnings: Vec::new(),
-        extracted: Arc::new(ExtractedAssets::unique()),
-    };
-    let mut reader = Reader::new(ctx);
-    reader.read_stage()?;
-    stage::check_composition(path, &stage)?;
-    let mut desc = reader.finish()?;
-    desc.content_hash = content_hash;
-    Ok(desc)
+/// When a stage's attributes are read: a USD time code, and how time samples between two
+/// authored ones are evaluated.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ReadTime {
+    /// The time code (`--frame`); `None`: the stage's `startTimeCode` when it authors one,
+    /// else its earliest time sample (a value without time samples is its default).
+    pub frame: Option<f64>,
+    /// Held interpolation (USD's `UsdInterpolationTypeHeld`): every value is the sample at
+    /// or before the time. Otherwise linear, USD's default: numeric samples (scalars,
+    /// vectors, matrices; quaternions by slerp) are interpolated, and every other type
+    /// (assets, tokens, strings, bools, ints) holds the earlier sample.
+    pub held: bool,
+}
+
+/// A stage opened and checked once, to be read at any number of times.
+pub struct OpenStage {
+    path: std::path::PathBuf,
+    stage: usd::Stage,
+    content_hash: u64,
+}
+
+/// Opens and checks the stage at `path` (every layer read and checked, composition arcs
+/// checked); [`OpenStage::read`] then reads it at a time.
+pub fn open(path: &Path) -> Result<OpenStage> {
+    guard::catch_panics(path, || {
+        let (stage, content_hash) = stage::open(path)?;
+        arcs::check(path, &stage)?;
+        Ok(OpenStage {
+            path: path.to_path_buf(),
+            stage,
+            content_hash,
+        })
+    })
+}
+
+impl OpenStage {
+    /// The stage's description at `time`.
+    pub fn read(&self, time: ReadTime) -> Result<SceneDescription> {
+        guard::catch_panics(&self.path, || self.read_unguarded(time))
+    }
+
+    /// [`OpenStage::read`] without the panic guard.
+    fn read_unguarded(&self, time: ReadTime) -> Result<SceneDescription> {
+        let (path, stage) = (self.path.as_path(), &self.stage);
+        stage.set_interpolation_type(if time.held {
+            usd::InterpolationType::Held
+        } else {
+            usd::InterpolationType::Linear
+        });
+        let meters_per_unit = stage::meters_per_unit(path, stage)?;
+        let z_up = stage::z_up(path, stage)?;
+        let (code, origin) = match time.frame {
+            Some(f) => (usd::TimeCode::new(f), TimeOrigin::Given),
+            None => stage::read_time(stage),
+        };
+        let ctx = Ctx {
+            file: path.to_path_buf(),
+            stage,
+            time: code,
+            meters_per_unit,
+            z_up,
+            stage_to_world: stage::stage_to_world(meters_per_unit, z_up),
+            warnings: Vec::new(),
+            extracted: Arc::new(ExtractedAssets::unique()),
+            animated: std::cell::Cell::new(false),
+        };
+        let mut reader = Reader::new(ctx);
+        reader.read_stage()?;
+        stage::check_composition(path, stage)?;
+        let animated = reader.ctx.animated.get();
+        let mut desc = reader.finish()?;
+        desc.time = TimeDesc {
+            code: (!code.is_earliest_time()).then_some(code.value()),
+            origin,
+            animated,
+            held: time.held,
+        };
+        desc.content_hash = self.content_hash;
+        if time != ReadTime::default() {
+            // A checkpoint of one frame does not resume another.
+            let mut hash = crate::desc::ContentHash(self.content_hash);
+            hash.add(&time.frame.unwrap_or(f64::NAN).to_le_bytes());
+            hash.add(&[u8::from(time.held)]);
+            desc.content_hash = hash.0;
+        }
+        Ok(desc)
+    }
 }
 
 /// What a prim hands down to its children.

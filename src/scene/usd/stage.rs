@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 use super::{resolver, values};
-use crate::desc::ContentHash;
+use crate::desc::{ContentHash, TimeOrigin};
 use crate::error::{Error, Result};
 
 /// `metersPerUnit` when the stage does not author it (USD's fallback: centimetres).
@@ -118,12 +118,16 @@ pub(super) fn stage_to_world(meters_per_unit: f64, z_up: bool) -> DMat4 {
     DMat4::from_scale(DVec3::splat(meters_per_unit)) * up
 }
 
-/// The time values are read at: the stage's `startTimeCode` when it authors a time range,
-/// else the earliest time sample (a default value is used when there are no samples).
-pub(super) fn read_time(stage: &usd::Stage) -> usd::TimeCode {
+/// The time values are read at when none is given: the stage's `startTimeCode` when it
+/// authors a time range, else the earliest time sample (a value without samples is its
+/// default then).
+pub(super) fn read_time(stage: &usd::Stage) -> (usd::TimeCode, TimeOrigin) {
     if stage.has_authored_time_code_range() {
-        usd::TimeCode::new(stage.start_time_code())
+        (
+            usd::TimeCode::new(stage.start_time_code()),
+            TimeOrigin::StartTimeCode,
+        )
     } else {
-        usd::TimeCode::EARLIEST
+        (usd::TimeCode::EARLIEST, TimeOrigin::Earliest)
     }
 }

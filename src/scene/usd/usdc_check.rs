@@ -333,6 +333,8 @@ impl<'a> Crate<'a> {
             9 | 56 if rep.is_array() => self.array(rep, 8, ArrayKind::Floats),
             48 => self.array(rep, 8, ArrayKind::Floats),
             11 if rep.is_array() => self.array(rep, 4, ArrayKind::Other),
+            // An empty array has payload 0 (openusd 0.6 misread it; vendor/openusd/PATCHES.md).
+            10 | 12 | 57 if rep.is_array() && pos == 0 => Ok(()),
             10 | 12 | 57 if rep.is_array() => self.indexed(pos, "a string array").map(|_| ()),
             13..=30 if rep.is_array() => {
                 let size = element_size(rep.ty());

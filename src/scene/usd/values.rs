@@ -31,6 +31,8 @@ pub(super) struct Ctx<'s> {
     pub warnings: Vec<String>,
     /// Where assets packaged in a `.usdz` are copied for the builder.
     pub extracted: Arc<ExtractedAssets>,
+    /// Set once an attribute read has two or more time samples.
+    pub animated: std::cell::Cell<bool>,
 }
 
 impl Ctx<'_> {
@@ -81,10 +83,26 @@ impl Ctx<'_> {
 
     /// The composed value of attribute `name` at `self.time`; `None` when unauthored or blocked.
     pub fn raw(&self, prim: &usd::Prim, name: &str) -> Result<Option<sdf::Value>> {
-        let value = prim
-            .attribute(name)
+        let attribute = prim.attribute(name);
+        let spline = attribute
+            .get_metadata::<sdf::Value>("spline")
+            .map_err(|e| self.usd_err(prim, &format!("reading '{name}'"), e))?;
+        if spline.is_some() {
+            let reason = format!(
+                "'{name}' is animated by a spline ('{name}.spline'), which this reader does \
+                 not evaluate; author time samples instead"
+            );
+            return Err(self.err(prim, reason));
+        }
+        let value = attribute
             .get_at::<sdf::Value>(self.time)
             .map_err(|e| self.usd_err(prim, &format!("reading '{name}'"), e))?;
+        if value.is_some() && !self.animated.get() {
+            let samples = attribute
+                .num_time_samples()
+                .map_err(|e| self.usd_err(prim, &format!("reading '{name}'"), e))?;
+            self.animated.set(samples > 1);
+        }
         Ok(value.filter(|v| !matches!(v, sdf::Value::ValueBlock | sdf::Value::None)))
     }
 

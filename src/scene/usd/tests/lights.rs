@@ -60,7 +60,8 @@ def DomeLight "Sky" {{
         rect.kind,
         LightKind::Rect {
             width: 2.0,
-            height: 3.0
+            height: 3.0,
+            texture: None
         }
     );
     let expected = EmissionDesc {
@@ -123,7 +124,8 @@ def DomeLight "Sky" {}
         light(&desc, "/Rect").kind,
         LightKind::Rect {
             width: 1.0,
-            height: 1.0
+            height: 1.0,
+            texture: None
         }
     );
     assert_eq!(light(&desc, "/Disk").kind, LightKind::Disk { radius: 0.5 });

@@ -7,6 +7,7 @@ mod lights;
 mod materials;
 mod robust;
 mod stage;
+mod time;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -110,7 +110,8 @@ def Camera "C" {
         light.kind,
         crate::desc::LightKind::Rect {
             width: 50.0,
-            height: 1.0
+            height: 1.0,
+            texture: None
         }
     );
     assert_close(
