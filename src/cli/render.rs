@@ -145,7 +145,9 @@ fn run(args: &RenderArgs) -> Result<()> {
     )?;
     if let Some(frames) = &args.frames {
         if args.part.part.is_some() {
-            return Err(Error::option("--part renders one frame: it cannot go with --frames"));
+            return Err(Error::option(
+                "--part renders one frame: it cannot go with --frames",
+            ));
         }
         return run_sequence(args, &opts, frames);
     }
