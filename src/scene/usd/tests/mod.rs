@@ -31,20 +31,6 @@ fn temp_dir() -> PathBuf {
 fn write_stage(name: &str, text: &str) -> PathBuf {
     let path = temp_dir().join(name);
     std::fs::write(&path, text).expect("write stage");
-    let dump = std::path::PathBuf::from("/tmp/fixtures");
-    let _ = std::fs::create_dir_all(&dump);
-    let _ = std::fs::write(
-        dump.join(format!(
-            "{}_{}",
-            path.parent()
-                .unwrap()
-                .file_name()
-                .unwrap()
-                .to_string_lossy(),
-            name
-        )),
-        text,
-    );
     path
 }
 
