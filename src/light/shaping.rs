@@ -1,7 +1,8 @@
 //! UsdLux ShapingAPI: how an area light's emitted radiance varies with the emission direction
 //! ω (pointing away from the light), relative to the light's axis, its local −Z. The formulas
-//! are the UsdLux schema text (OpenUSD `usdLux/schema.usda`, clarified in PR #3182; see
-//! `../shared/USDLUX.md`), evaluated as hdEmbree does (`HdEmbreeEvaluateDirectionalShaping`):
+//! are the UsdLux schema text (OpenUSD `usdLux/schema.usda`, clarified in PR #3182); where
+//! hdEmbree (`HdEmbreeEvaluateDirectionalShaping`) reads it differently, `docs/usdlux.md` says
+//! which reading is implemented and why:
 //!
 //! - cone: θ = acos(axis·ω), θ_cut = coneAngle, θ_soft = lerp(softness, θ_cut, 0) = (1 − s) θ_cut,
 //!   factor 1 − smoothstep(θ, θ_soft, θ_cut); hard cutoff (zero beyond θ_cut) at softness 0;

@@ -229,8 +229,8 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
 }
 
 /// The pilot's `variance`, or infinity when it is 0 because the pilot found no light at all
-/// (a black image: a distant beam through a prism, which light subpaths rarely reach in a few
-/// samples per pixel): such a pilot measured nothing, and must not win as noiseless.
+/// (a black image, as bdpt's 2-spp pilot on the prism gave before its roulette fix): such a
+/// pilot measured nothing, and must not win as noiseless.
 fn found_light(session: &ImageSession, variance: f64) -> f64 {
     let black = variance == 0.0 && session.output().xyz.iter().all(|p| p[1] == 0.0);
     if black {
