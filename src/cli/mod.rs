@@ -8,6 +8,7 @@
 mod checkpoints;
 mod common;
 mod converge;
+mod crop;
 mod frames;
 mod info;
 mod interrupt;
