@@ -23,10 +23,11 @@ use std::path::{Path, PathBuf};
 #[derive(Parser, Debug)]
 #[command(name = "spectral-render merge")]
 struct MergeArgs {
-    /// The parts: their EXRs (the .part file beside each is read) or the .part files.
+    /// The parts: their EXRs (the .part file beside each is read) or the .part files; or a
+    /// meter study's part files (PART.json, `meter --part`).
     #[arg(required = true)]
     parts: Vec<PathBuf>,
-    /// The merged EXR.
+    /// The merged EXR; for meter parts, the points' JSON document or the grid's map base name.
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
     /// The stage, when it is no longer at the path the parts recorded (its content must be
@@ -57,6 +58,14 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
 }
 
 fn run(args: &MergeArgs) -> Result<()> {
+    if super::meter_parts::are_meter_parts(&args.parts) {
+        if args.preview.is_some() || args.stage.is_some() {
+            return Err(Error::option(
+                "merge: --preview and --stage are for a render's parts, not a meter study's",
+            ));
+        }
+        return super::meter_parts::merge(&args.parts, &args.output);
+    }
     let mut targets = vec![Target::new("-o", &args.output, Format::Exr)];
     if let Some(p) = &args.preview {
         targets.push(Target::new("--preview", p, Format::Png));

@@ -15,6 +15,7 @@ mod interrupt;
 mod lights;
 mod merge;
 mod meter;
+mod meter_parts;
 mod parts;
 mod progress;
 mod render;
