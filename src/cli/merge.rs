@@ -11,6 +11,7 @@ use super::render::write_image;
 use crate::error::{Error, Result};
 use crate::output::target::{self, Format, Target};
 use crate::scene::{self, Machinery};
+use crate::session::checkpoint::Checkpoint;
 use crate::session::image::xyz_to_rgb;
 use crate::session::part::{self, STAGE_FILE_KEY};
 use crate::session::{DepthCut, RenderOutput};
@@ -71,15 +72,28 @@ fn run(args: &MergeArgs) -> Result<()> {
         targets.push(Target::new("--preview", p, Format::Png));
     }
     target::check(&targets)?;
-    let states = args
+    // Each part's identity and counts first (its film's data dropped), then the films one
+    // at a time in merge order: memory for two films, whatever the number of parts.
+    let heads = args
         .parts
         .iter()
-        .map(|p| parts::read(p))
+        .map(|p| parts::read(p).map(head))
         .collect::<Result<Vec<_>>>()?;
-    let merged = part::merge(&states).map_err(|(i, e)| match i {
+    let order = part::check(&heads).map_err(|(i, e)| match i {
         Some(i) => Error::io(&args.parts[i], e),
         None => Error::option(format!("merge: {e}")),
     })?;
+    let mut merged = None;
+    for &i in &order {
+        let c = parts::read(&args.parts[i])?;
+        let fail = |e: String| Error::io(&args.parts[i], e);
+        if (&c.identity, c.samples) != (&heads[i].identity, heads[i].samples) {
+            return Err(fail("the part changed while it was merged".into()));
+        }
+        part::add(&mut merged, &c).map_err(fail)?;
+    }
+    let merged = merged.expect("check refuses no parts");
+    let states = heads;
     let id = &merged.identity;
     let recorded = part::value(&states[0].identity, STAGE_FILE_KEY).map(PathBuf::from);
     let stage = args
@@ -112,6 +126,15 @@ fn run(args: &MergeArgs) -> Result<()> {
         out.wall_time_s
     );
     Ok(())
+}
+
+/// A part without its film's data (its size kept): what `part::check` reads.
+fn head(mut c: Checkpoint) -> Checkpoint {
+    let f = &mut c.film;
+    (f.sums, f.samples, f.odd_y, f.splat, f.odd_splat_y) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    c.strategies = None;
+    c
 }
 
 /// The stage must still be what the parts rendered.

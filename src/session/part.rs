@@ -7,7 +7,8 @@
 //! (`sensor::grid_sum`), so the parts' films added in any grouping are the single render's
 //! film bit for bit, for every integrator: the own-pixel sums, the splats of light tracing
 //! and BDPT, and VCM, whose iterations are one sample per pixel, so a part is a range of
-//! iterations. [`merge`] checks that the parts belong together and are complete.
+//! iterations. [`check`] checks that the parts belong together and are complete, and [`add`]
+//! adds them one by one.
 
 use super::checkpoint::{self, Checkpoint};
 use super::crop::Crop;
@@ -147,23 +148,51 @@ impl Labelled {
     }
 }
 
-/// Merges `parts` (in any order given; merged in part order) after checking that they are
-/// parts of one render (same identity but the part and crop), each rendered whole, and that
-/// for every sample part the windows cover each pixel exactly once: none missing, none twice.
-/// An error names the index of the part at fault, when there is one.
-pub fn merge(parts: &[Checkpoint]) -> Result<Merged, (Option<usize>, String)> {
-    let labelled = label(parts)?;
+/// Adds a checked part to the merge so far (the first part starts it).
+pub fn add(merged: &mut Option<Merged>, c: &Checkpoint) -> Result<(), String> {
+    match merged {
+        None => {
+            *merged = Some(Merged {
+                film: Film::from_state(c.film.clone())?,
+                identity: render_identity(c),
+                samples: value(&c.identity, "spp")
+                    .and_then(|s| s.parse().ok())
+                    .ok_or("the parts' render has no sample count")?,
+                dropped: c.dropped,
+                wall_time_s: c.wall_time_s,
+                depth_cut: c.depth_cut,
+            })
+        }
+        Some(m) => {
+            m.film.merge(&c.film)?;
+            m.dropped += c.dropped;
+            m.wall_time_s += c.wall_time_s;
+            m.depth_cut.merge(&c.depth_cut);
+        }
+    }
+    Ok(())
+}
+
+/// The render's identity of a part: its own without the part, the crop and the stage file.
+fn render_identity(c: &Checkpoint) -> Vec<(String, String)> {
+    c.identity
+        .iter()
+        .filter(|(k, _)| k != PART_KEY && k != STAGE_FILE_KEY && k != CROP_KEY)
+        .cloned()
+        .collect()
+}
+
+/// Checks that `parts` are parts of one render (same identity but the part and crop), each
+/// rendered whole, and that for every sample part the windows cover each pixel exactly once:
+/// none missing, none twice. Only the films' sizes are read, so the parts may be given with
+/// their films' data left out (merge then reads them one at a time). Returns the merge order
+/// (by part, then window). An error names the index of the part at fault, when there is one.
+pub fn check(parts: &[Checkpoint]) -> Result<Vec<usize>, (Option<usize>, String)> {
+    let mut labelled = label(parts)?;
     let Some(&first) = labelled.first() else {
         return Err((None, "no parts given".into()));
     };
-    let render = |c: &Checkpoint| -> Vec<(String, String)> {
-        c.identity
-            .iter()
-            .filter(|(k, _)| k != PART_KEY && k != STAGE_FILE_KEY && k != CROP_KEY)
-            .cloned()
-            .collect()
-    };
-    let expected = render(&parts[first.at]);
+    let expected = render_identity(&parts[first.at]);
     for l in &labelled {
         if l.part.count != first.part.count {
             return Err((
@@ -177,7 +206,7 @@ pub fn merge(parts: &[Checkpoint]) -> Result<Merged, (Option<usize>, String)> {
             ));
         }
         let mut c = parts[l.at].clone();
-        c.identity = render(&parts[l.at]);
+        c.identity = render_identity(&parts[l.at]);
         c.check_identity(&expected).map_err(|e| {
             (
                 Some(l.at),
@@ -186,7 +215,6 @@ pub fn merge(parts: &[Checkpoint]) -> Result<Merged, (Option<usize>, String)> {
             )
         })?;
     }
-    let mut labelled = labelled;
     labelled.sort_by_key(|l| (l.part.index, l.crop.map(|c| (c.y0, c.x0))));
     check_cover(parts, &labelled, first.part.count)?;
     let spp: u64 = value(&expected, "spp")
@@ -195,42 +223,21 @@ pub fn merge(parts: &[Checkpoint]) -> Result<Merged, (Option<usize>, String)> {
             Some(first.at),
             "the parts' render has no sample count".to_string(),
         ))?;
-    let mut merged: Option<Merged> = None;
     for l in &labelled {
-        let c = &parts[l.at];
         let (a, b) = l.part.samples(spp);
-        if c.samples != b - a {
+        if parts[l.at].samples != b - a {
             return Err((
                 Some(l.at),
                 format!(
                     "part {} holds {} of its {} samples per pixel (interrupted?)",
                     l.label(),
-                    c.samples,
+                    parts[l.at].samples,
                     b - a
                 ),
             ));
         }
-        let fail = |e: String| (Some(l.at), e);
-        match &mut merged {
-            None => {
-                merged = Some(Merged {
-                    film: Film::from_state(c.film.clone()).map_err(fail)?,
-                    identity: expected.clone(),
-                    samples: spp,
-                    dropped: c.dropped,
-                    wall_time_s: c.wall_time_s,
-                    depth_cut: c.depth_cut,
-                })
-            }
-            Some(m) => {
-                m.film.merge(&c.film).map_err(fail)?;
-                m.dropped += c.dropped;
-                m.wall_time_s += c.wall_time_s;
-                m.depth_cut.merge(&c.depth_cut);
-            }
-        }
     }
-    Ok(merged.expect("at least one part"))
+    Ok(labelled.iter().map(|l| l.at).collect())
 }
 
 /// Each part's sample part and window, read from its identity.
