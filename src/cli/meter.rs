@@ -155,14 +155,30 @@ fn run(args: &MeterArgs) -> Result<()> {
         opts.integrator.check_meter(*kind)?;
     }
     if let Request::Grid(_) = &request {
-        let base = output_base(args.output.as_deref());
-        let files = map::files(&base);
-        target::check(&[
-            Target::new("-o", &files[0], Format::Any),
-            Target::new("-o", &files[1], Format::Any),
-            Target::new("-o", &files[2], Format::Png),
-        ])?;
+        check_map_targets(&output_base(args.output.as_deref()))?;
     }
+    let Some(scene) = load(args, &opts)? else {
+        return Ok(());
+    };
+    match request {
+        Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
+        Request::Grid(g) => run_grid(args, &scene, &opts, &g),
+    }
+}
+
+/// Checks the map files of base name `base` as outputs, before the work.
+pub(super) fn check_map_targets(base: &Path) -> Result<()> {
+    let files = map::files(base);
+    target::check(&[
+        Target::new("-o", &files[0], Format::Any),
+        Target::new("-o", &files[1], Format::Any),
+        Target::new("-o", &files[2], Format::Png),
+    ])
+}
+
+/// Installs the signal handlers and loads the stage to measure in; None when a signal
+/// arrived meanwhile (nothing is measured or written).
+pub(super) fn load(args: &MeterArgs, opts: &MeterOptions) -> Result<Option<scene::Scene>> {
     interrupt::install()?;
     let scene = scene::load_at(
         &args.scene,
@@ -173,13 +189,10 @@ fn run(args: &MeterArgs) -> Result<()> {
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before measuring; nothing written");
-        return Ok(());
+        return Ok(None);
     }
     warn_limits(&opts.integrator, &scene, false);
-    match request {
-        Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
-        Request::Grid(g) => run_grid(args, &scene, &opts, &g),
-    }
+    Ok(Some(scene))
 }
 
 fn run_points(

@@ -18,16 +18,13 @@
 //! checks that the parts are of one study, complete and none twice, and writes what the
 //! single run writes: the `--json` document for points, the map files for a grid.
 
-use super::common::{print_summary, warn_limits};
 use super::interrupt;
 use super::meter::{self, MeterArgs, Request};
 use crate::error::{Error, Result};
 use crate::integrator::Integrator;
 use crate::output::atomic::write_atomically;
 use crate::output::json;
-use crate::output::map;
 use crate::output::target::{self, Format, Target};
-use crate::scene;
 use crate::session::part::Part;
 use crate::session::{Cap, DepthCut, MeterOptions, MeterRun, MeterSession, Reading};
 use clap::Parser;
@@ -121,15 +118,9 @@ pub(super) fn run(args: &MeterArgs, argv: &[OsString]) -> Result<()> {
     }
     let kept = kept_args(argv)?;
     target::check(&[Target::new("-o", &out, Format::Any)])?;
-    interrupt::install()?;
-    let scene = scene::load_at(
-        &args.scene,
-        Some((1, 1)),
-        args.machinery.machinery(),
-        args.when.read_time(),
-    )?;
-    print_summary(&scene);
-    warn_limits(&opts.integrator, &scene, false);
+    let Some(scene) = meter::load(args, &opts)? else {
+        return Ok(());
+    };
     let meters = meter::request_meters(&scene, &request)?;
     let total = meters.len() as u64;
     let (first, end) = part.samples(total);
@@ -288,12 +279,7 @@ pub(super) fn merge(paths: &[PathBuf], output: &Path) -> Result<()> {
         }
         Request::Grid(g) => {
             let base = meter::output_base(Some(output));
-            let files = map::files(&base);
-            target::check(&[
-                Target::new("-o", &files[0], Format::Any),
-                Target::new("-o", &files[1], Format::Any),
-                Target::new("-o", &files[2], Format::Png),
-            ])?;
+            meter::check_map_targets(&base)?;
             meter::grid_output(false, &opts, &g, &run, &base)
         }
     }
