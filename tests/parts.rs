@@ -39,6 +39,18 @@ fn channel_bits(path: &Path) -> Vec<(String, Vec<u32>)> {
         .collect()
 }
 
+/// Asserts that the EXRs `a` and `b` in `dir` have the six channels, equal bit for bit;
+/// returns `a`'s.
+fn assert_same_channels(dir: &Path, a: &str, b: &str, what: &str) -> Vec<(String, Vec<u32>)> {
+    let (x, y) = (channel_bits(&dir.join(a)), channel_bits(&dir.join(b)));
+    assert_eq!((x.len(), y.len()), (6, 6), "{what}");
+    for ((name, p), (_, q)) in x.iter().zip(&y) {
+        let differ = p.iter().zip(q).filter(|(u, v)| u != v).count();
+        assert_eq!(differ, 0, "{what}: {name} differs in {differ} pixels");
+    }
+    x
+}
+
 /// Renders `spp` samples whole and as `n` parts (rendered in reverse order, merged from a
 /// shuffled list), and compares the merged EXR with the single one.
 fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
@@ -68,18 +80,7 @@ fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
     args.extend_from_slice(&["-o", &merged, "--preview", "merged.png"]);
     let o = merge(dir, &args);
     assert!(o.status.success(), "{}", stderr(&o));
-    let (a, b) = (
-        channel_bits(&dir.join(&single)),
-        channel_bits(&dir.join(&merged)),
-    );
-    assert_eq!(a.len(), 6);
-    for ((name, x), (_, y)) in a.iter().zip(&b) {
-        let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
-        assert_eq!(
-            differ, 0,
-            "{integrator} {n} parts: {name} differs in {differ} pixels"
-        );
-    }
+    let a = assert_same_channels(dir, &single, &merged, &format!("{integrator} {n} parts"));
     let lit = a[0].1.iter().filter(|&&v| f32::from_bits(v) > 0.0).count();
     assert!(lit > 100, "{integrator}: only {lit} lit pixels");
     let (s, m) = (
@@ -283,19 +284,7 @@ fn assert_crops_merge_to_single(dir: &Path, integrator: &str, n: u32) {
     args.extend_from_slice(&["-o", &merged]);
     let o = merge(dir, &args);
     assert!(o.status.success(), "{}", stderr(&o));
-    let (a, b) = (
-        channel_bits(&dir.join(&single)),
-        channel_bits(&dir.join(&merged)),
-    );
-    assert_eq!(a.len(), 6);
-    assert_eq!(a.len(), b.len());
-    for ((name, x), (_, y)) in a.iter().zip(&b) {
-        let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
-        assert_eq!(
-            differ, 0,
-            "{integrator} × {n}: {name} differs in {differ} pixels"
-        );
-    }
+    assert_same_channels(dir, &single, &merged, &format!("{integrator} crops × {n}"));
     let (s, m) = (
         exr::read(&dir.join(&single)).unwrap(),
         exr::read(&dir.join(&merged)).unwrap(),
