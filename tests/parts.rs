@@ -1,6 +1,10 @@
 //! Issue 15: partial renders (`--part K/N`) merged by `spectral-render merge` equal the single
 //! render bit for bit, for every integrator, with N not dividing spp and N = 1; merge refuses
 //! parts that are missing, given twice or of another render with one line naming the part.
+//! Crop windows (`--crop`, pixels or NDC) that tile the image, alone or crossed with sample
+//! parts, merge into the single render bit for bit for path, light, bdpt and vcm; a crop's EXR
+//! has the crop as its data window and the full image as its display window; merge refuses
+//! overlapping and missing windows.
 
 mod common;
 
@@ -35,6 +39,18 @@ fn channel_bits(path: &Path) -> Vec<(String, Vec<u32>)> {
         .collect()
 }
 
+/// Asserts that the EXRs `a` and `b` in `dir` have the six channels, equal bit for bit;
+/// returns `a`'s.
+fn assert_same_channels(dir: &Path, a: &str, b: &str, what: &str) -> Vec<(String, Vec<u32>)> {
+    let (x, y) = (channel_bits(&dir.join(a)), channel_bits(&dir.join(b)));
+    assert_eq!((x.len(), y.len()), (6, 6), "{what}");
+    for ((name, p), (_, q)) in x.iter().zip(&y) {
+        let differ = p.iter().zip(q).filter(|(u, v)| u != v).count();
+        assert_eq!(differ, 0, "{what}: {name} differs in {differ} pixels");
+    }
+    x
+}
+
 /// Renders `spp` samples whole and as `n` parts (rendered in reverse order, merged from a
 /// shuffled list), and compares the merged EXR with the single one.
 fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
@@ -64,18 +80,7 @@ fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
     args.extend_from_slice(&["-o", &merged, "--preview", "merged.png"]);
     let o = merge(dir, &args);
     assert!(o.status.success(), "{}", stderr(&o));
-    let (a, b) = (
-        channel_bits(&dir.join(&single)),
-        channel_bits(&dir.join(&merged)),
-    );
-    assert_eq!(a.len(), 6);
-    for ((name, x), (_, y)) in a.iter().zip(&b) {
-        let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
-        assert_eq!(
-            differ, 0,
-            "{integrator} {n} parts: {name} differs in {differ} pixels"
-        );
-    }
+    let a = assert_same_channels(dir, &single, &merged, &format!("{integrator} {n} parts"));
     let lit = a[0].1.iter().filter(|&&v| f32::from_bits(v) > 0.0).count();
     assert!(lit > 100, "{integrator}: only {lit} lit pixels");
     let (s, m) = (
@@ -248,5 +253,143 @@ fn merge_refuses_missing_duplicated_and_mismatched_parts() {
         let o = spectral_render(&args, &dir);
         assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
         assert!(stderr(&o).contains(want), "{}", stderr(&o));
+    }
+}
+
+/// Three windows that tile 24×16, one given in NDC (⌈24·0.4⌉ = 10, ⌈16·0.4375⌉ = 7).
+const CROPS: [&str; 3] = ["0,0,10,16", "0.4,0,1.0,0.4375", "10,7,24,16"];
+
+/// Renders `integrator` whole and as `CROPS` × `n` sample parts, merges them, compares.
+fn assert_crops_merge_to_single(dir: &Path, integrator: &str, n: u32) {
+    let common = ["--spp", "5", "--integrator", integrator, "--seed", "7"];
+    let single = format!("single-{integrator}.exr");
+    render(dir, &single, &common);
+    let mut names = Vec::new();
+    for (c, crop) in CROPS.iter().enumerate() {
+        for k in 0..n {
+            let name = format!("{integrator}-c{c}-p{k}of{n}.exr");
+            let part = format!("{k}/{n}");
+            let mut args = common.to_vec();
+            args.extend_from_slice(&["--crop", crop, "--threads", "1"]);
+            if n > 1 {
+                args.extend_from_slice(&["--part", &part]);
+            }
+            render(dir, &name, &args);
+            names.push(name);
+        }
+    }
+    names.reverse();
+    let merged = format!("merged-{integrator}-{n}.exr");
+    let mut args: Vec<&str> = names.iter().map(String::as_str).collect();
+    args.extend_from_slice(&["-o", &merged]);
+    let o = merge(dir, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_channels(dir, &single, &merged, &format!("{integrator} crops × {n}"));
+    let (s, m) = (
+        exr::read(&dir.join(&single)).unwrap(),
+        exr::read(&dir.join(&merged)).unwrap(),
+    );
+    assert_eq!(
+        s.attributes.get(exr::SPP_ATTRIBUTE),
+        m.attributes.get(exr::SPP_ATTRIBUTE)
+    );
+}
+
+#[test]
+fn crops_merge_into_the_single_render_for_every_integrator() {
+    let dir = temp_dir("crops");
+    for integrator in ["path", "light", "bdpt", "vcm"] {
+        assert_crops_merge_to_single(&dir, integrator, 1);
+    }
+    // Crops × sample parts, 2 not dividing 5.
+    assert_crops_merge_to_single(&dir, "bdpt", 2);
+}
+
+#[test]
+fn a_crop_writes_its_window_as_the_data_window() {
+    let dir = temp_dir("crops-window");
+    let base = ["--spp", "4", "--integrator", "path"];
+    render(&dir, "whole.exr", &base);
+    let mut args = base.to_vec();
+    args.extend_from_slice(&["--crop", "3,2,13,9", "--preview", "crop.png"]);
+    render(&dir, "crop.exr", &args);
+    let (whole, crop) = (
+        exr::read(&dir.join("whole.exr")).unwrap(),
+        exr::read(&dir.join("crop.exr")).unwrap(),
+    );
+    assert_eq!((crop.width, crop.height), (10, 7));
+    let windows = format!("{:?}", crop.attributes);
+    assert!(
+        windows.contains("dataWindow") && windows.contains("displayWindow"),
+        "{windows}"
+    );
+    assert_ne!(
+        crop.attributes.get("dataWindow"),
+        whole.attributes.get("dataWindow")
+    );
+    assert_eq!(
+        crop.attributes.get("displayWindow"),
+        whole.attributes.get("displayWindow")
+    );
+    // Its pixels are the single render's there (a path tracer's pixel is its own samples).
+    let y = |img: &exr::ExrImage| img.channels["XYZ.Y"].clone();
+    let (w, c) = (y(&whole), y(&crop));
+    for row in 0..7 {
+        for col in 0..10 {
+            let v = w[(row + 2) * 24 + col + 3];
+            assert_eq!(c[row * 10 + col].to_bits(), v.to_bits(), "({col}, {row})");
+        }
+    }
+    assert!(dir.join("crop.part").is_file() && dir.join("crop.png").is_file());
+}
+
+#[test]
+fn merge_refuses_overlapping_and_missing_windows() {
+    let dir = temp_dir("crops-refused");
+    let base = ["--spp", "2", "--integrator", "path"];
+    for (name, crop) in [("l", "0,0,12,16"), ("r", "12,0,24,16"), ("o", "11,0,24,16")] {
+        let mut args = base.to_vec();
+        args.extend_from_slice(&["--crop", crop]);
+        render(&dir, &format!("{name}.exr"), &args);
+    }
+    assert_refused(
+        &dir,
+        &["l.exr", "o.exr", "-o", "out.exr"],
+        &["o.exr", "overlaps", "(11, 0)"],
+    );
+    assert_refused(
+        &dir,
+        &["l.exr", "-o", "out.exr"],
+        &["missing pixels", "(12, 0)"],
+    );
+    assert_refused(
+        &dir,
+        &["l.exr", "r.exr", "l.exr", "-o", "out.exr"],
+        &["l.exr", "given twice"],
+    );
+    let o = merge(&dir, &["r.exr", "l.exr", "-o", "out.exr"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stage = cbox_path().display().to_string();
+    for (crop, want) in [
+        ("0,0,25,16", "not within"),
+        ("0,0,0.5", "x0,y0,x1,y1"),
+        ("3,3,3,9", "empty"),
+    ] {
+        let args = [
+            stage.as_str(),
+            "--resolution",
+            RES,
+            "-o",
+            "x.exr",
+            "--spp",
+            "1",
+            "--integrator",
+            "path",
+            "--crop",
+            crop,
+        ];
+        let o = spectral_render(&args, &dir);
+        assert_eq!(o.status.code(), Some(1), "{crop}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{crop}: {}", stderr(&o));
     }
 }

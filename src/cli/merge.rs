@@ -11,6 +11,7 @@ use super::render::write_image;
 use crate::error::{Error, Result};
 use crate::output::target::{self, Format, Target};
 use crate::scene::{self, Machinery};
+use crate::session::checkpoint::Checkpoint;
 use crate::session::image::xyz_to_rgb;
 use crate::session::part::{self, STAGE_FILE_KEY};
 use crate::session::{DepthCut, RenderOutput};
@@ -23,10 +24,11 @@ use std::path::{Path, PathBuf};
 #[derive(Parser, Debug)]
 #[command(name = "spectral-render merge")]
 struct MergeArgs {
-    /// The parts: their EXRs (the .part file beside each is read) or the .part files.
+    /// The parts: their EXRs (the .part file beside each is read) or the .part files; or a
+    /// meter study's part files (PART.json, `meter --part`).
     #[arg(required = true)]
     parts: Vec<PathBuf>,
-    /// The merged EXR.
+    /// The merged EXR; for meter parts, the points' JSON document or the grid's map base name.
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
     /// The stage, when it is no longer at the path the parts recorded (its content must be
@@ -57,20 +59,41 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
 }
 
 fn run(args: &MergeArgs) -> Result<()> {
+    if super::meter_parts::are_meter_parts(&args.parts) {
+        if args.preview.is_some() || args.stage.is_some() {
+            return Err(Error::option(
+                "merge: --preview and --stage are for a render's parts, not a meter study's",
+            ));
+        }
+        return super::meter_parts::merge(&args.parts, &args.output);
+    }
     let mut targets = vec![Target::new("-o", &args.output, Format::Exr)];
     if let Some(p) = &args.preview {
         targets.push(Target::new("--preview", p, Format::Png));
     }
     target::check(&targets)?;
-    let states = args
+    // Each part's identity and counts first (its film's data dropped), then the films one
+    // at a time in merge order: memory for two films, whatever the number of parts.
+    let heads = args
         .parts
         .iter()
-        .map(|p| parts::read(p))
+        .map(|p| parts::read(p).map(head))
         .collect::<Result<Vec<_>>>()?;
-    let merged = part::merge(&states).map_err(|(i, e)| match i {
+    let order = part::check(&heads).map_err(|(i, e)| match i {
         Some(i) => Error::io(&args.parts[i], e),
         None => Error::option(format!("merge: {e}")),
     })?;
+    let mut merged = None;
+    for &i in &order {
+        let c = parts::read(&args.parts[i])?;
+        let fail = |e: String| Error::io(&args.parts[i], e);
+        if (&c.identity, c.samples) != (&heads[i].identity, heads[i].samples) {
+            return Err(fail("the part changed while it was merged".into()));
+        }
+        part::add(&mut merged, &c).map_err(fail)?;
+    }
+    let merged = merged.expect("check refuses no parts");
+    let states = heads;
     let id = &merged.identity;
     let recorded = part::value(&states[0].identity, STAGE_FILE_KEY).map(PathBuf::from);
     let stage = args
@@ -103,6 +126,15 @@ fn run(args: &MergeArgs) -> Result<()> {
         out.wall_time_s
     );
     Ok(())
+}
+
+/// A part without its film's data (its size kept): what `part::check` reads.
+fn head(mut c: Checkpoint) -> Checkpoint {
+    let f = &mut c.film;
+    (f.sums, f.samples, f.odd_y, f.splat, f.odd_splat_y) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    c.strategies = None;
+    c
 }
 
 /// The stage must still be what the parts rendered.
@@ -149,5 +181,6 @@ fn output(scene: &scene::Scene, m: &part::Merged) -> Result<RenderOutput> {
         auto: None,
         depth_cut: DepthCut::new(max_depth, &cut.sums(), cut.capped, cut.limited),
         clamped: m.film.clamped(),
+        crop: None,
     })
 }

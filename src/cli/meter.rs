@@ -22,6 +22,7 @@ use super::common::{
 };
 use super::frames::FrameArgs;
 use super::interrupt;
+use super::meter_parts::{self, MeterPartArgs};
 use crate::error::{Error, Result};
 use crate::output::json;
 use crate::output::map::{self, num, IlluminanceMap};
@@ -38,62 +39,64 @@ use std::path::{Path, PathBuf};
 
 /// Measure illuminance (lx) or luminance (cd/m²) in a USD stage, with 95% confidence
 /// intervals, or write an illuminance map.
-#[derive(Parser, Debug)]
+#[derive(Parser, Debug, Clone)]
 #[command(name = "spectral-render meter", bin_name = "spectral-render meter")]
-struct MeterArgs {
+pub(super) struct MeterArgs {
     /// The stage (.usda, .usdc or .usdz).
-    scene: PathBuf,
+    pub(super) scene: PathBuf,
     #[command(flatten)]
-    points: PointArgs,
+    pub(super) points: PointArgs,
     /// Origin (a corner) of an illuminance grid.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    grid: Option<String>,
+    pub(super) grid: Option<String>,
     /// First edge vector of the grid.
     #[arg(long = "u", value_name = "UX,UY,UZ", allow_hyphen_values = true)]
-    u: Option<String>,
+    pub(super) u: Option<String>,
     /// Second edge vector of the grid.
     #[arg(long = "v", value_name = "VX,VY,VZ", allow_hyphen_values = true)]
-    v: Option<String>,
+    pub(super) v: Option<String>,
     /// Cells along u and v.
     #[arg(long = "n", value_name = "NU,NV", allow_hyphen_values = true)]
-    n: Option<String>,
+    pub(super) n: Option<String>,
     /// Base name of the grid outputs: BASE.csv, BASE.json, BASE.png (default: map).
     #[arg(short = 'o', long = "output")]
-    output: Option<PathBuf>,
+    pub(super) output: Option<PathBuf>,
     /// Samples per reading (default 4096).
     #[arg(long, allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
-    spp: Option<u64>,
+    pub(super) spp: Option<u64>,
     /// Sample until every reading's ci95/value is below this (or a cap is hit).
     #[arg(long = "rel-error", allow_negative_numbers = true)]
-    rel_error: Option<f64>,
+    pub(super) rel_error: Option<f64>,
     /// Cap on the samples of one reading under --rel-error (default 2^24).
     #[arg(long = "max-spp", allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
-    max_spp: Option<u64>,
+    pub(super) max_spp: Option<u64>,
     /// Wall-clock cap in seconds.
     #[arg(long = "time", allow_negative_numbers = true)]
-    time: Option<f64>,
+    pub(super) time: Option<f64>,
     /// Seed of the deterministic sampler.
     #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = at_least::<u64>(0))]
-    seed: u64,
+    pub(super) seed: u64,
     /// Worker threads (default: all cores).
     #[arg(long, allow_negative_numbers = true, value_parser = at_least::<usize>(1))]
-    threads: Option<usize>,
+    pub(super) threads: Option<usize>,
     /// Maximum number of scattering events (as for rendering; default unlimited).
     #[arg(long = "max-depth", allow_negative_numbers = true, value_parser = at_least::<u32>(0))]
-    max_depth: Option<u32>,
+    pub(super) max_depth: Option<u32>,
     /// Refuse to start a measurement estimated to need more memory than SIZE (e.g. 8G;
     /// default: the memory available).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = max_memory, allow_hyphen_values = true)]
-    max_memory: Option<u64>,
+    pub(super) max_memory: Option<u64>,
     /// Print the readings as JSON on stdout.
     #[arg(long)]
-    json: bool,
+    pub(super) json: bool,
     #[command(flatten)]
-    integrator: IntegratorArgs,
+    pub(super) integrator: IntegratorArgs,
     #[command(flatten)]
-    when: FrameArgs,
+    pub(super) when: FrameArgs,
     #[command(flatten)]
-    machinery: MachineryArgs,
+    pub(super) machinery: MachineryArgs,
+    #[command(flatten)]
+    pub(super) part: MeterPartArgs,
 }
 
 /// Where meters are and what they measure (`meter` and `converge` take them alike).
@@ -115,7 +118,7 @@ pub(super) struct PointArgs {
 
 /// The grid as given (stage coordinates).
 #[derive(Clone, Copy, Debug)]
-struct GridSpec {
+pub(super) struct GridSpec {
     origin: DVec3,
     u: DVec3,
     v: DVec3,
@@ -125,7 +128,7 @@ struct GridSpec {
 
 /// What was asked for, validated, still in stage coordinates.
 #[derive(Clone, Debug)]
-enum Request {
+pub(super) enum Request {
     /// (kind, position, normal or direction) per meter.
     Points(MeterKind, Vec<(DVec3, DVec3)>),
     Grid(GridSpec),
@@ -137,7 +140,8 @@ const MAX_CELLS: usize = 4_000_000;
 /// Parses the arguments after `spectral-render` and measures. `--help` prints the usage; any
 /// option error (clap's included) is one line and exit code 1.
 pub fn main(argv: Vec<OsString>) -> Result<()> {
-    match MeterArgs::try_parse_from(argv) {
+    match MeterArgs::try_parse_from(&argv) {
+        Ok(args) if args.part.part.is_some() => meter_parts::run(&args, &argv),
         Ok(args) => run(&args),
         Err(e) if !e.use_stderr() => e.exit(),
         Err(e) => Err(Error::option(clap_message(&e))),
@@ -151,14 +155,30 @@ fn run(args: &MeterArgs) -> Result<()> {
         opts.integrator.check_meter(*kind)?;
     }
     if let Request::Grid(_) = &request {
-        let base = output_base(args.output.as_deref());
-        let files = map::files(&base);
-        target::check(&[
-            Target::new("-o", &files[0], Format::Any),
-            Target::new("-o", &files[1], Format::Any),
-            Target::new("-o", &files[2], Format::Png),
-        ])?;
+        check_map_targets(&output_base(args.output.as_deref()))?;
     }
+    let Some(scene) = load(args, &opts)? else {
+        return Ok(());
+    };
+    match request {
+        Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
+        Request::Grid(g) => run_grid(args, &scene, &opts, &g),
+    }
+}
+
+/// Checks the map files of base name `base` as outputs, before the work.
+pub(super) fn check_map_targets(base: &Path) -> Result<()> {
+    let files = map::files(base);
+    target::check(&[
+        Target::new("-o", &files[0], Format::Any),
+        Target::new("-o", &files[1], Format::Any),
+        Target::new("-o", &files[2], Format::Png),
+    ])
+}
+
+/// Installs the signal handlers and loads the stage to measure in; None when a signal
+/// arrived meanwhile (nothing is measured or written).
+pub(super) fn load(args: &MeterArgs, opts: &MeterOptions) -> Result<Option<scene::Scene>> {
     interrupt::install()?;
     let scene = scene::load_at(
         &args.scene,
@@ -169,13 +189,10 @@ fn run(args: &MeterArgs) -> Result<()> {
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before measuring; nothing written");
-        return Ok(());
+        return Ok(None);
     }
     warn_limits(&opts.integrator, &scene, false);
-    match request {
-        Request::Points(kind, points) => run_points(args, &scene, &opts, kind, &points),
-        Request::Grid(g) => run_grid(args, &scene, &opts, &g),
-    }
+    Ok(Some(scene))
 }
 
 fn run_points(
@@ -185,26 +202,50 @@ fn run_points(
     kind: MeterKind,
     points: &[(DVec3, DVec3)],
 ) -> Result<()> {
-    let meters = points
+    let meters = point_meters(scene, kind, points)?;
+    let run = measure(scene, &meters, opts)?;
+    print!("{}", points_output(args.json, opts, kind, points, &run)?);
+    Ok(())
+}
+
+/// The point meters in world space.
+fn point_meters(
+    scene: &scene::Scene,
+    kind: MeterKind,
+    points: &[(DVec3, DVec3)],
+) -> Result<Vec<Meter>> {
+    points
         .iter()
         .map(|&(p, d)| world_meter(&scene.stage_to_world, kind, p, d))
-        .collect::<Result<Vec<_>>>()?;
-    let run = measure(scene, &meters, opts)?;
-    warn(&run, opts);
+        .collect()
+}
+
+/// The warnings of a run of point meters, and what it prints: `--json`'s document or a line
+/// per reading (also the merge of a study's parts, `meter_parts`).
+pub(super) fn points_output(
+    as_json: bool,
+    opts: &MeterOptions,
+    kind: MeterKind,
+    points: &[(DVec3, DVec3)],
+    run: &MeterRun,
+) -> Result<String> {
+    warn(run, opts);
     let rel = matches!(opts.stop, Stop::RelError(_)) || interrupt::received().is_some();
-    if args.json {
+    if as_json {
         let meters = points
             .iter()
             .zip(&run.readings)
             .map(|(&(p, d), r)| json_entry(kind, p, d, r, rel))
             .collect();
-        print!("{}", json::compact(&Readings { meters })?);
+        json::compact(&Readings { meters })
     } else {
-        for (&(p, d), r) in points.iter().zip(&run.readings) {
-            println!("{}", text_entry(kind, p, d, r));
-        }
+        let lines: Vec<String> = points
+            .iter()
+            .zip(&run.readings)
+            .map(|(&(p, d), r)| text_entry(kind, p, d, r) + "\n")
+            .collect();
+        Ok(lines.concat())
     }
-    Ok(())
 }
 
 fn run_grid(
@@ -213,6 +254,14 @@ fn run_grid(
     opts: &MeterOptions,
     g: &GridSpec,
 ) -> Result<()> {
+    let meters = grid_meters(scene, g)?;
+    let run = measure(scene, &meters, opts)?;
+    let base = output_base(args.output.as_deref());
+    grid_output(args.json, opts, g, &run, &base)
+}
+
+/// The grid's meters in world space, row by row.
+fn grid_meters(scene: &scene::Scene, g: &GridSpec) -> Result<Vec<Meter>> {
     let (nu, nv) = g.n;
     let m = &scene.stage_to_world;
     let mut meters = Vec::with_capacity(nu * nv);
@@ -228,8 +277,28 @@ fn run_grid(
             meters.push(world_meter(m, MeterKind::Illuminance, c.into(), g.normal)?);
         }
     }
-    let run = measure(scene, &meters, opts)?;
-    warn(&run, opts);
+    Ok(meters)
+}
+
+/// The meters a request asks for, in world space.
+pub(super) fn request_meters(scene: &scene::Scene, request: &Request) -> Result<Vec<Meter>> {
+    match request {
+        Request::Points(kind, points) => point_meters(scene, *kind, points),
+        Request::Grid(g) => grid_meters(scene, g),
+    }
+}
+
+/// The warnings of a grid's run, its map files at `base` and its summary (also the merge of
+/// a study's parts, `meter_parts`).
+pub(super) fn grid_output(
+    as_json: bool,
+    opts: &MeterOptions,
+    g: &GridSpec,
+    run: &MeterRun,
+    base: &Path,
+) -> Result<()> {
+    warn(run, opts);
+    let (nu, nv) = g.n;
     let map = IlluminanceMap {
         origin: g.origin.into(),
         u: g.u.into(),
@@ -239,8 +308,7 @@ fn run_grid(
         normal: g.normal.into(),
         readings: run.readings.clone(),
     };
-    let base = output_base(args.output.as_deref());
-    let written = map.write(&base)?;
+    let written = map.write(base)?;
     let s = map.summary();
     let line = format!(
         "E_min = {} lx, E_avg = {} lx, E_max = {} lx, U0 = {}",
@@ -249,7 +317,7 @@ fn run_grid(
         num(s.e_max),
         num(s.u0)
     );
-    if args.json {
+    if as_json {
         print!("{}", map.json()?);
         eprintln!("{line}");
     } else {
@@ -269,6 +337,12 @@ fn run_grid(
 /// as interrupted and the readings so far are returned.
 fn measure(scene: &scene::Scene, meters: &[Meter], opts: &MeterOptions) -> Result<MeterRun> {
     let mut session = MeterSession::new(scene, meters, opts)?;
+    measure_session(&mut session)
+}
+
+/// Runs `session` to the end, or until a signal arrives (then the unfinished readings are
+/// marked as interrupted).
+pub(super) fn measure_session(session: &mut MeterSession) -> Result<MeterRun> {
     while session.step().is_some() {
         if let Some(signal) = interrupt::received() {
             session.interrupt();
@@ -423,7 +497,7 @@ fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
 }
 
 /// `-o`: a base name; a trailing .csv/.json/.png is dropped, a directory gets `map` inside.
-fn output_base(o: Option<&Path>) -> PathBuf {
+pub(super) fn output_base(o: Option<&Path>) -> PathBuf {
     let Some(o) = o else {
         return PathBuf::from("map");
     };
@@ -437,7 +511,7 @@ fn output_base(o: Option<&Path>) -> PathBuf {
 }
 
 /// Checks which meters were asked for and parses their vectors.
-fn request(a: &MeterArgs) -> Result<Request> {
+pub(super) fn request(a: &MeterArgs) -> Result<Request> {
     if a.grid.is_some() {
         return grid_request(a);
     }
@@ -586,7 +660,7 @@ fn cells(s: &str) -> Result<(usize, usize)> {
 }
 
 /// Sampling options from the flags.
-fn options(a: &MeterArgs) -> Result<MeterOptions> {
+pub(super) fn options(a: &MeterArgs) -> Result<MeterOptions> {
     let stop = match (a.spp, a.rel_error) {
         (Some(_), Some(_)) => return Err(Error::option("give --spp or --rel-error, not both")),
         (Some(n), None) if n < 2 => {

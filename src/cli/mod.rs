@@ -8,12 +8,14 @@
 mod checkpoints;
 mod common;
 mod converge;
+mod crop;
 mod frames;
 mod info;
 mod interrupt;
 mod lights;
 mod merge;
 mod meter;
+mod meter_parts;
 mod parts;
 mod progress;
 mod render;

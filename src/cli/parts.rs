@@ -15,6 +15,7 @@ use crate::output::atomic::write_atomically;
 use crate::output::target::{Format, Target};
 use crate::scene::Scene;
 use crate::session::checkpoint::Checkpoint;
+use crate::session::crop::{Crop, CropSpec};
 use crate::session::part::{self, Part};
 use crate::session::{ImageSession, RenderOptions, RenderOutput, DEFAULT_SPP};
 use std::io::Write;
@@ -30,6 +31,11 @@ pub struct PartArgs {
     /// raw film state beside the EXR (OUTPUT.part) for `spectral-render merge`.
     #[arg(long, value_name = "K/N", value_parser = Part::parse)]
     pub part: Option<Part>,
+    /// Render only the pixels x0..x1 of rows y0..y1 (whole numbers: pixels; with decimal
+    /// points: NDC, y down, as pbrt-v4's --cropwindow), overriding RenderSettings'
+    /// dataWindowNDC. The EXR's data window is the crop; OUTPUT.part is written for `merge`.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = CropSpec::parse)]
+    pub crop: Option<CropSpec>,
 }
 
 /// The `.part` file beside `output`.
@@ -41,10 +47,15 @@ impl PartArgs {
     /// Refuses what a part cannot be: a time budget (no fixed samples), auto (every part
     /// would run its own pilot), strategy images and checkpoints (not carried by parts).
     pub fn check(&self, opts: &RenderOptions, strategies: bool, checkpoints: bool) -> Result<()> {
-        if self.part.is_none() {
+        if !self.is_part() {
             return Ok(());
         }
-        let refuse = |why: &str| Err(Error::option(format!("--part {why}")));
+        let flag = if self.part.is_some() {
+            "--part"
+        } else {
+            "--crop"
+        };
+        let refuse = |why: &str| Err(Error::option(format!("{flag} {why}")));
         if opts.spp.is_none() && opts.time_budget.is_some() {
             return refuse("needs --spp: a time budget gives no fixed sample range");
         }
@@ -63,20 +74,45 @@ impl PartArgs {
         Ok(())
     }
 
-    /// The sidecar as an output target, checked with the others before the work.
-    pub fn target(&self, output: &Path) -> Option<Target> {
-        self.part
-            .map(|_| Target::new("--part", sidecar(output), Format::Any))
+    /// A part of a render: `--part`, `--crop`, or both.
+    pub fn is_part(&self) -> bool {
+        self.part.is_some() || self.crop.is_some()
     }
 
-    /// Restricts `session` to the part's samples.
+    /// The sample part (0/1: all samples, for a crop alone).
+    fn sample_part(&self) -> Part {
+        self.part.unwrap_or(Part { index: 0, count: 1 })
+    }
+
+    /// The sidecar as an output target, checked with the others before the work.
+    pub fn target(&self, output: &Path) -> Option<Target> {
+        self.is_part()
+            .then(|| Target::new("--part", sidecar(output), Format::Any))
+    }
+
+    /// Restricts `session` to the part's samples and window.
     pub fn start(&self, session: &mut ImageSession, opts: &RenderOptions) -> Result<()> {
         if let Some(p) = self.part {
             let (first, end) = p.samples(u64::from(opts.spp.unwrap_or(DEFAULT_SPP)));
             session.start_part(first, end).map_err(Error::option)?;
             eprintln!("part {}: samples {first}..{end} of every pixel", p.label());
         }
+        if let Some(c) = self.crop(session)? {
+            session.start_crop(c).map_err(Error::option)?;
+            eprintln!("crop {}: {}×{} pixels", c.label(), c.width(), c.height());
+        }
         Ok(())
+    }
+
+    /// The window `--crop` names on the session's image.
+    fn crop(&self, session: &ImageSession) -> Result<Option<Crop>> {
+        let (w, h) = session.size();
+        self.crop
+            .map(|s| {
+                s.resolve(w, h)
+                    .map_err(|e| Error::option(format!("--crop {e}")))
+            })
+            .transpose()
     }
 
     /// Writes the part's raw state beside `output` (atomically).
@@ -88,12 +124,13 @@ impl PartArgs {
         output: &Path,
         out: &RenderOutput,
     ) -> Result<()> {
-        let Some(p) = self.part else {
+        if !self.is_part() {
             return Ok(());
-        };
+        }
+        let p = self.sample_part();
         let stage = made.stage.display().to_string();
         let state = Checkpoint {
-            identity: part::identity(made.scene, opts, &stage, p),
+            identity: part::identity(made.scene, opts, &stage, p, out.crop),
             samples: out.spp,
             dropped: out.dropped_samples,
             wall_time_s: out.wall_time_s,
@@ -105,7 +142,10 @@ impl PartArgs {
         let bytes = state.encode();
         write_atomically(&path, |f| f.write_all(&bytes))
             .map_err(|e| Error::io(&path, format!("cannot write the part: {e}")))?;
-        eprintln!("wrote part {} to {}", p.label(), path.display());
+        let crop = out
+            .crop
+            .map_or(String::new(), |c| format!(" (crop {})", c.label()));
+        eprintln!("wrote part {}{crop} to {}", p.label(), path.display());
         Ok(())
     }
 }

@@ -144,9 +144,9 @@ fn run(args: &RenderArgs) -> Result<()> {
         args.checkpoint.is_some() || args.resume.is_some(),
     )?;
     if let Some(frames) = &args.frames {
-        if args.part.part.is_some() {
+        if args.part.is_part() {
             return Err(Error::option(
-                "--part renders one frame: it cannot go with --frames",
+                "--part and --crop render one frame: they cannot go with --frames",
             ));
         }
         return run_sequence(args, &opts, frames);
@@ -353,6 +353,9 @@ pub(super) fn write_image(
     let mut meta = made.metadata();
     meta.integrator = integrator_name;
     let white = spectral::color::white_xy().map(|c| c as f32);
+    if let Some(c) = out.crop {
+        return super::crop::write_window(path, preview, out, c, white, meta);
+    }
     exr::write(
         path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
     )?;

@@ -155,6 +155,30 @@ pub fn write_with_channels(
     write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
 }
 
+/// [`write()`] of a window of an image (`--crop`): `rgb` and `xyz` hold the window's
+/// `window.2 × window.3` pixels at (`window.0`, `window.1`) of a `full.0 × full.1` image.
+/// The file's data window is the window, its display window the full image.
+pub fn write_window(
+    path: &Path,
+    full: (usize, usize),
+    window: [usize; 4],
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> Result<()> {
+    let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
+    let [x, y, width, height] = window;
+    check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
+    check_finite(width, rgb, xyz).map_err(fail)?;
+    let to_i32 = |v: usize| i32::try_from(v).map_err(|_| fail(format!("{v} pixels is too far")));
+    let (x, y, fw, fh) = (to_i32(x)?, to_i32(y)?, full.0, full.1);
+    let mut image = build_image(width, height, rgb, xyz, &[], white_xy, meta);
+    image.layer_data.attributes.layer_position = Vec2(x, y);
+    image.attributes.display_window = exr::meta::attribute::IntegerBounds::new((0, 0), (fw, fh));
+    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+}
+
 /// Reads an EXR file: all channels of its first layer by name, converted to f32, and all
 /// header attributes of its first part as strings.
 pub fn read(path: &Path) -> Result<ExrImage> {

@@ -18,6 +18,11 @@ pub fn compact<T: Serialize>(value: &T) -> Result<String> {
         .map_err(|e| Error::resource(format!("cannot write JSON: {e}")))
 }
 
+/// `text` read as a `T` (a meter part, `meter --part`); the reason when it is not one.
+pub fn parse<T: serde::de::DeserializeOwned>(text: &str) -> std::result::Result<T, String> {
+    serde_json::from_str(text).map_err(|e| e.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -30,6 +30,7 @@
 
 use super::auto::AutoReport;
 use super::checkpoint::{self, Checkpoint};
+use super::crop::Crop;
 use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
@@ -135,6 +136,9 @@ pub struct RenderOutput {
     pub depth_cut: Option<DepthCut>,
     /// Contributions clamped to the film's range (`sensor::grid_sum`; should be 0).
     pub clamped: u64,
+    /// The window rendered (`--crop`), when not the whole image: `xyz` and `rgb` are the
+    /// whole image's, meaningful inside the window only.
+    pub crop: Option<Crop>,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -164,6 +168,8 @@ pub struct ImageSession<'a> {
     target: u64,
     /// The first sample of every pixel this session renders (0, or a part's start).
     first: u64,
+    /// The window of pixels this session renders (`session::crop`), when not the whole.
+    crop: Option<Crop>,
     done: u64,
     dropped: u64,
     passes: u32,
@@ -227,6 +233,7 @@ impl<'a> ImageSession<'a> {
                 (None, None) => u64::from(DEFAULT_SPP),
             },
             first: 0,
+            crop: None,
             done: 0,
             dropped: 0,
             passes: 0,
@@ -298,6 +305,29 @@ impl<'a> ImageSession<'a> {
         self.done = first;
         self.target = end;
         Ok(())
+    }
+
+    /// Makes the session render only the pixels of `crop` (every sample of each, splats
+    /// wherever they land: `session::crop`), before its first pass.
+    pub fn start_crop(&mut self, crop: Crop) -> Reason<()> {
+        if self.done > self.first || self.crop.is_some() {
+            return Err("a session is cropped only before its first pass".into());
+        }
+        let (w, h) = (self.film.width, self.film.height);
+        if crop.x1 > w || crop.y1 > h {
+            return Err(format!(
+                "the window {} is not within the {w}×{h} image",
+                crop.label()
+            ));
+        }
+        self.tiles = crop.clip(&self.tiles);
+        self.crop = Some(crop);
+        Ok(())
+    }
+
+    /// The image's width and height in pixels.
+    pub fn size(&self) -> (usize, usize) {
+        (self.film.width, self.film.height)
     }
 
     /// The film's raw state (a part's result, `session::part`).
@@ -389,6 +419,7 @@ impl<'a> ImageSession<'a> {
                 self.cut.limited,
             ),
             clamped: self.film.clamped(),
+            crop: self.crop,
         }
     }
 
@@ -475,8 +506,12 @@ impl<'a> ImageSession<'a> {
             self.dropped += r.dropped;
         }
         if self.splats {
-            self.film
-                .add_light_paths((self.film.width * self.film.height) as u64 * count);
+            // One light path per camera sample rendered: a crop's pixels' only.
+            let pixels = match self.crop {
+                Some(c) => c.pixel_count(),
+                None => self.film.width * self.film.height,
+            };
+            self.film.add_light_paths(pixels as u64 * count);
         }
         if let Some(sf) = &mut self.strategy_films {
             sf.add_samples(count);

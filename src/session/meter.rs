@@ -225,6 +225,9 @@ pub struct MeterSession<'a> {
     estimator: Box<dyn Estimator + 'a>,
     sensors: Vec<MeterSensor>,
     states: Vec<State>,
+    /// The index of the first meter in the whole study (0, or a part's first reading): meter
+    /// i's samples are keyed by `first_meter + i`.
+    first_meter: u64,
     auto: Option<AutoReport>,
     dropped: u64,
     passes: u32,
@@ -261,12 +264,25 @@ impl<'a> MeterSession<'a> {
                 .map(|m| MeterSensor::new(m, scene.point_error(m.p)))
                 .collect(),
             states: vec![State::default(); meters.len()],
+            first_meter: 0,
             auto: None,
             dropped: 0,
             passes: 0,
             start: Instant::now(),
             opts: opts.clone(),
         })
+    }
+
+    /// Makes the session's meters readings `first`, `first + 1`, … of a larger study (a part
+    /// of it, `meter --part`): each draws the random numbers it has in the whole study
+    /// (`Sampler::new(seed, first + i, s)`), so its reading is the whole study's, bit for bit.
+    /// Only before the first round.
+    pub fn start_part(&mut self, first: u64) -> std::result::Result<(), String> {
+        if self.passes > 0 {
+            return Err("a meter session starts a part only before its first round".into());
+        }
+        self.first_meter = first;
+        Ok(())
     }
 
     /// Marks the readings that have not reached their target as interrupted; the session
@@ -338,6 +354,7 @@ impl MeterSession<'_> {
     /// The statistics of `blocks`, in parallel, in their order.
     fn sample_blocks(&self, blocks: &[Block]) -> Vec<BlockResult> {
         let (estimator, sensors, seed) = (&*self.estimator, &self.sensors, self.opts.seed);
+        let first = self.first_meter;
         let max_depth = depth_cap(self.opts.max_depth);
         let per_block = self.estimator.iteration_samples().is_some();
         self.pool.install(|| {
@@ -345,7 +362,10 @@ impl MeterSession<'_> {
                 .par_iter()
                 .map_init(
                     || Workspace::new(max_depth, 0),
-                    |ws, b| sample_block(estimator, &sensors[b.meter], b, seed, per_block, ws),
+                    |ws, b| {
+                        let key = (seed, first + b.meter as u64);
+                        sample_block(estimator, &sensors[b.meter], b, key, per_block, ws)
+                    },
                 )
                 .collect()
         })
@@ -590,14 +610,14 @@ fn sample_block(
     estimator: &dyn Estimator,
     m: &MeterSensor,
     b: &Block,
-    seed: u64,
+    (seed, key): (u64, u64),
     per_block: bool,
     ws: &mut Workspace,
 ) -> BlockResult {
     let mut r = BlockResult::default();
     let mut block = RatioSums::default();
     for s in b.first..b.end {
-        let mut sampler = Sampler::new(seed, b.meter as u64, s);
+        let mut sampler = Sampler::new(seed, key, s);
         let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
         ws.record.cut = CutSample::default();
         let l = estimator.meter_sample(m, &mut lambda, &mut sampler, ws);

@@ -12,6 +12,7 @@
 
 pub mod auto;
 pub mod checkpoint;
+pub mod crop;
 pub mod depth_cut;
 pub mod image;
 pub mod memory;

@@ -7,9 +7,11 @@
 //! (`sensor::grid_sum`), so the parts' films added in any grouping are the single render's
 //! film bit for bit, for every integrator: the own-pixel sums, the splats of light tracing
 //! and BDPT, and VCM, whose iterations are one sample per pixel, so a part is a range of
-//! iterations. [`merge`] checks that the parts belong together and are complete.
+//! iterations. [`check`] checks that the parts belong together and are complete, and [`add`]
+//! adds them one by one.
 
 use super::checkpoint::{self, Checkpoint};
+use super::crop::Crop;
 use super::RenderOptions;
 use crate::error::Reason;
 use crate::integrator::cut::BatchedRatio;
@@ -22,6 +24,9 @@ pub const PART_KEY: &str = "part";
 /// The identity key of the stage file as the user named it (informative: parts of the same
 /// stage content rendered from another path still merge).
 pub const STAGE_FILE_KEY: &str = "stage file";
+/// The identity key of a part's window (`--crop`, `session::crop`), `x0,y0,x1,y1` in pixels;
+/// absent for the whole image.
+pub const CROP_KEY: &str = "crop";
 
 /// Part `index` of `count` (0 ≤ index < count).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,6 +76,7 @@ pub fn identity(
     opts: &RenderOptions,
     stage_file: &str,
     part: Part,
+    crop: Option<Crop>,
 ) -> Vec<(String, String)> {
     let mut id = checkpoint::identity(scene, opts);
     id.push((INTEGRATOR_NAME_KEY.into(), opts.integrator.name().into()));
@@ -82,6 +88,9 @@ pub fn identity(
     id.push((MIS_KEY.into(), mis.map_or("none", |m| m.name()).into()));
     id.push((STAGE_FILE_KEY.into(), stage_file.into()));
     id.push((PART_KEY.into(), part.label()));
+    if let Some(c) = crop {
+        id.push((CROP_KEY.into(), c.label()));
+    }
     id
 }
 
@@ -121,107 +130,187 @@ pub struct Merged {
     pub depth_cut: BatchedRatio,
 }
 
-/// Merges `parts` (in any order given; merged in part order) after checking that they are
-/// parts of one render (same identity but the part), each rendered whole, none missing and
-/// none twice. An error names the index of the part at fault, when there is one.
-pub fn merge(parts: &[Checkpoint]) -> Result<Merged, (Option<usize>, String)> {
+/// A part as merge sees it: its sample part, its window (None: the whole image) and its
+/// index among the parts given.
+#[derive(Clone, Copy)]
+struct Labelled {
+    part: Part,
+    crop: Option<Crop>,
+    at: usize,
+}
+
+impl Labelled {
+    fn label(&self) -> String {
+        match self.crop {
+            Some(c) => format!("{} (crop {})", self.part.label(), c.label()),
+            None => self.part.label(),
+        }
+    }
+}
+
+/// Adds a checked part to the merge so far (the first part starts it).
+pub fn add(merged: &mut Option<Merged>, c: &Checkpoint) -> Result<(), String> {
+    match merged {
+        None => {
+            *merged = Some(Merged {
+                film: Film::from_state(c.film.clone())?,
+                identity: render_identity(c),
+                samples: value(&c.identity, "spp")
+                    .and_then(|s| s.parse().ok())
+                    .ok_or("the parts' render has no sample count")?,
+                dropped: c.dropped,
+                wall_time_s: c.wall_time_s,
+                depth_cut: c.depth_cut,
+            })
+        }
+        Some(m) => {
+            m.film.merge(&c.film)?;
+            m.dropped += c.dropped;
+            m.wall_time_s += c.wall_time_s;
+            m.depth_cut.merge(&c.depth_cut);
+        }
+    }
+    Ok(())
+}
+
+/// The render's identity of a part: its own without the part, the crop and the stage file.
+fn render_identity(c: &Checkpoint) -> Vec<(String, String)> {
+    c.identity
+        .iter()
+        .filter(|(k, _)| k != PART_KEY && k != STAGE_FILE_KEY && k != CROP_KEY)
+        .cloned()
+        .collect()
+}
+
+/// Checks that `parts` are parts of one render (same identity but the part and crop), each
+/// rendered whole, and that for every sample part the windows cover each pixel exactly once:
+/// none missing, none twice. Only the films' sizes are read, so the parts may be given with
+/// their films' data left out (merge then reads them one at a time). Returns the merge order
+/// (by part, then window). An error names the index of the part at fault, when there is one.
+pub fn check(parts: &[Checkpoint]) -> Result<Vec<usize>, (Option<usize>, String)> {
+    let mut labelled = label(parts)?;
+    let Some(&first) = labelled.first() else {
+        return Err((None, "no parts given".into()));
+    };
+    let expected = render_identity(&parts[first.at]);
+    for l in &labelled {
+        if l.part.count != first.part.count {
+            return Err((
+                Some(l.at),
+                format!(
+                    "part {} of a split into {}, not {} as the first part's",
+                    l.part.label(),
+                    l.part.count,
+                    first.part.count
+                ),
+            ));
+        }
+        let mut c = parts[l.at].clone();
+        c.identity = render_identity(&parts[l.at]);
+        c.check_identity(&expected).map_err(|e| {
+            (
+                Some(l.at),
+                e.replace("the checkpoint is of another run", "another render")
+                    .replace(" here", " in the first part"),
+            )
+        })?;
+    }
+    labelled.sort_by_key(|l| (l.part.index, l.crop.map(|c| (c.y0, c.x0))));
+    check_cover(parts, &labelled, first.part.count)?;
+    let spp: u64 = value(&expected, "spp")
+        .and_then(|s| s.parse().ok())
+        .ok_or((
+            Some(first.at),
+            "the parts' render has no sample count".to_string(),
+        ))?;
+    for l in &labelled {
+        let (a, b) = l.part.samples(spp);
+        if parts[l.at].samples != b - a {
+            return Err((
+                Some(l.at),
+                format!(
+                    "part {} holds {} of its {} samples per pixel (interrupted?)",
+                    l.label(),
+                    parts[l.at].samples,
+                    b - a
+                ),
+            ));
+        }
+    }
+    Ok(labelled.iter().map(|l| l.at).collect())
+}
+
+/// Each part's sample part and window, read from its identity.
+fn label(parts: &[Checkpoint]) -> Result<Vec<Labelled>, (Option<usize>, String)> {
     let mut labelled = Vec::new();
     for (i, c) in parts.iter().enumerate() {
         let part = value(&c.identity, PART_KEY)
             .ok_or("not a part of a render (no --part; a checkpoint?)".to_string())
             .and_then(Part::parse)
             .map_err(|e| (Some(i), e))?;
-        labelled.push((part, i));
+        let crop = match value(&c.identity, CROP_KEY) {
+            None => None,
+            Some(s) => Some(Crop::from_label(s).ok_or((Some(i), format!("bad crop '{s}'")))?),
+        };
+        labelled.push(Labelled { part, crop, at: i });
     }
-    let Some(&(first, i0)) = labelled.first() else {
-        return Err((None, "no parts given".into()));
-    };
-    let render = |c: &Checkpoint| -> Vec<(String, String)> {
-        c.identity
-            .iter()
-            .filter(|(k, _)| k != PART_KEY && k != STAGE_FILE_KEY)
-            .cloned()
-            .collect()
-    };
-    let expected = render(&parts[i0]);
-    for &(part, i) in &labelled {
-        if part.count != first.count {
+    Ok(labelled)
+}
+
+/// For every sample part 0..count, the parts' windows (`labelled`, sorted by part) cover
+/// every pixel of the film exactly once.
+fn check_cover(
+    parts: &[Checkpoint],
+    labelled: &[Labelled],
+    count: u64,
+) -> Result<(), (Option<usize>, String)> {
+    let film = &parts[labelled[0].at].film;
+    let (w, h) = (film.width, film.height);
+    let mut covered = vec![0u8; w * h];
+    for k in 0..count {
+        covered.fill(0);
+        let of_k: Vec<&Labelled> = labelled.iter().filter(|l| l.part.index == k).collect();
+        if of_k.is_empty() {
+            return Err((None, format!("missing part {k}/{count}")));
+        }
+        for (j, l) in of_k.iter().enumerate() {
+            if of_k[..j].iter().any(|o| o.crop == l.crop) {
+                return Err((Some(l.at), format!("part {} given twice", l.label())));
+            }
+            let c = l.crop.unwrap_or(Crop::whole(w, h));
+            if c.x1 > w || c.y1 > h {
+                return Err((
+                    Some(l.at),
+                    format!("part {}: crop outside the film", l.label()),
+                ));
+            }
+            for y in c.y0..c.y1 {
+                for x in c.x0..c.x1 {
+                    if covered[y * w + x] > 0 {
+                        return Err((
+                            Some(l.at),
+                            format!(
+                                "part {} overlaps another part's pixels at ({x}, {y})",
+                                l.label()
+                            ),
+                        ));
+                    }
+                    covered[y * w + x] = 1;
+                }
+            }
+        }
+        if let Some(i) = covered.iter().position(|&v| v == 0) {
             return Err((
-                Some(i),
+                None,
                 format!(
-                    "part {} of a split into {}, not {} as the first part's",
-                    part.label(),
-                    part.count,
-                    first.count
+                    "missing pixels of part {k}/{count}: no crop covers ({}, {})",
+                    i % w,
+                    i / w
                 ),
             ));
         }
-        let mut c = parts[i].clone();
-        c.identity = render(&parts[i]);
-        c.check_identity(&expected).map_err(|e| {
-            (
-                Some(i),
-                e.replace("the checkpoint is of another run", "another render")
-                    .replace(" here", " in the first part"),
-            )
-        })?;
     }
-    labelled.sort_by_key(|&(p, _)| p.index);
-    for w in labelled.windows(2) {
-        if w[0].0 == w[1].0 {
-            return Err((Some(w[1].1), format!("part {} given twice", w[1].0.label())));
-        }
-    }
-    let missing: Vec<String> = (0..first.count)
-        .filter(|k| !labelled.iter().any(|(p, _)| p.index == *k))
-        .map(|k| format!("{k}/{}", first.count))
-        .collect();
-    if !missing.is_empty() {
-        return Err((None, format!("missing part {}", missing.join(", "))));
-    }
-    let spp: u64 = value(&expected, "spp")
-        .and_then(|s| s.parse().ok())
-        .ok_or((
-            Some(i0),
-            "the parts' render has no sample count".to_string(),
-        ))?;
-    let mut merged: Option<Merged> = None;
-    for &(part, i) in &labelled {
-        let c = &parts[i];
-        let (a, b) = part.samples(spp);
-        if c.samples != b - a {
-            return Err((
-                Some(i),
-                format!(
-                    "part {} holds {} of its {} samples per pixel (interrupted?)",
-                    part.label(),
-                    c.samples,
-                    b - a
-                ),
-            ));
-        }
-        let fail = |e: String| (Some(i), e);
-        match &mut merged {
-            None => {
-                merged = Some(Merged {
-                    film: Film::from_state(c.film.clone()).map_err(fail)?,
-                    identity: expected.clone(),
-                    samples: c.samples,
-                    dropped: c.dropped,
-                    wall_time_s: c.wall_time_s,
-                    depth_cut: c.depth_cut,
-                })
-            }
-            Some(m) => {
-                m.film.merge(&c.film).map_err(fail)?;
-                m.samples += c.samples;
-                m.dropped += c.dropped;
-                m.wall_time_s += c.wall_time_s;
-                m.depth_cut.merge(&c.depth_cut);
-            }
-        }
-    }
-    Ok(merged.expect("at least one part"))
+    Ok(())
 }
 
 #[cfg(test)]
