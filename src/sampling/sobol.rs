@@ -53,8 +53,9 @@ mod tests {
 
     #[test]
     fn first_points_are_sobols() {
-        // Sobol' 1967's second coordinate: 0, 1/2, 3/4, 1/4, 3/8, 7/8, 5/8, 1/8.
-        let want = [0.0, 0.5, 0.75, 0.25, 0.375, 0.875, 0.625, 0.125];
+        // The second coordinate in index (not Gray-code) order: direction numbers 1/2, 3/4,
+        // 5/8, XORed by the index's bits.
+        let want = [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875];
         for (i, w) in want.iter().enumerate() {
             assert_eq!(f(dim1(i as u32)), *w, "point {i}");
         }
