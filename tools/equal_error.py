@@ -14,8 +14,11 @@ relRMSE = RMS over the pixels away from the visible light (compare_mitsuba.py's 
 reference) and the RGB channels of (image − reference), over the reference's mean there.
 Time to relRMSE 5 %: seconds per sample per pixel × spp × (relRMSE / 0.05)², from the
 256-spp renders (error ∝ 1/√spp; the low-discrepancy sampler converges a little faster,
-so its figure is conservative). The reference's own noise is not subtracted.
+so its figure is conservative). The reference's own noise (mitsuba_reference.py's
+`est_rmse_of_ref` from its passes' spread, over all pixels) is subtracted from the squared
+error when its log is found.
 """
+import json
 import argparse
 import os
 import subprocess
@@ -67,6 +70,12 @@ def main():
     ref = common.read_exr(a.reference)[..., :3].astype(np.float64)
     mask = emitter_mask(ref)
     ref_mean = ref[mask].mean()
+    ref_noise2 = 0.0
+    log = os.path.join(os.path.dirname(a.reference), "ref_mitsuba_llvm_ad_spectral.json")
+    if os.path.exists(log):
+        for c in json.load(open(log))["checkpoints"]:
+            if c["file"] == os.path.basename(a.reference):
+                ref_noise2 = (c["est_rmse_of_ref"] / ref_mean) ** 2
     configs = [("ours path zsobol", lambda spp, s, tmp: ours("zsobol", spp, a.res, s, tmp)),
                ("ours path independent",
                 lambda spp, s, tmp: ours("independent", spp, a.res, s, tmp))]
@@ -80,13 +89,15 @@ def main():
         for spp in a.spp:
             for name, run in configs:
                 t, img = run(spp, r + 1, tmp)
-                err = np.sqrt(np.mean((img[..., :3] - ref)[mask] ** 2)) / ref_mean
+                err2 = np.mean((img[..., :3] - ref)[mask] ** 2) / ref_mean ** 2
+                err = np.sqrt(max(err2 - ref_noise2, 0.0))
                 rows.setdefault((name, spp), []).append((t, err))
                 print(f"round {r + 1} {name:28} {spp:5} spp: {t:7.2f} s, relRMSE {err:.4f}",
                       file=sys.stderr)
     px = a.res * a.res
     print(f"cbox {a.res}x{a.res}, max depth 7 (Mitsuba 8), {a.rounds} interleaved rounds, "
-          f"reference {os.path.basename(a.reference)}, light masked")
+          f"reference {os.path.basename(a.reference)} (its relative noise "
+          f"{np.sqrt(ref_noise2):.4f} subtracted), light masked")
     hdr = ["renderer", "samples/s"] + [f"relRMSE {s} spp" for s in a.spp] + \
           [f"relRMSE²×spp @{a.spp[-1]}", "time to 5 % (s)", "vs ours zsobol"]
     print("| " + " | ".join(hdr) + " |")
