@@ -139,4 +139,5 @@ pub mod testing;
 pub use error::{Error, ErrorKind, Result};
 pub use integrator::{Capabilities, Integrator, MisHeuristic};
 pub use light::report;
+pub use sampling::SamplerKind;
 pub use sensor::meter::{Meter, MeterKind};

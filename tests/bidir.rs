@@ -29,6 +29,7 @@ use spectral_render::integrator::bidir::connect::{
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
 use spectral_render::texture::TextureFilter;
+use spectral_render::SamplerKind;
 
 /// The bidirectional context's default (`BidirContext::new`): textures unfiltered.
 const FINEST: TextureFilter = TextureFilter::Finest;
@@ -327,11 +328,30 @@ fn render_with(
     seed: u64,
     max_depth: u32,
 ) -> RenderOutput {
+    render_sampled(
+        scene,
+        integrator,
+        SamplerKind::default(),
+        spp,
+        seed,
+        max_depth,
+    )
+}
+
+fn render_sampled(
+    scene: &Scene,
+    integrator: Integrator,
+    sampler: SamplerKind,
+    spp: u32,
+    seed: u64,
+    max_depth: u32,
+) -> RenderOutput {
     let opts = RenderOptions {
         spp: Some(spp),
         seed,
         max_depth: Some(max_depth),
         integrator,
+        sampler,
         ..Default::default()
     };
     let out = session::render(scene, &opts).unwrap();
@@ -367,8 +387,34 @@ fn batches(
     max_depth: u32,
     seed_base: u64,
 ) -> Batches {
+    batches_sampled(
+        scene,
+        integrator,
+        SamplerKind::default(),
+        k,
+        spp,
+        max_depth,
+        seed_base,
+    )
+}
+
+/// [`batches`] with the samples drawn by `sampler` (the path tracer's low-discrepancy
+/// sequence or independent numbers): k independent seeds, so the batch means are
+/// independent whatever the sampler.
+fn batches_sampled(
+    scene: &Scene,
+    integrator: Integrator,
+    sampler: SamplerKind,
+    k: usize,
+    spp: u32,
+    max_depth: u32,
+    seed_base: u64,
+) -> Batches {
     let outs: Vec<Vec<[f32; 3]>> = (0..k)
-        .map(|i| render_with(scene, integrator, spp, seed_base + i as u64, max_depth).xyz)
+        .map(|i| {
+            let seed = seed_base + i as u64;
+            render_sampled(scene, integrator, sampler, spp, seed, max_depth).xyz
+        })
         .collect();
     let n = outs[0].len();
     let mut mean = vec![[0.0; 3]; n];
@@ -492,6 +538,15 @@ fn path_light_and_bdpt_agree_per_pixel() {
         let scene = (case.scene)();
         let run = |kind, base| batches(&scene, kind, case.batches, case.spp, case.max_depth, base);
         let pt = run(Integrator::Path, 1000);
+        let pt_independent = batches_sampled(
+            &scene,
+            Integrator::Path,
+            SamplerKind::Independent,
+            case.batches,
+            case.spp,
+            case.max_depth,
+            4000,
+        );
         let lt = run(Integrator::Light, 2000);
         let bd = run(
             Integrator::Bdpt {
@@ -503,6 +558,8 @@ fn path_light_and_bdpt_agree_per_pixel() {
             ("PT-LT", &pt, &lt),
             ("PT-BDPT", &pt, &bd),
             ("LT-BDPT", &lt, &bd),
+            ("PT(independent)-BDPT", &pt_independent, &bd),
+            ("PT(zsobol)-PT(independent)", &pt, &pt_independent),
         ] {
             let z = z_test(a, b, alpha);
             let (wp, wc) = z.worst;
@@ -616,7 +673,7 @@ const EFFICIENCY: &[SceneCase] = &[
 ];
 
 /// The image's mean luminance, one value per render of `spp` samples per pixel (seeds
-/// `seed_base` + i): independent batch means of the pixel-mean estimator. Also the mean over
+/// `seed_base` + i, independent samplers): independent batch means of the pixel-mean estimator. Also the mean over
 /// pixels of each pixel's variance per sample (for the log only: BDPT's splats make pixels
 /// covary, which the batch means of the image mean include and a sum of pixels' would not).
 fn image_means(
@@ -628,9 +685,13 @@ fn image_means(
     let mut sums: Vec<(f64, f64)> = Vec::new();
     let means = (0..case.batches)
         .map(|i| {
-            let out = render_with(
+            // Independent numbers for every integrator: this compares estimators, not
+            // samplers (the path tracer's default low-discrepancy sequence lowers its
+            // variance further; the bidirectional ones draw independent numbers).
+            let out = render_sampled(
                 scene,
                 integrator,
+                SamplerKind::Independent,
                 case.spp,
                 seed_base + i as u64,
                 case.max_depth,

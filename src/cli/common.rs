@@ -7,6 +7,7 @@ use crate::integrator::cut;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::exr::ExrMetadata;
+use crate::sampling::SamplerKind;
 use crate::scene::{Machinery, Scene};
 use crate::session::{AutoReport, DepthCut};
 use clap::builder::{PossibleValue, TypedValueParser};
@@ -49,6 +50,23 @@ impl ValueEnum for VcmMode {
             VcmMode::Vcm => "connections and merges",
             VcmMode::Vc => "connections only: exactly BDPT",
             VcmMode::Vm => "merges only: bidirectional photon mapping",
+        };
+        Some(PossibleValue::new(self.name()).help(help))
+    }
+}
+
+impl ValueEnum for SamplerKind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &SamplerKind::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        let help = match self {
+            SamplerKind::ZSobol => {
+                "Owen-scrambled Sobol' points in Morton order over the image (path; the \
+                 bidirectional integrators draw independent numbers)"
+            }
+            SamplerKind::Independent => "independent uniform numbers (PCG32)",
         };
         Some(PossibleValue::new(self.name()).help(help))
     }

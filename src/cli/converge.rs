@@ -152,6 +152,7 @@ fn run(args: &ConvergeArgs, command: String) -> Result<()> {
         threads: args.threads,
         max_depth: args.max_depth,
         filter_textures: !args.no_texture_filtering,
+        ..RunOptions::default()
     };
     let mut report = Report {
         command,

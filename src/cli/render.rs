@@ -2,8 +2,9 @@
 
 use super::checkpoints::{self, Checkpoints};
 use super::common::{
-    at_least, clap_message, max_memory, metadata_name, print_auto, print_report, print_summary,
-    warn_clamped, warn_depth_cut, warn_dropped, warn_limits, IntegratorArgs, MachineryArgs, Made,
+    at_least, clap_message, max_memory, metadata_name, named, print_auto, print_report,
+    print_summary, warn_clamped, warn_depth_cut, warn_dropped, warn_limits, IntegratorArgs,
+    MachineryArgs, Made,
 };
 use super::frames::{frame_path, parse_frames, FrameArgs, FrameRange};
 use super::interrupt;
@@ -14,6 +15,7 @@ use crate::integrator::bidir::strategies::StrategyImage;
 use crate::integrator::Integrator;
 use crate::output::target::{self, Format, Target};
 use crate::output::{exr, png};
+use crate::sampling::SamplerKind;
 use crate::session::image::xyz_to_rgb;
 use crate::session::{self, ImageSession, Observer, Progressive, RenderOptions, RenderOutput};
 use crate::{scene, spectral};
@@ -52,6 +54,10 @@ struct RenderArgs {
     max_depth: Option<u32>,
     #[command(flatten)]
     integrator: IntegratorArgs,
+    /// The numbers the path tracer's samples draw; the bidirectional integrators draw
+    /// independent ones whatever this says.
+    #[arg(long, default_value = "zsobol", value_parser = named::<SamplerKind>("sampler"))]
+    sampler: SamplerKind,
     #[command(flatten)]
     machinery: MachineryArgs,
     #[command(flatten)]
@@ -480,6 +486,7 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
         strategies: args.strategies.is_some(),
         filter_textures: !args.no_texture_filtering,
         max_memory: args.max_memory,
+        sampler: args.sampler,
         ..RenderOptions::default()
     })
 }

@@ -27,6 +27,7 @@ pub mod schedule;
 
 use crate::error::Result;
 use crate::integrator::Integrator;
+use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::session::{ImageSession, RenderOptions, RenderOutput};
 use metrics::{image_errors, ImageErrors, Reference};
@@ -71,6 +72,8 @@ pub struct RunOptions {
     /// Maximum scattering events; None: unlimited (as `RenderOptions::max_depth`).
     pub max_depth: Option<u32>,
     pub filter_textures: bool,
+    /// The samples' numbers (`RenderOptions::sampler`).
+    pub sampler: SamplerKind,
 }
 
 impl Default for RunOptions {
@@ -82,6 +85,7 @@ impl Default for RunOptions {
             threads: None,
             max_depth: None,
             filter_textures: true,
+            sampler: SamplerKind::ZSobol,
         }
     }
 }
@@ -231,6 +235,7 @@ pub fn render_options(config: &Config, opts: &RunOptions) -> RenderOptions {
         integrator: config.integrator,
         filter_textures: opts.filter_textures,
         wavelengths: config.wavelengths,
+        sampler: opts.sampler,
         ..RenderOptions::default()
     }
 }

@@ -103,6 +103,14 @@ impl Integrator {
     ];
 
     /// The name the CLI and the EXR metadata use.
+    /// The estimator draws its camera path's numbers at fixed dimensions
+    /// (`sampling::dimensions`), so the low-discrepancy sampler may feed it (`--sampler`).
+    /// The bidirectional ones draw a number of dimensions that depends on both subpaths'
+    /// lengths and keep the independent sampler.
+    pub fn low_discrepancy(&self) -> bool {
+        matches!(self, Integrator::Path)
+    }
+
     pub fn name(&self) -> &'static str {
         match self {
             Integrator::Path => "path",

@@ -27,6 +27,7 @@ use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
 use crate::geometry::Ray;
 use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
 use crate::material::Material;
+use crate::sampling::dimensions::{self, BSDF, LIGHT, ROULETTE};
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::meter::{MeterKind, MeterSensor};
@@ -279,6 +280,8 @@ impl PathIntegrator {
         sampler: &mut Sampler,
         l: &mut SampledSpectrum,
     ) -> bool {
+        // Each decision draws from its own dimensions of this bounce (`dimensions.rs`).
+        let bounce = st.depth;
         st.depth += 1;
         let wo = -st.ray.d;
         let material = &scene.materials[si.material as usize];
@@ -287,8 +290,10 @@ impl PathIntegrator {
         }
         let bsdf = material.bsdf(scene.tex_coord(si, self.filter), si.ns, lambda);
         if !bsdf.is_specular() {
+            sampler.set_dimension(dimensions::bounce(bounce, LIGHT));
             *l += st.beta * self.sample_ld(scene, si, &bsdf, wo, lambda, sampler);
         }
+        sampler.set_dimension(dimensions::bounce(bounce, BSDF));
         let (uc, u) = (sampler.get_1d(), sampler.get_2d());
         let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
             return false;
@@ -304,6 +309,7 @@ impl PathIntegrator {
         });
         st.ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
         st.t_max = f32::INFINITY;
+        sampler.set_dimension(dimensions::bounce(bounce, ROULETTE));
         russian_roulette(&mut st.beta, st.eta_scale, st.depth, sampler)
     }
 
@@ -404,11 +410,13 @@ impl PathIntegrator {
 /// How many surfaces with opacity < 1 a ray may pass through before it is given up.
 const MAX_PASS_THROUGHS: u32 = 256;
 
-/// The stochastic opacity test: true when the surface is there for this path.
+/// The stochastic opacity test: true when the surface is there for this path. A path may
+/// take it any number of times between two bounces, so it draws outside the dimension
+/// layout (`Sampler::get_1d_free`).
 #[inline]
 fn surface_present(material: &Material, uv: Vec2, sampler: &mut Sampler) -> bool {
     let a = material.opacity(uv);
-    a >= 1.0 || (a > 0.0 && sampler.get_1d() < a)
+    a >= 1.0 || (a > 0.0 && sampler.get_1d_free() < a)
 }
 
 /// The shadow ray from a surface point to a light sample, and its t_max.

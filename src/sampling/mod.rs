@@ -1,10 +1,17 @@
-//! Random numbers and the warps from the unit square to directions and shapes.
+//! Random numbers — independent or low-discrepancy (`--sampler`) — and the warps from the
+//! unit square to directions and shapes.
 
+pub mod dimensions;
 pub mod distribution;
+pub mod owen;
+pub mod pixel;
 pub mod rng;
+pub mod sobol;
 pub mod warp;
+pub mod zsobol;
 
 pub use distribution::Distribution1D;
+pub use pixel::{PixelSamplers, SamplerKind};
 pub use rng::Sampler;
 
 /// Power heuristic with β = 2 (Veach 1997, §9.2.4, eq. 9.13), for one sample from each of

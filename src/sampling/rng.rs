@@ -2,15 +2,23 @@
 //! (seed, pixel or path index, sample index), so the image does not depend on the number of
 //! threads or the order of work (as pbrt-v4's IndependentSampler).
 //!
+//! A sampler is either independent (every number from PCG32) or a stream of the
+//! low-discrepancy sequence (`zsobol.rs`) that keeps PCG32 beside it for its forks and for
+//! decisions outside the dimension layout (`dimensions.rs`).
+//!
 //! Generator: PCG32 (O'Neill 2014, "PCG: A Family of Simple Fast Space-Efficient Statistically
 //! Good Algorithms for Random Number Generation", XSH-RR output, multiplier 6364136223846793005),
 //! seeded through SplitMix64 mixing (Steele et al. 2014).
+
+use super::zsobol::Stream;
 
 /// A per-sample random number stream.
 #[derive(Clone, Debug)]
 pub struct Sampler {
     state: u64,
     inc: u64,
+    /// The low-discrepancy stream, if this sample draws from one.
+    lds: Option<Stream>,
 }
 
 const PCG_MULT: u64 = 6_364_136_223_846_793_005;
@@ -20,11 +28,34 @@ impl Sampler {
     pub fn new(seed: u64, index: u64, sample: u64) -> Sampler {
         let key = mix64(seed ^ mix64(index.wrapping_add(mix64(sample))));
         let inc = (mix64(key ^ 0x9e37_79b9_7f4a_7c15) << 1) | 1;
-        let mut s = Sampler { state: 0, inc };
+        let mut s = Sampler {
+            state: 0,
+            inc,
+            lds: None,
+        };
         s.next_u32();
         s.state = s.state.wrapping_add(key);
         s.next_u32();
         s
+    }
+
+    /// The sampler of sample `sample` of pixel `index` that draws from the low-discrepancy
+    /// `stream`; its forks and [`get_1d_free`](Self::get_1d_free) are those of
+    /// `Sampler::new(seed, index, sample)`.
+    pub fn low_discrepancy(seed: u64, index: u64, sample: u64, stream: Stream) -> Sampler {
+        Sampler {
+            lds: Some(stream),
+            ..Sampler::new(seed, index, sample)
+        }
+    }
+
+    /// Makes `d` the next dimension a low-discrepancy sampler draws (`dimensions.rs`); the
+    /// independent sampler draws in order and ignores it.
+    #[inline]
+    pub fn set_dimension(&mut self, d: u32) {
+        if let Some(q) = &mut self.lds {
+            q.set_dimension(d);
+        }
     }
 
     #[inline]
@@ -36,16 +67,30 @@ impl Sampler {
         xorshifted.rotate_right(rot)
     }
 
-    /// A uniform number in [0, 1).
+    /// A uniform number in [0, 1): the next dimension.
     #[inline]
     pub fn get_1d(&mut self) -> f32 {
-        // 24 random mantissa bits: exactly representable and strictly below 1.
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        match &mut self.lds {
+            Some(q) => unit(q.next_1d()),
+            None => self.get_1d_free(),
+        }
     }
 
+    /// A uniform point in [0, 1)²: the next two dimensions.
     #[inline]
     pub fn get_2d(&mut self) -> [f32; 2] {
-        [self.get_1d(), self.get_1d()]
+        match &mut self.lds {
+            Some(q) => q.next_2d().map(unit),
+            None => [self.get_1d_free(), self.get_1d_free()],
+        }
+    }
+
+    /// A uniform number in [0, 1) from PCG32 whatever the sampler, for decisions a path
+    /// takes a variable number of times (stochastic opacity), which have no place in the
+    /// dimension layout. For the independent sampler it is [`get_1d`](Self::get_1d).
+    #[inline]
+    pub fn get_1d_free(&mut self) -> f32 {
+        unit(self.next_u32())
     }
 
     /// A stream of its own, derived from this one's current state and `stream` without
@@ -53,10 +98,21 @@ impl Sampler {
     pub fn fork(&self, stream: u64) -> Sampler {
         let key = mix64(self.state ^ mix64(stream ^ self.inc));
         let inc = (mix64(key ^ stream) << 1) | 1;
-        let mut s = Sampler { state: key, inc };
+        let mut s = Sampler {
+            state: key,
+            inc,
+            lds: None,
+        };
         s.next_u32();
         s
     }
+}
+
+/// 24 random mantissa bits of `x` as a number in [0, 1): exactly representable and strictly
+/// below 1.
+#[inline]
+fn unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 /// SplitMix64 finaliser (Steele, Lea, Flood 2014).

@@ -70,6 +70,10 @@ pub fn identity(scene: &Scene, opts: &RenderOptions) -> Vec<(String, String)> {
         ("texture filtering", opts.filter_textures.to_string()),
         ("strategy images", opts.strategies.to_string()),
         ("wavelengths", opts.wavelengths.to_string()),
+        (
+            "sampler",
+            super::image::sampler_kind(opts).name().to_string(),
+        ),
         ("version", env!("CARGO_PKG_VERSION").to_string()),
     ];
     pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect()

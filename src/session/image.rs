@@ -37,7 +37,7 @@ use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
 use crate::integrator::cut::{depth_cap, BatchedRatio};
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
-use crate::sampling::Sampler;
+use crate::sampling::{dimensions, PixelSamplers, SamplerKind};
 use crate::scene::Scene;
 use crate::sensor::film::{Film, Tile};
 use crate::sensor::grid_sum::{Fixed3, Grid};
@@ -93,6 +93,10 @@ pub struct RenderOptions {
     /// Refuse to start when the estimated memory (`session::memory`) and what the process
     /// holds exceed this many bytes; None: the machine's available memory.
     pub max_memory: Option<u64>,
+    /// The numbers the samples draw (`--sampler`): the low-discrepancy sequence for the
+    /// integrators that keep its dimension layout (`Integrator::low_discrepancy`), else
+    /// independent ones.
+    pub sampler: SamplerKind,
 }
 
 /// The wavelength counts [`RenderOptions::wavelengths`] may take.
@@ -111,6 +115,7 @@ impl Default for RenderOptions {
             filter_textures: true,
             wavelengths: 4,
             max_memory: None,
+            sampler: SamplerKind::ZSobol,
         }
     }
 }
@@ -177,6 +182,8 @@ pub struct ImageSession<'a> {
     /// Seconds spent before this session started (a resumed checkpoint's).
     prior_s: f64,
     auto: Option<AutoReport>,
+    /// The samplers of every (pixel, sample).
+    samplers: PixelSamplers,
 }
 
 impl<'a> ImageSession<'a> {
@@ -240,6 +247,7 @@ impl<'a> ImageSession<'a> {
             start: Instant::now(),
             prior_s: 0.0,
             auto: None,
+            samplers: pixel_samplers(opts, w as u64),
             opts: opts.clone(),
         })
     }
@@ -469,8 +477,7 @@ impl<'a> ImageSession<'a> {
         let task = Segment {
             first,
             count,
-            seed: self.opts.seed,
-            width: self.film.width as u64,
+            samplers: self.samplers,
             strategy_count: self.strategy_count,
             hero_only: self.opts.wavelengths == 1,
             grid: self.film.grid(),
@@ -591,6 +598,26 @@ fn texture_filter(opts: &RenderOptions) -> TextureFilter {
     TextureFilter::camera(spp)
 }
 
+/// The samplers of a run of `opts` on an image `width` wide: `opts.sampler` where the
+/// integrator keeps the dimension layout, else independent.
+fn pixel_samplers(opts: &RenderOptions, width: u64) -> PixelSamplers {
+    let spp = opts.spp.map(u64::from).or(match opts.time_budget {
+        Some(_) => None,
+        None => Some(u64::from(DEFAULT_SPP)),
+    });
+    PixelSamplers::new(sampler_kind(opts), opts.seed, width, spp)
+}
+
+/// The sampler a run of `opts` draws from: `opts.sampler` where the integrator keeps the
+/// dimension layout, else independent.
+pub(crate) fn sampler_kind(opts: &RenderOptions) -> SamplerKind {
+    if opts.integrator.low_discrepancy() {
+        opts.sampler
+    } else {
+        SamplerKind::Independent
+    }
+}
+
 /// Linear Rec.709 RGB of an XYZ pixel.
 pub fn xyz_to_rgb(p: [f32; 3]) -> [f32; 3] {
     color::xyz_to_rgb(p.map(f64::from)).map(|c| c as f32)
@@ -601,8 +628,7 @@ pub fn xyz_to_rgb(p: [f32; 3]) -> [f32; 3] {
 struct Segment {
     first: u64,
     count: u64,
-    seed: u64,
-    width: u64,
+    samplers: PixelSamplers,
     strategy_count: usize,
     /// Terminate the secondary wavelengths (`RenderOptions::wavelengths` = 1).
     hero_only: bool,
@@ -629,14 +655,16 @@ fn render_tile<const HERO_ONLY: bool>(
     let mut k = 0;
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
-            let pixel = y as u64 * task.width + x as u64;
             for s in task.first..task.first + task.count {
-                let mut sampler = Sampler::new(task.seed, pixel, s);
+                let mut sampler = task.samplers.sampler(x as u32, y as u32, s);
+                sampler.set_dimension(dimensions::WAVELENGTH);
                 let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
                 if HERO_ONLY {
                     lambda.terminate_secondary();
                 }
+                sampler.set_dimension(dimensions::FILM);
                 let [jx, jy] = sampler.get_2d();
+                sampler.set_dimension(dimensions::LENS);
                 let u_lens = sampler.get_2d();
                 let film = [x as f32 + jx, y as f32 + jy];
                 ws.record.clear();

@@ -1,0 +1,150 @@
+//! The low-discrepancy sampler: Owen-scrambled Sobol' points in pbrt-v4's Morton ("Z") order
+//! over the image (`ZSobolSampler`, after Ahmed and Wonka 2020, "Screen-space blue-noise
+//! diffusion of Monte Carlo sampling error via hierarchical ordering of pixels"), with Burley
+//! 2020's hash-based shuffling and scrambling.
+//!
+//! Sample s of pixel (x, y) belongs to replicate r = s mod 2 as its sample j = ⌊s/2⌋. In each
+//! replicate the sample's global index is (Morton(x, y) · 2^L) + (j mod 2^L), with 2^L the
+//! samples per pixel of the replicate rounded up to a power of two: a pixel's samples are one
+//! aligned block of the sequence, and a 2 × 2 quad of pixels the next block up, so the error
+//! of neighbouring pixels is spread as blue noise. Each request for a dimension (1D) or pair
+//! of dimensions (2D) d takes the first one or two Sobol' dimensions (`sobol.rs`) at the index
+//! shuffled with a seed of (run seed, r, d, higher index bits), and Owen-scrambles the values
+//! with seeds of their own (`owen.rs`): every dimension is uniform on its own, dimensions of
+//! one sample are independent, and the first 2^k samples of a replicate of a pixel are a
+//! (0, k, 2)-net in every 1D and 2D projection. Dimensions are unbounded (padding by hashing).
+//!
+//! **Why two replicates.** The even and the odd samples of a pixel are independent
+//! randomisations, so the film's even/odd variance estimate (`sensor/film.rs`), on which
+//! `auto`'s pilot, `converge`'s bias estimate and the z-tests between integrators rest, stays
+//! unbiased (Owen 1997: independent replicates of a scrambled net). One net over all the
+//! samples would make the halves anti-correlated and overstate the variance.
+//!
+//! Samples beyond 2^L per replicate (a `--time` run, whose sample count is unknown, takes
+//! L = 16) start a new epoch, hashed into the seeds: another independent scramble.
+
+use super::owen;
+use super::rng::mix64;
+use super::sobol;
+
+/// The largest log2 of samples per pixel and replicate that a run's blocks take.
+pub const MAX_LOG2: u32 = 20;
+/// log2 of the block of a run whose sample count is unknown (a time budget).
+pub const UNKNOWN_SPP_LOG2: u32 = 16;
+
+/// A run's parameters of the sequence: its seed and the block size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ZSobol {
+    seed: u64,
+    log2: u32,
+}
+
+impl ZSobol {
+    /// The sequence for a run of `spp` samples per pixel (None: unknown).
+    pub fn new(seed: u64, spp: Option<u64>) -> ZSobol {
+        let log2 = match spp {
+            Some(n) => (n.div_ceil(2).max(1).next_power_of_two().trailing_zeros()).min(MAX_LOG2),
+            None => UNKNOWN_SPP_LOG2,
+        };
+        ZSobol { seed, log2 }
+    }
+
+    /// The stream of sample `s` of pixel (x, y).
+    pub fn stream(&self, x: u32, y: u32, s: u64) -> Stream {
+        let (r, j) = (s & 1, s >> 1);
+        let l = self.log2;
+        let m = morton(x, y);
+        let epoch = j >> l;
+        // The index bits above 32 select a scramble of their own, like an epoch.
+        let high = m >> (32 - l);
+        let low = ((m << l) | (j & ((1 << l) - 1))) as u32;
+        let key = mix64(self.seed ^ mix64(r ^ mix64(epoch ^ mix64(high))));
+        Stream {
+            key,
+            index: low,
+            dim: 0,
+        }
+    }
+}
+
+/// One sample's draws from the sequence: dimension `dim` next.
+#[derive(Clone, Copy, Debug)]
+pub struct Stream {
+    key: u64,
+    index: u32,
+    dim: u32,
+}
+
+impl Stream {
+    #[inline]
+    fn seeds(&self, d: u32) -> u64 {
+        mix64(self.key ^ u64::from(d).wrapping_mul(0x9e37_79b9_7f4a_7c15))
+    }
+
+    /// The next dimension as a 32-bit fraction.
+    #[inline]
+    pub fn next_1d(&mut self) -> u32 {
+        let h = self.seeds(self.dim);
+        self.dim += 1;
+        let i = owen::shuffle(self.index, h as u32);
+        owen::scramble(sobol::dim0(i), (h >> 32) as u32)
+    }
+
+    /// The next two dimensions, a point of one (0, 2)-sequence, as 32-bit fractions.
+    #[inline]
+    pub fn next_2d(&mut self) -> [u32; 2] {
+        let h = self.seeds(self.dim);
+        self.dim += 2;
+        let i = owen::shuffle(self.index, h as u32);
+        let h2 = mix64(h);
+        [
+            owen::scramble(sobol::dim0(i), (h >> 32) as u32),
+            owen::scramble(sobol::dim1(i), h2 as u32),
+        ]
+    }
+
+    /// Makes `d` the next dimension drawn.
+    #[inline]
+    pub fn set_dimension(&mut self, d: u32) {
+        self.dim = d;
+    }
+}
+
+/// The Morton (Z-order) code of (x, y): their bits interleaved, x in the even bits.
+pub fn morton(x: u32, y: u32) -> u64 {
+    spread(x) | (spread(y) << 1)
+}
+
+/// The bits of `v` moved to the even positions of a u64.
+fn spread(v: u32) -> u64 {
+    let mut v = u64::from(v);
+    v = (v | (v << 16)) & 0x0000_ffff_0000_ffff;
+    v = (v | (v << 8)) & 0x00ff_00ff_00ff_00ff;
+    v = (v | (v << 4)) & 0x0f0f_0f0f_0f0f_0f0f;
+    v = (v | (v << 2)) & 0x3333_3333_3333_3333;
+    (v | (v << 1)) & 0x5555_5555_5555_5555
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_interleaves() {
+        assert_eq!(morton(0, 0), 0);
+        assert_eq!(morton(1, 0), 1);
+        assert_eq!(morton(0, 1), 2);
+        assert_eq!(morton(3, 3), 15);
+        assert_eq!(morton(u32::MAX, 0), 0x5555_5555_5555_5555);
+    }
+
+    #[test]
+    fn block_sizes() {
+        assert_eq!(ZSobol::new(0, Some(1)).log2, 0);
+        assert_eq!(ZSobol::new(0, Some(2)).log2, 0);
+        assert_eq!(ZSobol::new(0, Some(64)).log2, 5);
+        assert_eq!(ZSobol::new(0, Some(65)).log2, 6);
+        assert_eq!(ZSobol::new(0, None).log2, UNKNOWN_SPP_LOG2);
+        assert_eq!(ZSobol::new(0, Some(u64::MAX)).log2, MAX_LOG2);
+    }
+}

@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""Time to equal error on the Cornell box: ours (path, each sampler) against Mitsuba 3
+(`llvm_ad_spectral`, `scalar_spectral`), interleaved in one run. Run by
+tools/bench_equal_error.sh, which names the reference; see that script for the options.
+
+For each configuration and sample count (64, 256 by default) and each of --rounds rounds
+(configurations interleaved within a round, seeds 1, 2, ...):
+- ours: the release binary on ../shared/peers/cbox.usda, --max-depth 7, timed as a whole
+  process (scene load and EXR write included);
+- Mitsuba: `mi.render` of the same box (`common.cbox_dict`, max_depth 8, 1-px box filter,
+  its independent sampler) in this process, timed after one untimed warm-up render per
+  variant (the llvm variant's JIT compile is not counted).
+relRMSE = RMS over the pixels away from the visible light (compare_mitsuba.py's mask on the
+reference) and the RGB channels of (image − reference), over the reference's mean there.
+Time to relRMSE 5 %: seconds per sample per pixel × spp × (relRMSE / 0.05)², from the
+256-spp renders (error ∝ 1/√spp; the low-discrepancy sampler converges a little faster,
+so its figure is conservative). The reference's own noise (mitsuba_reference.py's
+`est_rmse_of_ref` from its passes' spread, over all pixels) is subtracted from the squared
+error when its log is found.
+"""
+import json
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PEERS = os.path.join(ROOT, "..", "shared", "peers")
+sys.path.insert(0, PEERS)
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+import common  # noqa: E402
+from compare_mitsuba import emitter_mask  # noqa: E402
+
+EXE = os.path.join(ROOT, "target", "release", "spectral-render")
+
+
+def ours(sampler, spp, res, seed, tmp):
+    out = os.path.join(tmp, f"ours_{sampler}_{spp}_{seed}.exr")
+    t0 = time.perf_counter()
+    subprocess.run([EXE, os.path.join(PEERS, "cbox.usda"), "-o", out, "--spp", str(spp),
+                    "--resolution", f"{res}x{res}", "--max-depth", "7", "--seed", str(seed),
+                    "--integrator", "path", "--sampler", sampler],
+                   check=True, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - t0, common.read_exr(out)
+
+
+def mitsuba(variant, spp, res, seed, scenes):
+    import mitsuba as mi
+    mi.set_variant(variant)
+    if variant not in scenes:
+        scenes[variant] = mi.load_dict(common.cbox_dict(mi, res, spp, 0, 8))
+        mi.render(scenes[variant], spp=spp, seed=0)  # warm-up (JIT)
+    t0 = time.perf_counter()
+    img = np.array(mi.render(scenes[variant], spp=spp, seed=seed), dtype=np.float64)
+    return time.perf_counter() - t0, img[..., :3]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--reference", required=True)
+    ap.add_argument("--res", type=int, default=256)
+    ap.add_argument("--spp", type=int, nargs="+", default=[64, 256])
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--variants", nargs="+", default=["llvm_ad_spectral", "scalar_spectral"])
+    a = ap.parse_args()
+    ref = common.read_exr(a.reference)[..., :3].astype(np.float64)
+    mask = emitter_mask(ref)
+    ref_mean = ref[mask].mean()
+    ref_noise2 = 0.0
+    log = os.path.join(os.path.dirname(a.reference), "ref_mitsuba_llvm_ad_spectral.json")
+    if os.path.exists(log):
+        for c in json.load(open(log))["checkpoints"]:
+            if c["file"] == os.path.basename(a.reference):
+                ref_noise2 = (c["est_rmse_of_ref"] / ref_mean) ** 2
+    configs = [("ours path zsobol", lambda spp, s, tmp: ours("zsobol", spp, a.res, s, tmp)),
+               ("ours path independent",
+                lambda spp, s, tmp: ours("independent", spp, a.res, s, tmp))]
+    scenes = {}
+    for v in a.variants:
+        configs.append((f"Mitsuba {v}",
+                        lambda spp, s, tmp, v=v: mitsuba(v, spp, a.res, s, scenes)))
+    rows = {}  # (name, spp) -> list of (seconds, relRMSE)
+    tmp = tempfile.mkdtemp()
+    for r in range(a.rounds):
+        for spp in a.spp:
+            for name, run in configs:
+                t, img = run(spp, r + 1, tmp)
+                err2 = np.mean((img[..., :3] - ref)[mask] ** 2) / ref_mean ** 2
+                err = np.sqrt(max(err2 - ref_noise2, 0.0))
+                rows.setdefault((name, spp), []).append((t, err))
+                print(f"round {r + 1} {name:28} {spp:5} spp: {t:7.2f} s, relRMSE {err:.4f}",
+                      file=sys.stderr)
+    px = a.res * a.res
+    print(f"cbox {a.res}x{a.res}, max depth 7 (Mitsuba 8), {a.rounds} interleaved rounds, "
+          f"reference {os.path.basename(a.reference)} (its relative noise "
+          f"{np.sqrt(ref_noise2):.4f} subtracted), light masked")
+    hdr = ["renderer", "samples/s"] + [f"relRMSE {s} spp" for s in a.spp] + \
+          [f"relRMSE²×spp @{a.spp[-1]}", "time to 5 % (s)", "vs ours zsobol"]
+    print("| " + " | ".join(hdr) + " |")
+    print("|" + "---|" * len(hdr))
+    t5 = {}
+    for name, _ in configs:
+        t, e = map(np.array, zip(*rows[(name, a.spp[-1])]))
+        sps = px * a.spp[-1] / t.mean()
+        rel = float(np.sqrt(np.mean(e ** 2)))
+        t5[name] = t.mean() * (rel / 0.05) ** 2
+    base = t5[configs[0][0]]
+    for name, _ in configs:
+        t, e = map(np.array, zip(*rows[(name, a.spp[-1])]))
+        sps = px * a.spp[-1] / t.mean()
+        errs = [float(np.sqrt(np.mean(np.array([x[1] for x in rows[(name, s)]]) ** 2)))
+                for s in a.spp]
+        per_sample = errs[-1] ** 2 * a.spp[-1]
+        cells = [name, f"{sps / 1e6:.2f} M"] + [f"{x:.4f}" for x in errs] + \
+                [f"{per_sample:.2f}", f"{t5[name]:.1f}", f"{t5[name] / base:.2f}×"]
+        print("| " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
