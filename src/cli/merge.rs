@@ -149,5 +149,6 @@ fn output(scene: &scene::Scene, m: &part::Merged) -> Result<RenderOutput> {
         auto: None,
         depth_cut: DepthCut::new(max_depth, &cut.sums(), cut.capped, cut.limited),
         clamped: m.film.clamped(),
+        layers: Default::default(),
     })
 }

@@ -11,6 +11,7 @@ mod converge;
 mod frames;
 mod info;
 mod interrupt;
+mod layers;
 mod lights;
 mod merge;
 mod meter;

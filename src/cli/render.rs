@@ -7,13 +7,14 @@ use super::common::{
 };
 use super::frames::{frame_path, parse_frames, FrameArgs, FrameRange};
 use super::interrupt;
+use super::layers::LayerArgs;
 use super::parts::PartArgs;
 use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::integrator::bidir::strategies::StrategyImage;
 use crate::integrator::Integrator;
 use crate::output::target::{self, Format, Target};
-use crate::output::{exr, png};
+use crate::output::{self, exr, png};
 use crate::session::image::xyz_to_rgb;
 use crate::session::{self, ImageSession, Observer, Progressive, RenderOptions, RenderOutput};
 use crate::{scene, spectral};
@@ -56,6 +57,8 @@ struct RenderArgs {
     machinery: MachineryArgs,
     #[command(flatten)]
     part: PartArgs,
+    #[command(flatten)]
+    layers: LayerArgs,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
     strategies: Option<PathBuf>,
@@ -138,6 +141,11 @@ pub fn command() -> clap::Command {
 
 fn run(args: &RenderArgs) -> Result<()> {
     let opts = options(args)?;
+    args.layers.check_state(
+        &opts.layers,
+        args.part.part.is_some(),
+        args.checkpoint.is_some() || args.resume.is_some(),
+    )?;
     args.part.check(
         &opts,
         args.strategies.is_some(),
@@ -353,8 +361,15 @@ pub(super) fn write_image(
     let mut meta = made.metadata();
     meta.integrator = integrator_name;
     let white = spectral::color::white_xy().map(|c| c as f32);
-    exr::write(
-        path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
+    exr::write_with_layers(
+        path,
+        out.width,
+        out.height,
+        &out.rgb,
+        &out.xyz,
+        &output::layers::exr_layers(&out.layers),
+        white,
+        &meta,
     )?;
     if let Some((preview, exposure)) = preview {
         png::write_preview(preview, out.width, out.height, &out.rgb, exposure)?;
@@ -467,7 +482,10 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
     if args.threads == Some(0) {
         return Err(Error::option("--threads must be at least 1"));
     }
+    let integrator = args.layers.integrator(integrator);
+    let layers = args.layers.options(&integrator)?;
     Ok(RenderOptions {
+        layers,
         spp: args.spp,
         time_budget: args.time,
         seed: args.seed,

@@ -155,6 +155,57 @@ pub fn write_with_channels(
     write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
 }
 
+/// Extra float32 channels and string attributes written beside R, G, B and XYZ
+/// (`output::layers`: spectral radiance, AOVs).
+#[derive(Clone, Debug, Default)]
+pub struct ExrLayers {
+    /// (channel name, one value per pixel, row-major).
+    pub channels: Vec<(String, Vec<f32>)>,
+    /// (attribute name, string value) in the header.
+    pub strings: Vec<(String, String)>,
+}
+
+/// [`write()`] with the `layers`' channels and string attributes; every value must be
+/// finite, and an attribute may not replace one of the module's.
+#[allow(clippy::too_many_arguments)]
+pub fn write_with_layers(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    layers: &ExrLayers,
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> Result<()> {
+    let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
+    check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
+    check_finite(width, rgb, xyz).map_err(fail)?;
+    let extra: Vec<(&str, Vec<f32>)> = layers
+        .channels
+        .iter()
+        .map(|(n, v)| (n.as_str(), v.clone()))
+        .collect();
+    for (name, values) in &extra {
+        if values.len() != rgb.len() || !values.iter().all(|v| v.is_finite()) {
+            return Err(fail(format!(
+                "channel {name} needs one finite value per pixel"
+            )));
+        }
+    }
+    let mut image = build_image(width, height, rgb, xyz, &extra, white_xy, meta);
+    let other = &mut image.layer_data.attributes.other;
+    for (name, value) in &layers.strings {
+        if other
+            .insert(text(name), AttributeValue::Text(text(value)))
+            .is_some()
+        {
+            return Err(fail(format!("attribute {name} is written twice")));
+        }
+    }
+    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+}
+
 /// Reads an EXR file: all channels of its first layer by name, converted to f32, and all
 /// header attributes of its first part as strings.
 pub fn read(path: &Path) -> Result<ExrImage> {

@@ -30,6 +30,7 @@
 
 use super::auto::AutoReport;
 use super::checkpoint::{self, Checkpoint};
+use super::layers::{LayerFilms, LayerImages, LayerOptions, LayerTile};
 use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
@@ -92,6 +93,8 @@ pub struct RenderOptions {
     /// Refuse to start when the estimated memory (`session::memory`) and what the process
     /// holds exceed this many bytes; None: the machine's available memory.
     pub max_memory: Option<u64>,
+    /// Extra layers: spectral radiance, AOVs (`session::layers`).
+    pub layers: LayerOptions,
 }
 
 /// The wavelength counts [`RenderOptions::wavelengths`] may take.
@@ -110,6 +113,7 @@ impl Default for RenderOptions {
             filter_textures: true,
             wavelengths: 4,
             max_memory: None,
+            layers: LayerOptions::default(),
         }
     }
 }
@@ -135,6 +139,8 @@ pub struct RenderOutput {
     pub depth_cut: Option<DepthCut>,
     /// Contributions clamped to the film's range (`sensor::grid_sum`; should be 0).
     pub clamped: u64,
+    /// The extra layers asked for (`RenderOptions::layers`).
+    pub layers: LayerImages,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -152,6 +158,7 @@ pub struct ImageSession<'a> {
     estimator: Box<dyn Estimator + 'a>,
     splats: bool,
     film: Film,
+    layers: LayerFilms,
     tiles: Vec<Tile>,
     strategy_count: usize,
     strategy_films: Option<StrategyFilms>,
@@ -196,9 +203,11 @@ impl<'a> ImageSession<'a> {
             &super::memory::image(scene, opts),
             opts.max_memory,
         )?;
+        opts.layers.check(&opts.integrator)?;
         let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h, Grid::for_scale(scene.camera.exposure_scale as f64));
+        let layers = LayerFilms::new(w, h, &opts.layers, film.grid());
         let settings = Settings {
             max_depth: cap,
             filter: texture_filter(opts),
@@ -212,6 +221,7 @@ impl<'a> ImageSession<'a> {
             splats,
             tiles: film.tiles(TILE_SIZE),
             film,
+            layers,
             strategy_count,
             strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, cap)),
             chunk: if splats {
@@ -388,7 +398,8 @@ impl<'a> ImageSession<'a> {
                 self.cut.capped,
                 self.cut.limited,
             ),
-            clamped: self.film.clamped(),
+            clamped: self.film.clamped() + self.layers.clamped(),
+            layers: self.layers.images(exposure),
         }
     }
 
@@ -446,6 +457,7 @@ impl<'a> ImageSession<'a> {
         };
         let estimator = &*self.estimator;
         let max_depth = self.cap;
+        let layers = &self.layers;
         let results: Vec<TileSums> = self.pool.install(|| {
             self.tiles
                 .par_iter()
@@ -456,17 +468,19 @@ impl<'a> ImageSession<'a> {
                             vec![[0.0; 3]; tile.pixel_count()],
                             task.strategy_count,
                         );
+                        let lt = LayerTile::new(layers, tile);
                         if task.hero_only {
-                            render_tile::<true>(estimator, tile, &task, acc, ws)
+                            render_tile::<true>(estimator, tile, &task, (acc, lt), ws)
                         } else {
-                            render_tile::<false>(estimator, tile, &task, acc, ws)
+                            render_tile::<false>(estimator, tile, &task, (acc, lt), ws)
                         }
                     },
                 )
                 .collect()
         });
-        for (tile, (r, fixed, clamped)) in self.tiles.iter().zip(results) {
+        for (tile, (r, fixed, clamped, lt)) in self.tiles.iter().zip(results) {
             self.film.store_tile(tile, &fixed, &r.odd_y, count, clamped);
+            self.layers.store_tile(tile, &lt, count);
             self.film.add_splats(&r.splats, &r.odd_splats);
             self.cut.merge(&r.cut);
             if let (Some(sf), Some(st)) = (&mut self.strategy_films, &r.strategies) {
@@ -575,9 +589,9 @@ struct Segment {
     grid: Grid,
 }
 
-/// A tile's accumulator (its own-pixel sums emptied), its own-pixel sums on the grid and the
-/// terms it clamped.
-type TileSums = (TileAccumulator, Vec<Fixed3>, u64);
+/// A tile's accumulator (its own-pixel sums emptied), its own-pixel sums on the grid, the
+/// terms it clamped and its layers' sums.
+type TileSums = (TileAccumulator, Vec<Fixed3>, u64, LayerTile);
 
 /// Renders a tile's samples into `acc`: per-pixel XYZ sums, splats and the number of
 /// non-finite samples dropped. `HERO_ONLY`: every sample carries its hero wavelength alone
@@ -586,7 +600,7 @@ fn render_tile<const HERO_ONLY: bool>(
     estimator: &dyn Estimator,
     tile: &Tile,
     task: &Segment,
-    mut acc: TileAccumulator,
+    (mut acc, mut layers): (TileAccumulator, LayerTile),
     ws: &mut Workspace,
 ) -> TileSums {
     let mut fixed = vec![[0; 3]; tile.pixel_count()];
@@ -610,7 +624,9 @@ fn render_tile<const HERO_ONLY: bool>(
                     // VCM replaces the sample's wavelengths by its iteration's tuple.
                     lambda.terminate_secondary();
                 }
+                let dropped = acc.dropped;
                 acc.add(k, &ws.record, &lambda, s);
+                layers.add(k, &ws.record, &lambda, acc.dropped != dropped);
                 // The sample's own value (0 when it was dropped), rounded to the grid.
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
                 let (t, c) = task.grid.triple(own);
@@ -619,5 +635,5 @@ fn render_tile<const HERO_ONLY: bool>(
             k += 1;
         }
     }
-    (acc, fixed, clamped)
+    (acc, fixed, clamped, layers)
 }

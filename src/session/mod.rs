@@ -14,6 +14,7 @@ pub mod auto;
 pub mod checkpoint;
 pub mod depth_cut;
 pub mod image;
+pub mod layers;
 pub mod memory;
 pub mod meter;
 pub mod part;

@@ -1,0 +1,63 @@
+//! The image's extra layers as EXR channels and attributes (`session::layers`).
+//!
+//! **Spectral radiance** follows Fichet, Pacanowski and Wilkie 2021, "An OpenEXR Layout for
+//! Spectral Images" (JCGT 10(3)), §3: one float32 channel per bin named `S0.<λ>nm`, the
+//! Stokes component S0 (unpolarised emissive data) and the bin's centre wavelength with a
+//! comma as its decimal separator (`S0.367,343750nm`), and the string attributes
+//! `spectralLayoutVersion` = `1.0` and `emissiveUnits` = `W.m^-2.sr^-1` (the channels hold
+//! spectral radiance per nm of the wavelength unit in their names). The values are the
+//! bin-averaged spectral radiance × 2^exposure, on the scale of the RGB and XYZ layers
+//! (`whiteLuminance` gives it back as absolute). `spectralRender:spectralBins` records the
+//! bins as `MIN,MAX,COUNT` (nm).
+
+use super::exr::ExrLayers;
+use crate::sensor::spectral_film::SpectralImage;
+use crate::session::layers::LayerImages;
+
+/// The layout version the spectral channels follow (Fichet et al. 2021).
+pub const SPECTRAL_LAYOUT_VERSION: &str = "1.0";
+/// The unit of the emissive spectral channels (Fichet et al. 2021, §3.2).
+pub const EMISSIVE_UNITS: &str = "W.m^-2.sr^-1";
+pub const SPECTRAL_BINS_ATTRIBUTE: &str = "spectralRender:spectralBins";
+
+/// The channels and attributes of `layers`.
+pub fn exr_layers(layers: &LayerImages) -> ExrLayers {
+    let mut out = ExrLayers::default();
+    if let Some(s) = &layers.spectral {
+        spectral(s, &mut out);
+    }
+    out
+}
+
+/// The channel name of an emissive, unpolarised bin centred on `nm`.
+pub fn spectral_channel(nm: f64) -> String {
+    format!("S0.{}nm", format!("{nm:.6}").replace('.', ","))
+}
+
+fn spectral(s: &SpectralImage, out: &mut ExrLayers) {
+    for (i, image) in s.images.iter().enumerate() {
+        out.channels
+            .push((spectral_channel(s.bins.centre(i)), image.clone()));
+    }
+    let strings = [
+        ("spectralLayoutVersion", SPECTRAL_LAYOUT_VERSION.to_string()),
+        ("emissiveUnits", EMISSIVE_UNITS.to_string()),
+        (
+            SPECTRAL_BINS_ATTRIBUTE,
+            format!("{},{},{}", s.bins.min, s.bins.max, s.bins.count),
+        ),
+    ];
+    out.strings
+        .extend(strings.into_iter().map(|(k, v)| (k.to_string(), v)));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn channel_names_follow_the_layout() {
+        assert_eq!(spectral_channel(560.0), "S0.560,000000nm");
+        assert_eq!(spectral_channel(367.34375), "S0.367,343750nm");
+    }
+}
