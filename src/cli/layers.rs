@@ -23,6 +23,9 @@ pub struct LayerArgs {
     #[arg(long = "spectral-range", value_name = "A,B", value_parser = parse_range,
           allow_hyphen_values = true)]
     pub spectral_range: Option<(f32, f32)>,
+    /// Extra layers (comma-separated): variance (variance.Y, of the pixel's mean luminance).
+    #[arg(long = "aov", value_name = "LIST", value_delimiter = ',', value_parser = ["variance"])]
+    pub aov: Vec<String>,
 }
 
 fn parse_range(s: &str) -> std::result::Result<(f32, f32), String> {
@@ -51,7 +54,10 @@ impl LayerArgs {
         } else {
             None
         };
-        let layers = LayerOptions { spectral: bins };
+        let layers = LayerOptions {
+            spectral: bins,
+            variance: self.aov.iter().any(|a| a == "variance"),
+        };
         layers.check(integrator)?;
         Ok(layers)
     }
@@ -76,7 +82,7 @@ impl LayerArgs {
     /// Refuses layers with --part, --checkpoint and --resume: their raw state (`.part`,
     /// checkpoint files) carries the image's film only.
     pub fn check_state(&self, layers: &LayerOptions, part: bool, checkpoints: bool) -> Result<()> {
-        if layers.any() && (part || checkpoints) {
+        if layers.spectral.is_some() && (part || checkpoints) {
             return Err(Error::option(
                 "--spectral does not go with --part, --checkpoint or --resume: their saved \
                  state holds the image's film, not the spectral bins",

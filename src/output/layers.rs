@@ -9,6 +9,10 @@
 //! bin-averaged spectral radiance × 2^exposure, on the scale of the RGB and XYZ layers
 //! (`whiteLuminance` gives it back as absolute). `spectralRender:spectralBins` records the
 //! bins as `MIN,MAX,COUNT` (nm).
+//!
+//! **AOVs.** `variance.Y`: per pixel, the estimated variance of the pixel's mean luminance
+//! (cd/m²)², × 2^(2·exposure), from the film's even and odd halves (`sensor::film`); −1 where
+//! a pixel has fewer than 2 samples.
 
 use super::exr::ExrLayers;
 use crate::sensor::spectral_film::SpectralImage;
@@ -18,6 +22,8 @@ use crate::session::layers::LayerImages;
 pub const SPECTRAL_LAYOUT_VERSION: &str = "1.0";
 /// The unit of the emissive spectral channels (Fichet et al. 2021, §3.2).
 pub const EMISSIVE_UNITS: &str = "W.m^-2.sr^-1";
+/// The variance of the pixel's mean luminance (`--aov variance`).
+pub const VARIANCE_CHANNEL: &str = "variance.Y";
 pub const SPECTRAL_BINS_ATTRIBUTE: &str = "spectralRender:spectralBins";
 
 /// The channels and attributes of `layers`.
@@ -25,6 +31,9 @@ pub fn exr_layers(layers: &LayerImages) -> ExrLayers {
     let mut out = ExrLayers::default();
     if let Some(s) = &layers.spectral {
         spectral(s, &mut out);
+    }
+    if let Some(v) = &layers.variance {
+        out.channels.push((VARIANCE_CHANNEL.to_string(), v.clone()));
     }
     out
 }

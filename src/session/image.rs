@@ -399,7 +399,15 @@ impl<'a> ImageSession<'a> {
                 self.cut.limited,
             ),
             clamped: self.film.clamped() + self.layers.clamped(),
-            layers: self.layers.images(exposure),
+            layers: LayerImages {
+                variance: self.opts.layers.variance.then(|| {
+                    let v = self.film.variance_y(exposure);
+                    v.iter()
+                        .map(|&v| if v.is_finite() { v as f32 } else { -1.0 })
+                        .collect()
+                }),
+                ..self.layers.images(exposure)
+            },
         }
     }
 

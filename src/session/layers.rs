@@ -17,6 +17,9 @@ use crate::spectral::SampledWavelengths;
 pub struct LayerOptions {
     /// Spectral radiance in these bins (`sensor::spectral_film`).
     pub spectral: Option<SpectralBins>,
+    /// The per-pixel variance of the mean luminance (`--aov variance`, from the film's even
+    /// and odd halves, `sensor::film`).
+    pub variance: bool,
 }
 
 impl LayerOptions {
@@ -93,6 +96,9 @@ pub struct LayerFilms {
 #[derive(Clone, Debug, Default)]
 pub struct LayerImages {
     pub spectral: Option<SpectralImage>,
+    /// Per pixel, the estimated variance of the mean luminance in (cd/m²)² (× exposure²);
+    /// −1 where a pixel has fewer than 2 samples (no estimate).
+    pub variance: Option<Vec<f32>>,
 }
 
 impl LayerFilms {
@@ -123,6 +129,7 @@ impl LayerFilms {
                 bins: f.bins(),
                 images: f.images(scale),
             }),
+            variance: None,
         }
     }
 }
