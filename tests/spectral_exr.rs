@@ -24,6 +24,7 @@ fn render(scene: &Scene, spp: u32, threads: usize, bins: SpectralBins) -> Render
         integrator: Integrator::Path,
         layers: LayerOptions {
             spectral: Some(bins),
+            ..Default::default()
         },
         ..Default::default()
     };
@@ -117,14 +118,15 @@ fn bins_do_not_depend_on_the_threads() {
 fn spectral_exr_reads_back_in_the_papers_layout() {
     colour_science_venv();
     let dir = temp_dir("spectral-exr");
-    let exr = dir.join("cbox.exr");
+    let exr = dir.join("colorchecker.exr");
+    let stage = root().join("scenes/colorchecker.usda");
     let out = spectral_render(
         &[
-            cbox_path().to_str().unwrap(),
+            stage.to_str().unwrap(),
             "--resolution",
-            "24x24",
+            "48x32",
             "--spp",
-            "8",
+            "32",
             "--spectral-bins",
             "16",
             "--spectral-range",

@@ -35,8 +35,8 @@ def wavelength_nm(name):
 
 def main(path):
     with OpenEXR.File(path) as f:
-        header = f.header()
-        channels = {name: np.asarray(c.pixels) for name, c in f.channels().items()}
+        header = dict(f.header())
+        channels = {name: np.array(c.pixels) for name, c in f.channels().items()}
     failures = []
     if header.get("spectralLayoutVersion") != "1.0":
         failures.append(f"spectralLayoutVersion = {header.get('spectralLayoutVersion')!r}")
@@ -71,14 +71,13 @@ def main(path):
         grid = np.linspace(w - width / 2, w + width / 2, int(round(width / 0.01)) + 1)
         weights = [np.trapezoid(np.interp(grid, xs, cmfs.values[:, c]), grid) for c in range(3)]
         xyz_bins += K_M * channels[n].astype(np.float64).mean() * np.array(weights)
-    inside = (lo, hi) == (360.0, 830.0)
     err = np.max(np.abs(xyz_bins / xyz_layer - 1.0))
     print(f"{len(spectral)} spectral channels, {lo:g}-{hi:g} nm")
     print(f"image mean XYZ: layer {xyz_layer}, from the bins {xyz_bins}, max rel. diff {err:.4%}")
-    # Outside the full range the CMFs' tails (below 380 / above 780 nm) are not binned: allow them.
-    tail = 0.01 if inside else 0.012
-    if err > tail:
-        failures.append(f"the bins integrate to XYZ within {err:.4%}, not {tail:.1%}")
+    # The curves outside the bins' range (below 380 / above 780 nm: < 0.01 % of Y) are left
+    # out; the rest is the binning error and the noise of the bins' difference from the layer.
+    if err > 0.01:
+        failures.append(f"the bins integrate to XYZ within {err:.4%}, not 1 %")
     if failures:
         print("\n".join(failures))
         return 1
