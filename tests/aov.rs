@@ -64,3 +64,40 @@ fn mean_and_standard_error(x: &[f64]) -> (f64, f64) {
     let v = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0);
     (m, (v / n).sqrt())
 }
+
+#[test]
+fn first_hit_layers_of_the_back_wall() {
+    // The Cornell box's back wall is the plane z = −1 facing +z; the camera sits at z = 3.9
+    // looking along −z: in OpenEXR's camera space the wall is at depth 4.9 with normal
+    // (0, 0, −1), whatever the pixel it covers.
+    let scene = scene::load(&cbox_path(), Some((33, 33))).unwrap();
+    let opts = RenderOptions {
+        spp: Some(4),
+        max_depth: Some(1),
+        integrator: Integrator::Path,
+        layers: LayerOptions {
+            first_hit: true,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let out = session::render(&scene, &opts).unwrap();
+    let fh = out.layers.first_hit.unwrap();
+    // Pixel (16, 10): above the blocks, below the ceiling, on the back wall.
+    let i = 10 * 33 + 16;
+    let (p, n) = (fh.position[i], fh.normal[i]);
+    assert!((p[2] - 4.9).abs() < 1e-4, "{p:?}");
+    assert!(p[0].abs() < 0.1 && p[1] > 0.3, "{p:?}");
+    assert!(
+        (n[2] + 1.0).abs() < 1e-5 && n[0].abs() < 1e-5 && n[1].abs() < 1e-5,
+        "{n:?}"
+    );
+    // The left wall (x = −1, normal +x) in the left column's middle.
+    let j = 16 * 33;
+    assert!(
+        (fh.position[j][0] + 1.0).abs() < 1e-3,
+        "{:?}",
+        fh.position[j]
+    );
+    assert!((fh.normal[j][0] - 1.0).abs() < 1e-5, "{:?}", fh.normal[j]);
+}

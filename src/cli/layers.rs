@@ -23,8 +23,11 @@ pub struct LayerArgs {
     #[arg(long = "spectral-range", value_name = "A,B", value_parser = parse_range,
           allow_hyphen_values = true)]
     pub spectral_range: Option<(f32, f32)>,
-    /// Extra layers (comma-separated): variance (variance.Y, of the pixel's mean luminance).
-    #[arg(long = "aov", value_name = "LIST", value_delimiter = ',', value_parser = ["variance"])]
+    /// Extra layers (comma-separated): variance (variance.Y, of the pixel's mean luminance);
+    /// position, normal, depth (P.X/Y/Z, N.X/Y/Z, Z of the first hit in camera space; any
+    /// one writes the three).
+    #[arg(long = "aov", value_name = "LIST", value_delimiter = ',',
+          value_parser = ["variance", "position", "normal", "depth"])]
     pub aov: Vec<String>,
 }
 
@@ -57,6 +60,7 @@ impl LayerArgs {
         let layers = LayerOptions {
             spectral: bins,
             variance: self.aov.iter().any(|a| a == "variance"),
+            first_hit: self.aov.iter().any(|a| a != "variance"),
         };
         layers.check(integrator)?;
         Ok(layers)

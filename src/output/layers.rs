@@ -12,7 +12,11 @@
 //!
 //! **AOVs.** `variance.Y`: per pixel, the estimated variance of the pixel's mean luminance
 //! (cd/m²)², × 2^(2·exposure), from the film's even and odd halves (`sensor::film`); −1 where
-//! a pixel has fewer than 2 samples.
+//! a pixel has fewer than 2 samples. `P.X/Y/Z`, `N.X/Y/Z`, `Z` (`--aov position`, `normal` or
+//! `depth`: the three come together): the mean over the pixel's samples of the first surface
+//! its camera ray meets (pbrt-v4's GBufferFilm conventions): position and geometric normal in
+//! OpenEXR's camera space (`worldToCamera`: x right, y up, z along the view, metres), and the
+//! depth Z = P.z; 0 where no sample hit anything.
 
 use super::exr::ExrLayers;
 use crate::sensor::spectral_film::SpectralImage;
@@ -34,6 +38,16 @@ pub fn exr_layers(layers: &LayerImages) -> ExrLayers {
     }
     if let Some(v) = &layers.variance {
         out.channels.push((VARIANCE_CHANNEL.to_string(), v.clone()));
+    }
+    if let Some(f) = &layers.first_hit {
+        for (c, axis) in ["X", "Y", "Z"].iter().enumerate() {
+            let p = f.position.iter().map(|v| v[c]).collect();
+            out.channels.push((format!("P.{axis}"), p));
+            let n = f.normal.iter().map(|v| v[c]).collect();
+            out.channels.push((format!("N.{axis}"), n));
+        }
+        out.channels
+            .push(("Z".into(), f.position.iter().map(|v| v[2]).collect()));
     }
     out
 }

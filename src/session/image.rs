@@ -207,7 +207,8 @@ impl<'a> ImageSession<'a> {
         let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h, Grid::for_scale(scene.camera.exposure_scale as f64));
-        let layers = LayerFilms::new(w, h, &opts.layers, film.grid());
+        let to_camera = scene.camera.world_to_exr_camera();
+        let layers = LayerFilms::new(w, h, &opts.layers, film.grid(), to_camera);
         let settings = Settings {
             max_depth: cap,
             filter: texture_filter(opts),
@@ -466,6 +467,7 @@ impl<'a> ImageSession<'a> {
         let estimator = &*self.estimator;
         let max_depth = self.cap;
         let layers = &self.layers;
+        let scene = self.scene;
         let results: Vec<TileSums> = self.pool.install(|| {
             self.tiles
                 .par_iter()
@@ -478,9 +480,9 @@ impl<'a> ImageSession<'a> {
                         );
                         let lt = LayerTile::new(layers, tile);
                         if task.hero_only {
-                            render_tile::<true>(estimator, tile, &task, (acc, lt), ws)
+                            render_tile::<true>(estimator, scene, tile, &task, (acc, lt), ws)
                         } else {
-                            render_tile::<false>(estimator, tile, &task, (acc, lt), ws)
+                            render_tile::<false>(estimator, scene, tile, &task, (acc, lt), ws)
                         }
                     },
                 )
@@ -606,6 +608,7 @@ type TileSums = (TileAccumulator, Vec<Fixed3>, u64, LayerTile);
 /// (a constant, so the 4-wavelength loop has no per-sample test).
 fn render_tile<const HERO_ONLY: bool>(
     estimator: &dyn Estimator,
+    scene: &Scene,
     tile: &Tile,
     task: &Segment,
     (mut acc, mut layers): (TileAccumulator, LayerTile),
@@ -635,6 +638,7 @@ fn render_tile<const HERO_ONLY: bool>(
                 let dropped = acc.dropped;
                 acc.add(k, &ws.record, &lambda, s);
                 layers.add(k, &ws.record, &lambda, acc.dropped != dropped);
+                layers.add_first_hit(k, scene, film, u_lens);
                 // The sample's own value (0 when it was dropped), rounded to the grid.
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
                 let (t, c) = task.grid.triple(own);
