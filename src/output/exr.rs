@@ -138,21 +138,14 @@ pub fn write_with_channels(
     white_xy: [f32; 2],
     meta: &ExrMetadata,
 ) -> Result<()> {
-    let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
-    check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
-    check_finite(width, rgb, xyz).map_err(fail)?;
-    for (name, values) in extra {
-        if values.len() != rgb.len() || !values.iter().all(|v| v.is_finite()) {
-            return Err(fail(format!(
-                "channel {name} needs one finite value per pixel"
-            )));
-        }
-    }
-    if !white_xy.iter().all(|c| c.is_finite()) {
-        return Err(fail(format!("white point {white_xy:?} is not finite")));
-    }
-    let image = build_image(width, height, rgb, xyz, extra, white_xy, meta);
-    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+    let layers = ExrLayers {
+        channels: extra
+            .iter()
+            .map(|(n, v)| (n.to_string(), v.clone()))
+            .collect(),
+        strings: Vec::new(),
+    };
+    write_with_layers(path, width, height, rgb, xyz, &layers, white_xy, meta)
 }
 
 /// Extra float32 channels and string attributes written beside R, G, B and XYZ
@@ -192,6 +185,9 @@ pub fn write_with_layers(
                 "channel {name} needs one finite value per pixel"
             )));
         }
+    }
+    if !white_xy.iter().all(|c| c.is_finite()) {
+        return Err(fail(format!("white point {white_xy:?} is not finite")));
     }
     let mut image = build_image(width, height, rgb, xyz, &extra, white_xy, meta);
     let other = &mut image.layer_data.attributes.other;
