@@ -182,5 +182,6 @@ fn output(scene: &scene::Scene, m: &part::Merged) -> Result<RenderOutput> {
         depth_cut: DepthCut::new(max_depth, &cut.sums(), cut.capped, cut.limited),
         clamped: m.film.clamped(),
         crop: None,
+        layers: Default::default(),
     })
 }

@@ -12,6 +12,7 @@ mod crop;
 mod frames;
 mod info;
 mod interrupt;
+mod layers;
 mod lights;
 mod merge;
 mod meter;

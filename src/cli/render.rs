@@ -8,13 +8,14 @@ use super::common::{
 };
 use super::frames::{frame_path, parse_frames, FrameArgs, FrameRange};
 use super::interrupt;
+use super::layers::LayerArgs;
 use super::parts::PartArgs;
 use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::integrator::bidir::strategies::StrategyImage;
 use crate::integrator::Integrator;
 use crate::output::target::{self, Format, Target};
-use crate::output::{exr, png};
+use crate::output::{self, exr, png};
 use crate::sampling::SamplerKind;
 use crate::session::image::xyz_to_rgb;
 use crate::session::{self, ImageSession, Observer, Progressive, RenderOptions, RenderOutput};
@@ -62,6 +63,8 @@ struct RenderArgs {
     machinery: MachineryArgs,
     #[command(flatten)]
     part: PartArgs,
+    #[command(flatten)]
+    layers: LayerArgs,
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
     strategies: Option<PathBuf>,
@@ -144,6 +147,16 @@ pub fn command() -> clap::Command {
 
 fn run(args: &RenderArgs) -> Result<()> {
     let opts = options(args)?;
+    args.layers.check_state(
+        &opts.layers,
+        args.part.is_part(),
+        args.checkpoint.is_some() || args.resume.is_some(),
+    )?;
+    if args.part.crop.is_some() && (opts.layers.any() || opts.layers.variance) {
+        return Err(Error::option(
+            "--crop writes the window's image only: it does not go with --spectral or --aov",
+        ));
+    }
     args.part.check(
         &opts,
         args.strategies.is_some(),
@@ -362,8 +375,15 @@ pub(super) fn write_image(
     if let Some(c) = out.crop {
         return super::crop::write_window(path, preview, out, c, white, meta);
     }
-    exr::write(
-        path, out.width, out.height, &out.rgb, &out.xyz, white, &meta,
+    exr::write_with_layers(
+        path,
+        out.width,
+        out.height,
+        &out.rgb,
+        &out.xyz,
+        &output::layers::exr_layers(&out.layers),
+        white,
+        &meta,
     )?;
     if let Some((preview, exposure)) = preview {
         png::write_preview(preview, out.width, out.height, &out.rgb, exposure)?;
@@ -476,7 +496,10 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
     if args.threads == Some(0) {
         return Err(Error::option("--threads must be at least 1"));
     }
+    let integrator = args.layers.integrator(integrator);
+    let layers = args.layers.options(&integrator)?;
     Ok(RenderOptions {
+        layers,
         spp: args.spp,
         time_budget: args.time,
         seed: args.seed,

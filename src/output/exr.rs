@@ -138,10 +138,48 @@ pub fn write_with_channels(
     white_xy: [f32; 2],
     meta: &ExrMetadata,
 ) -> Result<()> {
+    let layers = ExrLayers {
+        channels: extra
+            .iter()
+            .map(|(n, v)| (n.to_string(), v.clone()))
+            .collect(),
+        strings: Vec::new(),
+    };
+    write_with_layers(path, width, height, rgb, xyz, &layers, white_xy, meta)
+}
+
+/// Extra float32 channels and string attributes written beside R, G, B and XYZ
+/// (`output::layers`: spectral radiance, AOVs).
+#[derive(Clone, Debug, Default)]
+pub struct ExrLayers {
+    /// (channel name, one value per pixel, row-major).
+    pub channels: Vec<(String, Vec<f32>)>,
+    /// (attribute name, string value) in the header.
+    pub strings: Vec<(String, String)>,
+}
+
+/// [`write()`] with the `layers`' channels and string attributes; every value must be
+/// finite, and an attribute may not replace one of the module's.
+#[allow(clippy::too_many_arguments)]
+pub fn write_with_layers(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    layers: &ExrLayers,
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> Result<()> {
     let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
     check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
     check_finite(width, rgb, xyz).map_err(fail)?;
-    for (name, values) in extra {
+    let extra: Vec<(&str, Vec<f32>)> = layers
+        .channels
+        .iter()
+        .map(|(n, v)| (n.as_str(), v.clone()))
+        .collect();
+    for (name, values) in &extra {
         if values.len() != rgb.len() || !values.iter().all(|v| v.is_finite()) {
             return Err(fail(format!(
                 "channel {name} needs one finite value per pixel"
@@ -151,7 +189,16 @@ pub fn write_with_channels(
     if !white_xy.iter().all(|c| c.is_finite()) {
         return Err(fail(format!("white point {white_xy:?} is not finite")));
     }
-    let image = build_image(width, height, rgb, xyz, extra, white_xy, meta);
+    let mut image = build_image(width, height, rgb, xyz, &extra, white_xy, meta);
+    let other = &mut image.layer_data.attributes.other;
+    for (name, value) in &layers.strings {
+        if other
+            .insert(text(name), AttributeValue::Text(text(value)))
+            .is_some()
+        {
+            return Err(fail(format!("attribute {name} is written twice")));
+        }
+    }
     write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
 }
 

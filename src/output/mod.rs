@@ -14,6 +14,7 @@ pub mod exr;
 pub mod json;
 #[cfg(not(feature = "testing"))]
 pub(crate) mod json;
+pub mod layers;
 pub mod map;
 pub mod plot;
 pub mod png;

@@ -61,7 +61,7 @@ impl Tile {
     }
 
     /// Film indices of the tile's pixels, row by row.
-    fn pixels(&self, width: usize) -> impl Iterator<Item = usize> + '_ {
+    pub(crate) fn pixels(&self, width: usize) -> impl Iterator<Item = usize> + '_ {
         (self.y0..self.y1).flat_map(move |y| (self.x0..self.x1).map(move |x| y * width + x))
     }
 }

@@ -31,6 +31,7 @@
 use super::auto::AutoReport;
 use super::checkpoint::{self, Checkpoint};
 use super::crop::Crop;
+use super::layers::{LayerFilms, LayerImages, LayerOptions, LayerTile};
 use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
@@ -97,6 +98,8 @@ pub struct RenderOptions {
     /// integrators that keep its dimension layout (`Integrator::low_discrepancy`), else
     /// independent ones.
     pub sampler: SamplerKind,
+    /// Extra layers: spectral radiance, AOVs (`session::layers`).
+    pub layers: LayerOptions,
 }
 
 /// The wavelength counts [`RenderOptions::wavelengths`] may take.
@@ -116,6 +119,7 @@ impl Default for RenderOptions {
             wavelengths: 4,
             max_memory: None,
             sampler: SamplerKind::ZSobol,
+            layers: LayerOptions::default(),
         }
     }
 }
@@ -144,6 +148,8 @@ pub struct RenderOutput {
     /// The window rendered (`--crop`), when not the whole image: `xyz` and `rgb` are the
     /// whole image's, meaningful inside the window only.
     pub crop: Option<Crop>,
+    /// The extra layers asked for (`RenderOptions::layers`).
+    pub layers: LayerImages,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -161,6 +167,7 @@ pub struct ImageSession<'a> {
     estimator: Box<dyn Estimator + 'a>,
     splats: bool,
     film: Film,
+    layers: LayerFilms,
     tiles: Vec<Tile>,
     strategy_count: usize,
     strategy_films: Option<StrategyFilms>,
@@ -209,9 +216,12 @@ impl<'a> ImageSession<'a> {
             &super::memory::image(scene, opts),
             opts.max_memory,
         )?;
+        opts.layers.check(&opts.integrator)?;
         let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h, Grid::for_scale(scene.camera.exposure_scale as f64));
+        let to_camera = scene.camera.world_to_exr_camera();
+        let layers = LayerFilms::new(w, h, &opts.layers, film.grid(), to_camera);
         let settings = Settings {
             max_depth: cap,
             filter: texture_filter(opts),
@@ -225,6 +235,7 @@ impl<'a> ImageSession<'a> {
             splats,
             tiles: film.tiles(TILE_SIZE),
             film,
+            layers,
             strategy_count,
             strategy_films: (strategy_count > 0).then(|| StrategyFilms::new(w, h, cap)),
             chunk: if splats {
@@ -426,8 +437,17 @@ impl<'a> ImageSession<'a> {
                 self.cut.capped,
                 self.cut.limited,
             ),
-            clamped: self.film.clamped(),
+            clamped: self.film.clamped() + self.layers.clamped(),
             crop: self.crop,
+            layers: LayerImages {
+                variance: self.opts.layers.variance.then(|| {
+                    let v = self.film.variance_y(exposure);
+                    v.iter()
+                        .map(|&v| if v.is_finite() { v as f32 } else { -1.0 })
+                        .collect()
+                }),
+                ..self.layers.images(exposure)
+            },
         }
     }
 
@@ -484,6 +504,8 @@ impl<'a> ImageSession<'a> {
         };
         let estimator = &*self.estimator;
         let max_depth = self.cap;
+        let layers = &self.layers;
+        let scene = self.scene;
         let results: Vec<TileSums> = self.pool.install(|| {
             self.tiles
                 .par_iter()
@@ -494,17 +516,19 @@ impl<'a> ImageSession<'a> {
                             vec![[0.0; 3]; tile.pixel_count()],
                             task.strategy_count,
                         );
+                        let lt = LayerTile::new(layers, tile);
                         if task.hero_only {
-                            render_tile::<true>(estimator, tile, &task, acc, ws)
+                            render_tile::<true>(estimator, scene, tile, &task, (acc, lt), ws)
                         } else {
-                            render_tile::<false>(estimator, tile, &task, acc, ws)
+                            render_tile::<false>(estimator, scene, tile, &task, (acc, lt), ws)
                         }
                     },
                 )
                 .collect()
         });
-        for (tile, (r, fixed, clamped)) in self.tiles.iter().zip(results) {
+        for (tile, (r, fixed, clamped, lt)) in self.tiles.iter().zip(results) {
             self.film.store_tile(tile, &fixed, &r.odd_y, count, clamped);
+            self.layers.store_tile(tile, &lt, count);
             self.film.add_splats(&r.splats, &r.odd_splats);
             self.cut.merge(&r.cut);
             if let (Some(sf), Some(st)) = (&mut self.strategy_films, &r.strategies) {
@@ -636,18 +660,19 @@ struct Segment {
     grid: Grid,
 }
 
-/// A tile's accumulator (its own-pixel sums emptied), its own-pixel sums on the grid and the
-/// terms it clamped.
-type TileSums = (TileAccumulator, Vec<Fixed3>, u64);
+/// A tile's accumulator (its own-pixel sums emptied), its own-pixel sums on the grid, the
+/// terms it clamped and its layers' sums.
+type TileSums = (TileAccumulator, Vec<Fixed3>, u64, LayerTile);
 
 /// Renders a tile's samples into `acc`: per-pixel XYZ sums, splats and the number of
 /// non-finite samples dropped. `HERO_ONLY`: every sample carries its hero wavelength alone
 /// (a constant, so the 4-wavelength loop has no per-sample test).
 fn render_tile<const HERO_ONLY: bool>(
     estimator: &dyn Estimator,
+    scene: &Scene,
     tile: &Tile,
     task: &Segment,
-    mut acc: TileAccumulator,
+    (mut acc, mut layers): (TileAccumulator, LayerTile),
     ws: &mut Workspace,
 ) -> TileSums {
     let mut fixed = vec![[0; 3]; tile.pixel_count()];
@@ -673,7 +698,10 @@ fn render_tile<const HERO_ONLY: bool>(
                     // VCM replaces the sample's wavelengths by its iteration's tuple.
                     lambda.terminate_secondary();
                 }
+                let dropped = acc.dropped;
                 acc.add(k, &ws.record, &lambda, s);
+                layers.add(k, &ws.record, &lambda, acc.dropped != dropped);
+                layers.add_first_hit(k, scene, film, u_lens);
                 // The sample's own value (0 when it was dropped), rounded to the grid.
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
                 let (t, c) = task.grid.triple(own);
@@ -682,5 +710,5 @@ fn render_tile<const HERO_ONLY: bool>(
             k += 1;
         }
     }
-    (acc, fixed, clamped)
+    (acc, fixed, clamped, layers)
 }

@@ -103,6 +103,18 @@ pub fn image(scene: &Scene, opts: &RenderOptions) -> MemoryEstimate {
         e.add("splat lists", samples.saturating_mul((depth + 1) * SPLAT));
     }
     e.add("output", pixels.saturating_mul(OUTPUT));
+    if let Some(bins) = opts.layers.spectral {
+        // i128 sums and a u64 count per pixel, and f32 images on output.
+        let per_pixel = bins.count as u64 * (16 + 4) + 8;
+        e.add("spectral bins", pixels.saturating_mul(per_pixel));
+    }
+    if opts.layers.first_hit {
+        // Six i128 sums and a count per pixel, and six f32 images on output.
+        e.add(
+            "first-hit layers",
+            pixels.saturating_mul(6 * 16 + 8 + 6 * 4),
+        );
+    }
     if opts.strategies {
         let n = strategies::count(cap.min(strategies::MAX_DEPTH)) as u64;
         e.add("strategy images", pixels.saturating_mul(n * STRATEGY));

@@ -15,6 +15,7 @@ pub mod checkpoint;
 pub mod crop;
 pub mod depth_cut;
 pub mod image;
+pub mod layers;
 pub mod memory;
 pub mod meter;
 pub mod part;

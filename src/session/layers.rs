@@ -1,0 +1,237 @@
+//! The image's extra layers beside RGB and XYZ (`--spectral`, `--aov`): what a render is asked
+//! for ([`LayerOptions`]), what a tile collects per sample ([`LayerTile`], allocated once per
+//! tile and segment, never per sample) and the films that hold the sums ([`LayerFilms`]).
+//! Every sum is on a fixed grid (`sensor::grid_sum`), so the layers, like the image, depend on
+//! the seed and the sample count only.
+
+use crate::error::{Error, Result};
+use crate::integrator::bidir::record::SampleRecord;
+use crate::integrator::Integrator;
+use crate::scene::{Hit, Scene};
+use crate::sensor::film::Tile;
+use crate::sensor::grid_sum::Grid;
+use crate::sensor::spectral_film::{Binner, SpectralBins, SpectralFilm, SpectralImage};
+use crate::spectral::SampledWavelengths;
+use glam::Mat4;
+
+/// Grid of the first-hit sums (`sensor::grid_sum`): 2^−40 m ≈ 1e−12 m for positions, and
+/// normals to 1e−12; a term is clamped at 2^100 units, sums of 2^27 samples of 2^60 m fit.
+const FIRST_HIT_GRID: Grid = Grid { exponent: 40 };
+
+/// The extra layers a render writes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LayerOptions {
+    /// Spectral radiance in these bins (`sensor::spectral_film`).
+    pub spectral: Option<SpectralBins>,
+    /// The per-pixel variance of the mean luminance (`--aov variance`, from the film's even
+    /// and odd halves, `sensor::film`).
+    pub variance: bool,
+    /// The first hit's position, normal and depth (`--aov position,normal,depth`).
+    pub first_hit: bool,
+}
+
+impl LayerOptions {
+    /// Whether any layer needs per-sample work.
+    pub fn any(&self) -> bool {
+        self.spectral.is_some() || self.first_hit
+    }
+
+    /// Refuses layers the integrator cannot fill: the spectral film bins the sample's own
+    /// pixel, so integrators that splat (light paths reaching any pixel) are refused.
+    pub fn check(&self, integrator: &Integrator) -> Result<()> {
+        if self.spectral.is_some() && integrator.capabilities().splats {
+            return Err(Error::option(format!(
+                "--spectral bins each sample's own pixel: integrator {} splats light paths \
+                 over the image, which are not binned (use --integrator path)",
+                integrator.name()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// What one tile collects for the layers over a segment.
+#[derive(Clone, Debug, Default)]
+pub struct LayerTile {
+    binner: Option<Binner>,
+    bins: usize,
+    /// `spectral[k * bins + b]`, k the tile pixel.
+    spectral: Vec<i128>,
+    clamped: u64,
+    /// World to camera space (OpenEXR's, as pbrt-v4's GBufferFilm writes), when first hits
+    /// are recorded.
+    to_camera: Option<Mat4>,
+    /// Per tile pixel: P.x, P.y, P.z, N.x, N.y, N.z summed over the samples that hit.
+    first_hit: Vec<FirstHitSums>,
+}
+
+/// A pixel's first-hit sums on [`FIRST_HIT_GRID`] and the samples that hit something.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FirstHitSums {
+    pub sums: [i128; 6],
+    pub hits: u64,
+}
+
+impl LayerTile {
+    /// Empty sums for `tile` (nothing allocated when no layer is asked for).
+    pub fn new(films: &LayerFilms, tile: &Tile) -> LayerTile {
+        let mut t = LayerTile::default();
+        if let Some(f) = &films.spectral {
+            t.binner = Some(f.binner());
+            t.bins = f.bins().count;
+            t.spectral = vec![0; tile.pixel_count() * f.bins().count];
+        }
+        if let Some(fh) = &films.first_hit {
+            t.to_camera = Some(fh.to_camera);
+            t.first_hit = vec![FirstHitSums::default(); tile.pixel_count()];
+        }
+        t
+    }
+
+    /// Traces the sample's camera ray (`film`, `u_lens` as the estimator had them) to its first
+    /// hit and adds its camera-space position and geometric normal (pbrt-v4's GBufferFilm
+    /// conventions: the surface the camera ray meets first, camera space).
+    #[inline]
+    pub fn add_first_hit(&mut self, k: usize, scene: &Scene, film: [f32; 2], u_lens: [f32; 2]) {
+        let Some(m) = self.to_camera else {
+            return;
+        };
+        let (ray, t_max) = scene.camera.generate_ray(film, u_lens);
+        let (p, n) = match scene.intersect(&ray, t_max) {
+            Some(Hit::Surface(si)) => (si.p, si.ng),
+            Some(Hit::Light { hit, .. }) => (hit.p, hit.n),
+            None => return,
+        };
+        let (pc, nc) = (
+            m.transform_point3(p),
+            m.transform_vector3(n).normalize_or_zero(),
+        );
+        let px = &mut self.first_hit[k];
+        for (c, v) in [pc.x, pc.y, pc.z, nc.x, nc.y, nc.z].into_iter().enumerate() {
+            let (t, clamped) = FIRST_HIT_GRID.term(f64::from(v));
+            px.sums[c] = px.sums[c].saturating_add(t);
+            self.clamped += u64::from(clamped);
+        }
+        px.hits += 1;
+    }
+
+    /// Adds a finished sample of tile pixel `k` (its wavelengths final); `dropped`: the sample
+    /// was non-finite and dropped from the image, so from the layers too.
+    #[inline]
+    pub fn add(
+        &mut self,
+        k: usize,
+        rec: &SampleRecord,
+        lambda: &SampledWavelengths,
+        dropped: bool,
+    ) {
+        if dropped {
+            return;
+        }
+        if let Some(binner) = &self.binner {
+            let sums = &mut self.spectral[k * self.bins..(k + 1) * self.bins];
+            self.clamped += binner.add(sums, rec.own(lambda), lambda);
+        }
+    }
+}
+
+/// The films of the layers asked for.
+#[derive(Clone, Debug, Default)]
+pub struct LayerFilms {
+    clamped: u64,
+    pub spectral: Option<SpectralFilm>,
+    pub first_hit: Option<FirstHitFilm>,
+}
+
+/// Per pixel, the first hits' sums (`LayerTile::add_first_hit`).
+#[derive(Clone, Debug)]
+pub struct FirstHitFilm {
+    to_camera: Mat4,
+    pixels: Vec<FirstHitSums>,
+    width: usize,
+}
+
+/// The first-hit layers: per pixel, the mean camera-space position and geometric normal of
+/// the samples that hit a surface (0 where none did), and the depth Z = P.z.
+#[derive(Clone, Debug)]
+pub struct FirstHitImages {
+    pub position: Vec<[f32; 3]>,
+    pub normal: Vec<[f32; 3]>,
+}
+
+/// The layers of a rendered image.
+#[derive(Clone, Debug, Default)]
+pub struct LayerImages {
+    pub spectral: Option<SpectralImage>,
+    /// Per pixel, the estimated variance of the mean luminance in (cd/m²)² (× exposure²);
+    /// −1 where a pixel has fewer than 2 samples (no estimate).
+    pub variance: Option<Vec<f32>>,
+    pub first_hit: Option<FirstHitImages>,
+}
+
+impl LayerFilms {
+    pub fn new(
+        width: usize,
+        height: usize,
+        opts: &LayerOptions,
+        grid: Grid,
+        to_camera: Mat4,
+    ) -> LayerFilms {
+        LayerFilms {
+            clamped: 0,
+            spectral: opts
+                .spectral
+                .map(|bins| SpectralFilm::new(width, height, bins, grid)),
+            first_hit: opts.first_hit.then(|| FirstHitFilm {
+                to_camera,
+                pixels: vec![FirstHitSums::default(); width * height],
+                width,
+            }),
+        }
+    }
+
+    /// Adds a tile's sums of `samples` samples per pixel.
+    pub fn store_tile(&mut self, tile: &Tile, t: &LayerTile, samples: u64) {
+        if let Some(f) = &mut self.spectral {
+            f.store_tile(tile, &t.spectral, samples, 0);
+        }
+        if let Some(f) = &mut self.first_hit {
+            for (k, i) in tile.pixels(f.width).enumerate() {
+                let (acc, add) = (&mut f.pixels[i], &t.first_hit[k]);
+                for c in 0..6 {
+                    acc.sums[c] = acc.sums[c].saturating_add(add.sums[c]);
+                }
+                acc.hits += add.hits;
+            }
+        }
+        self.clamped += t.clamped;
+    }
+
+    /// Terms clamped and sums saturated.
+    pub fn clamped(&self) -> u64 {
+        self.clamped + self.spectral.as_ref().map_or(0, SpectralFilm::clamped)
+    }
+
+    /// The layers times `scale` (the camera exposure).
+    pub fn images(&self, scale: f64) -> LayerImages {
+        LayerImages {
+            spectral: self.spectral.as_ref().map(|f| SpectralImage {
+                bins: f.bins(),
+                images: f.images(scale),
+            }),
+            variance: None,
+            first_hit: self.first_hit.as_ref().map(|f| {
+                let mean = |p: &FirstHitSums, c0: usize| -> [f32; 3] {
+                    std::array::from_fn(|c| match p.hits {
+                        0 => 0.0,
+                        n => (FIRST_HIT_GRID.value(p.sums[c0 + c]) / n as f64) as f32,
+                    })
+                };
+                FirstHitImages {
+                    position: f.pixels.iter().map(|p| mean(p, 0)).collect(),
+                    normal: f.pixels.iter().map(|p| mean(p, 3)).collect(),
+                }
+            }),
+        }
+    }
+}
