@@ -5,6 +5,7 @@
 //! the path the parts recorded, or `--stage`) for the EXR's camera metadata, and must still
 //! have the content the parts were rendered from.
 
+use super::color::PreviewArgs;
 use super::common::{clap_message, print_summary, warn_clamped, warn_depth_cut, warn_dropped};
 use super::parts;
 use super::render::write_image;
@@ -33,16 +34,8 @@ struct MergeArgs {
     /// the same).
     #[arg(long)]
     stage: Option<PathBuf>,
-    /// Also write an 8-bit sRGB PNG preview.
-    #[arg(long)]
-    preview: Option<PathBuf>,
-    /// Exposure of the preview in stops (the EXR stays absolute).
-    #[arg(
-        long = "preview-exposure",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    preview_exposure: f32,
+    #[command(flatten)]
+    color: PreviewArgs,
 }
 
 pub fn main(argv: Vec<OsString>) -> Result<()> {
@@ -58,7 +51,8 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
 
 fn run(args: &MergeArgs) -> Result<()> {
     let mut targets = vec![Target::new("-o", &args.output, Format::Exr)];
-    if let Some(p) = &args.preview {
+    let color = args.color.resolve()?;
+    if let Some(p) = &args.color.preview {
         targets.push(Target::new("--preview", p, Format::Png));
     }
     target::check(&targets)?;
@@ -91,8 +85,15 @@ fn run(args: &MergeArgs) -> Result<()> {
     warn_clamped(out.clamped);
     warn_depth_cut(out.depth_cut.as_ref(), "the image's mean luminance");
     let made = parts::made(&stage, &scene, &integrator, id, &out)?;
-    let preview = args.preview.as_deref().map(|p| (p, args.preview_exposure));
-    write_image(&made, integrator.name().into(), &args.output, preview, &out)?;
+    let preview = args.color.preview.as_deref();
+    write_image(
+        &made,
+        integrator.name().into(),
+        &args.output,
+        preview,
+        &color,
+        &out,
+    )?;
     eprintln!(
         "merged {} parts into {} ({}x{}, {} spp, {:.2} s of rendering)",
         states.len(),

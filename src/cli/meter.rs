@@ -24,7 +24,8 @@ use super::frames::FrameArgs;
 use super::interrupt;
 use crate::error::{Error, Result};
 use crate::output::json;
-use crate::output::map::{self, num, IlluminanceMap};
+use crate::output::map::{self, IlluminanceMap};
+use crate::output::rounding::{significant, with_confidence};
 use crate::output::target::{self, Format, Target};
 use crate::scene;
 use crate::sensor::meter::{self, Meter, MeterKind};
@@ -57,6 +58,9 @@ struct MeterArgs {
     /// Cells along u and v.
     #[arg(long = "n", value_name = "NU,NV", allow_hyphen_values = true)]
     n: Option<String>,
+    /// A fixed colour scale for the map's PNG, in lx (default: from the readings).
+    #[arg(long, value_name = "MIN,MAX", value_parser = parse_range, allow_hyphen_values = true)]
+    range: Option<(f64, f64)>,
     /// Base name of the grid outputs: BASE.csv, BASE.json, BASE.png (default: map).
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
@@ -238,17 +242,12 @@ fn run_grid(
         nv,
         normal: g.normal.into(),
         readings: run.readings.clone(),
+        range: args.range,
+        meters_per_unit: m.x_axis.truncate().length(),
     };
     let base = output_base(args.output.as_deref());
     let written = map.write(&base)?;
-    let s = map.summary();
-    let line = format!(
-        "E_min = {} lx, E_avg = {} lx, E_max = {} lx, U0 = {}",
-        num(s.e_min),
-        num(s.e_avg),
-        num(s.e_max),
-        num(s.u0)
-    );
+    let line = summary_line(&map);
     if args.json {
         print!("{}", map.json()?);
         eprintln!("{line}");
@@ -263,6 +262,26 @@ fn run_grid(
         run.wall_time_s
     );
     Ok(())
+}
+
+/// EN 12464-1's figures rounded to their confidence: E_min and E_max with their cell's
+/// 95 % half-width, E_avg with that of the mean of independent readings (√Σci² / n), U0 to
+/// three significant digits.
+fn summary_line(map: &IlluminanceMap) -> String {
+    let s = map.summary();
+    let r = &map.readings;
+    let by_value = |a: &&Reading, b: &&Reading| a.value.total_cmp(&b.value);
+    let (Some(lo), Some(hi)) = (r.iter().min_by(by_value), r.iter().max_by(by_value)) else {
+        return "no readings".into();
+    };
+    let ci_avg = r.iter().map(|x| x.ci95 * x.ci95).sum::<f64>().sqrt() / r.len() as f64;
+    format!(
+        "E_min = {} lx, E_avg = {} lx, E_max = {} lx, U0 = {}",
+        with_confidence(lo.value, lo.ci95),
+        with_confidence(s.e_avg, ci_avg),
+        with_confidence(hi.value, hi.ci95),
+        significant(s.u0, 3)
+    )
 }
 
 /// Measures to the end, or until a signal arrives: then the unfinished readings are marked
@@ -402,7 +421,7 @@ fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
         MeterKind::Luminance => "looking along",
     };
     format!(
-        "{} at ({}, {}, {}) {what} ({}, {}, {}): {:.6} {} ± {:.3} (95% CI, {} samples){}",
+        "{} at ({}, {}, {}) {what} ({}, {}, {}): {} {} (95% CI, {} samples){}",
         kind.name(),
         p.x,
         p.y,
@@ -410,9 +429,8 @@ fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
         d.x,
         d.y,
         d.z,
-        r.value,
+        with_confidence(r.value, r.ci95),
         kind.unit(),
-        r.ci95,
         r.samples,
         match r.capped {
             Some(Cap::Interrupted) => " [interrupted]",
@@ -446,6 +464,7 @@ fn request(a: &MeterArgs) -> Result<Request> {
         (a.v.is_some(), "--v"),
         (a.n.is_some(), "--n"),
         (a.output.is_some(), "-o"),
+        (a.range.is_some(), "--range"),
     ] {
         if given {
             return Err(Error::option(format!(
@@ -535,6 +554,21 @@ fn grid_request(a: &MeterArgs) -> Result<Request> {
 }
 
 /// Three comma-separated finite numbers.
+/// `--range MIN,MAX`: finite, MIN < MAX.
+fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
+    let bad = || format!("'{s}': expected MIN,MAX in lx with MIN < MAX, e.g. 0,500");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let (a, b) = (
+        a.trim().parse::<f64>().map_err(|_| bad())?,
+        b.trim().parse::<f64>().map_err(|_| bad())?,
+    );
+    if a.is_finite() && b.is_finite() && a < b {
+        Ok((a, b))
+    } else {
+        Err(bad())
+    }
+}
+
 fn vector(flag: &str, s: &str) -> Result<DVec3> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let bad = || {
