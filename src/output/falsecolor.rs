@@ -35,6 +35,8 @@ const INK: [u8; 3] = [20, 20, 20];
 const MARGIN: i64 = 12;
 const BAR_W: i64 = 24;
 const LEGEND_MIN_H: usize = 240;
+/// From the bar to its labels: clear of the tick mark, so that it does not read as a minus.
+const LABEL_GAP: i64 = 16;
 /// The unit over the legend (the font has no superscript).
 pub const UNIT: &str = "cd/m2";
 
@@ -94,7 +96,7 @@ impl FalseColor {
             .map(|v| text_width(&label(*v), 2))
             .max()
             .unwrap_or(0) as i64;
-        let image_x = bar_x + BAR_W + 8 + labels + 2 * MARGIN;
+        let image_x = bar_x + BAR_W + LABEL_GAP + labels + 2 * MARGIN;
         let bar_h = height.max(LEGEND_MIN_H);
         Layout {
             image_x,
@@ -166,7 +168,13 @@ impl FalseColor {
                 c.line((l.bar_x, y), (l.bar_x + BAR_W - 1, y), ink);
             }
             c.line((l.bar_x + BAR_W, y), (l.bar_x + BAR_W + 4, y), INK);
-            c.text(l.bar_x + BAR_W + 8, y - GLYPH_H as i64, &label(*v), 2, INK);
+            c.text(
+                l.bar_x + BAR_W + LABEL_GAP,
+                y - GLYPH_H as i64,
+                &label(*v),
+                2,
+                INK,
+            );
         }
         c.text(l.bar_x, MARGIN, UNIT, 2, INK);
     }
