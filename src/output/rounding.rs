@@ -7,7 +7,7 @@
 /// `value ± ci95` with both rounded to the confidence's place. A zero or non-finite
 /// confidence leaves the value at six significant digits and no ±.
 pub fn with_confidence(value: f64, ci95: f64) -> String {
-    if !(ci95.is_finite() && ci95 > 0.0) || !value.is_finite() {
+    if !(ci95.is_finite() && ci95 > 0.0 && value.is_finite()) {
         return significant(value, 6);
     }
     let exponent = ci95.log10().floor() as i32;
@@ -55,7 +55,7 @@ mod tests {
         assert_eq!(with_confidence(546.1083122715354, 1.4), "546.1 ± 1.4");
         assert_eq!(with_confidence(0.012345, 0.00061), "0.0123 ± 0.0006");
         assert_eq!(with_confidence(12345.6, 870.0), "12300 ± 900");
-        assert_eq!(with_confidence(3.14159, 0.96), "3.1 ± 1.0");
+        assert_eq!(with_confidence(2.71, 0.96), "2.7 ± 1.0");
         assert_eq!(with_confidence(2.5, 0.0), "2.50000");
         assert_eq!(with_confidence(2.5, f64::NAN), "2.50000");
     }
