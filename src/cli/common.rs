@@ -416,6 +416,7 @@ impl Made<'_> {
             scene: self.stage.display().to_string(),
             world_to_camera: Some(camera.world_to_exr_camera().to_cols_array()),
             world_to_ndc: Some(camera.world_to_ndc().to_cols_array()),
+            working_space: Default::default(),
         }
     }
 }

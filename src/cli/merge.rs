@@ -5,6 +5,7 @@
 //! the path the parts recorded, or `--stage`) for the EXR's camera metadata, and must still
 //! have the content the parts were rendered from.
 
+use super::color::PreviewArgs;
 use super::common::{clap_message, print_summary, warn_clamped, warn_depth_cut, warn_dropped};
 use super::parts;
 use super::render::write_image;
@@ -35,16 +36,8 @@ struct MergeArgs {
     /// the same).
     #[arg(long)]
     stage: Option<PathBuf>,
-    /// Also write an 8-bit sRGB PNG preview.
-    #[arg(long)]
-    preview: Option<PathBuf>,
-    /// Exposure of the preview in stops (the EXR stays absolute).
-    #[arg(
-        long = "preview-exposure",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    preview_exposure: f32,
+    #[command(flatten)]
+    color: PreviewArgs,
 }
 
 pub fn main(argv: Vec<OsString>) -> Result<()> {
@@ -60,7 +53,7 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
 
 fn run(args: &MergeArgs) -> Result<()> {
     if super::meter_parts::are_meter_parts(&args.parts) {
-        if args.preview.is_some() || args.stage.is_some() {
+        if args.color.preview.is_some() || args.stage.is_some() {
             return Err(Error::option(
                 "merge: --preview and --stage are for a render's parts, not a meter study's",
             ));
@@ -68,7 +61,8 @@ fn run(args: &MergeArgs) -> Result<()> {
         return super::meter_parts::merge(&args.parts, &args.output);
     }
     let mut targets = vec![Target::new("-o", &args.output, Format::Exr)];
-    if let Some(p) = &args.preview {
+    let color = args.color.resolve()?;
+    if let Some(p) = &args.color.preview {
         targets.push(Target::new("--preview", p, Format::Png));
     }
     target::check(&targets)?;
@@ -114,8 +108,15 @@ fn run(args: &MergeArgs) -> Result<()> {
     warn_clamped(out.clamped);
     warn_depth_cut(out.depth_cut.as_ref(), "the image's mean luminance");
     let made = parts::made(&stage, &scene, &integrator, id, &out)?;
-    let preview = args.preview.as_deref().map(|p| (p, args.preview_exposure));
-    write_image(&made, integrator.name().into(), &args.output, preview, &out)?;
+    let preview = args.color.preview.as_deref();
+    write_image(
+        &made,
+        integrator.name().into(),
+        &args.output,
+        preview,
+        &color,
+        &out,
+    )?;
     eprintln!(
         "merged {} parts into {} ({}x{}, {} spp, {:.2} s of rendering)",
         states.len(),

@@ -25,7 +25,8 @@ use super::interrupt;
 use super::meter_parts::{self, MeterPartArgs};
 use crate::error::{Error, Result};
 use crate::output::json;
-use crate::output::map::{self, num, IlluminanceMap};
+use crate::output::map::{self, IlluminanceMap};
+use crate::output::rounding::{significant, with_confidence};
 use crate::output::target::{self, Format, Target};
 use crate::scene;
 use crate::sensor::meter::{self, Meter, MeterKind};
@@ -58,6 +59,9 @@ pub(super) struct MeterArgs {
     /// Cells along u and v.
     #[arg(long = "n", value_name = "NU,NV", allow_hyphen_values = true)]
     pub(super) n: Option<String>,
+    /// A fixed colour scale for the map's PNG, in lx (default: from the readings).
+    #[arg(long, value_name = "MIN,MAX", value_parser = parse_range, allow_hyphen_values = true)]
+    pub(super) range: Option<(f64, f64)>,
     /// Base name of the grid outputs: BASE.csv, BASE.json, BASE.png (default: map).
     #[arg(short = 'o', long = "output")]
     pub(super) output: Option<PathBuf>,
@@ -248,6 +252,11 @@ pub(super) fn points_output(
     }
 }
 
+/// The stage's metres per unit, for the map's axes.
+pub(super) fn meters_per_unit(scene: &scene::Scene) -> f64 {
+    scene.stage_to_world.x_axis.truncate().length()
+}
+
 fn run_grid(
     args: &MeterArgs,
     scene: &scene::Scene,
@@ -257,7 +266,8 @@ fn run_grid(
     let meters = grid_meters(scene, g)?;
     let run = measure(scene, &meters, opts)?;
     let base = output_base(args.output.as_deref());
-    grid_output(args.json, opts, g, &run, &base)
+    let scale = (args.range, meters_per_unit(scene));
+    grid_output(args.json, opts, g, &run, &base, scale)
 }
 
 /// The grid's meters in world space, row by row.
@@ -290,12 +300,14 @@ pub(super) fn request_meters(scene: &scene::Scene, request: &Request) -> Result<
 
 /// The warnings of a grid's run, its map files at `base` and its summary (also the merge of
 /// a study's parts, `meter_parts`).
+/// `scale`: the PNG's fixed colour range (`--range`) and the stage's metres per unit.
 pub(super) fn grid_output(
     as_json: bool,
     opts: &MeterOptions,
     g: &GridSpec,
     run: &MeterRun,
     base: &Path,
+    (range, meters_per_unit): (Option<(f64, f64)>, f64),
 ) -> Result<()> {
     warn(run, opts);
     let (nu, nv) = g.n;
@@ -307,16 +319,11 @@ pub(super) fn grid_output(
         nv,
         normal: g.normal.into(),
         readings: run.readings.clone(),
+        range,
+        meters_per_unit,
     };
     let written = map.write(base)?;
-    let s = map.summary();
-    let line = format!(
-        "E_min = {} lx, E_avg = {} lx, E_max = {} lx, U0 = {}",
-        num(s.e_min),
-        num(s.e_avg),
-        num(s.e_max),
-        num(s.u0)
-    );
+    let line = summary_line(&map);
     if as_json {
         print!("{}", map.json()?);
         eprintln!("{line}");
@@ -331,6 +338,26 @@ pub(super) fn grid_output(
         run.wall_time_s
     );
     Ok(())
+}
+
+/// EN 12464-1's figures rounded to their confidence: E_min and E_max with their cell's
+/// 95 % half-width, E_avg with that of the mean of independent readings (√Σci² / n), U0 to
+/// three significant digits.
+fn summary_line(map: &IlluminanceMap) -> String {
+    let s = map.summary();
+    let r = &map.readings;
+    let by_value = |a: &&Reading, b: &&Reading| a.value.total_cmp(&b.value);
+    let (Some(lo), Some(hi)) = (r.iter().min_by(by_value), r.iter().max_by(by_value)) else {
+        return "no readings".into();
+    };
+    let ci_avg = r.iter().map(|x| x.ci95 * x.ci95).sum::<f64>().sqrt() / r.len() as f64;
+    format!(
+        "E_min = {} lx, E_avg = {} lx, E_max = {} lx, U0 = {}",
+        with_confidence(lo.value, lo.ci95),
+        with_confidence(s.e_avg, ci_avg),
+        with_confidence(hi.value, hi.ci95),
+        significant(s.u0, 3)
+    )
 }
 
 /// Measures to the end, or until a signal arrives: then the unfinished readings are marked
@@ -476,7 +503,7 @@ fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
         MeterKind::Luminance => "looking along",
     };
     format!(
-        "{} at ({}, {}, {}) {what} ({}, {}, {}): {:.6} {} ± {:.3} (95% CI, {} samples){}",
+        "{} at ({}, {}, {}) {what} ({}, {}, {}): {} {} (95% CI, {} samples){}",
         kind.name(),
         p.x,
         p.y,
@@ -484,9 +511,8 @@ fn text_entry(kind: MeterKind, p: DVec3, d: DVec3, r: &Reading) -> String {
         d.x,
         d.y,
         d.z,
-        r.value,
+        with_confidence(r.value, r.ci95),
         kind.unit(),
-        r.ci95,
         r.samples,
         match r.capped {
             Some(Cap::Interrupted) => " [interrupted]",
@@ -520,6 +546,7 @@ pub(super) fn request(a: &MeterArgs) -> Result<Request> {
         (a.v.is_some(), "--v"),
         (a.n.is_some(), "--n"),
         (a.output.is_some(), "-o"),
+        (a.range.is_some(), "--range"),
     ] {
         if given {
             return Err(Error::option(format!(
@@ -609,6 +636,21 @@ fn grid_request(a: &MeterArgs) -> Result<Request> {
 }
 
 /// Three comma-separated finite numbers.
+/// `--range MIN,MAX`: finite, MIN < MAX.
+fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
+    let bad = || format!("'{s}': expected MIN,MAX in lx with MIN < MAX, e.g. 0,500");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let (a, b) = (
+        a.trim().parse::<f64>().map_err(|_| bad())?,
+        b.trim().parse::<f64>().map_err(|_| bad())?,
+    );
+    if a.is_finite() && b.is_finite() && a < b {
+        Ok((a, b))
+    } else {
+        Err(bad())
+    }
+}
+
 fn vector(flag: &str, s: &str) -> Result<DVec3> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let bad = || {

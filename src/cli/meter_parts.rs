@@ -58,6 +58,8 @@ struct MeterPart {
     first: u64,
     dropped: u64,
     wall_time_s: f64,
+    /// The stage's metres per unit (the map's axes).
+    meters_per_unit: f64,
     values: Vec<PartReading>,
 }
 
@@ -140,6 +142,7 @@ pub(super) fn run(args: &MeterArgs, argv: &[OsString]) -> Result<()> {
         first,
         dropped: run.dropped,
         wall_time_s: run.wall_time_s,
+        meters_per_unit: meter::meters_per_unit(&scene),
         values: run.readings.iter().map(part_reading).collect(),
     };
     let text = json::pretty(&doc)?;
@@ -280,7 +283,8 @@ pub(super) fn merge(paths: &[PathBuf], output: &Path) -> Result<()> {
         Request::Grid(g) => {
             let base = meter::output_base(Some(output));
             meter::check_map_targets(&base)?;
-            meter::grid_output(false, &opts, &g, &run, &base)
+            let scale = (args.range, first.meters_per_unit);
+            meter::grid_output(false, &opts, &g, &run, &base, scale)
         }
     }
 }

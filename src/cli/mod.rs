@@ -6,9 +6,11 @@
 //! exits with 130 or 143 after writing what it has.
 
 mod checkpoints;
+mod color;
 mod common;
 mod converge;
 mod crop;
+mod falsecolor;
 mod frames;
 mod info;
 mod interrupt;
@@ -32,6 +34,7 @@ type Command = fn(Vec<OsString>) -> Result<()>;
 /// list them from here.
 const SUBCOMMANDS: &[(&str, Command)] = &[
     ("converge", converge::main),
+    ("falsecolor", falsecolor::main),
     ("info", info::main),
     ("lights", lights::main),
     ("merge", merge::main),

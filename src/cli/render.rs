@@ -1,6 +1,7 @@
 //! `spectral-render STAGE [options]`: render a stage to a calibrated EXR.
 
 use super::checkpoints::{self, Checkpoints};
+use super::color::{ColorOutput, PreviewArgs};
 use super::common::{
     at_least, clap_message, max_memory, metadata_name, named, print_auto, print_report,
     print_summary, warn_clamped, warn_depth_cut, warn_dropped, warn_limits, IntegratorArgs,
@@ -15,9 +16,8 @@ use crate::error::{Error, Result};
 use crate::integrator::bidir::strategies::StrategyImage;
 use crate::integrator::Integrator;
 use crate::output::target::{self, Format, Target};
-use crate::output::{self, exr, png};
+use crate::output::{self, exr};
 use crate::sampling::SamplerKind;
-use crate::session::image::xyz_to_rgb;
 use crate::session::{self, ImageSession, Observer, Progressive, RenderOptions, RenderOutput};
 use crate::{scene, spectral};
 use clap::{CommandFactory, FromArgMatches, Parser};
@@ -68,21 +68,12 @@ struct RenderArgs {
     /// Also write one EXR per BDPT strategy (s, t), weighted and unweighted, into DIR.
     #[arg(long, value_name = "DIR")]
     strategies: Option<PathBuf>,
-    /// Also write an 8-bit sRGB PNG preview.
-    #[arg(long)]
-    preview: Option<PathBuf>,
+    #[command(flatten)]
+    color: PreviewArgs,
     /// Look textures up bilinearly at full resolution instead of filtering them over the
     /// pixel footprint (MIP-mapped, trilinear), as Mitsuba 3's bitmaps.
     #[arg(long = "no-texture-filtering")]
     no_texture_filtering: bool,
-    /// Exposure of the preview in stops (the EXR stays absolute): the preview shows
-    /// RGB × 2^EV, so −6.6 maps 100 cd/m² white to 1.
-    #[arg(
-        long = "preview-exposure",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    preview_exposure: f32,
     /// Save the render's state to FILE every --checkpoint-interval seconds and when it is
     /// interrupted (SIGINT, SIGTERM), to continue it with --resume; removed once the image
     /// is written.
@@ -157,6 +148,7 @@ fn run(args: &RenderArgs) -> Result<()> {
             "--crop writes the window's image only: it does not go with --spectral or --aov",
         ));
     }
+    let color = args.color.resolve()?;
     args.part.check(
         &opts,
         args.strategies.is_some(),
@@ -168,13 +160,13 @@ fn run(args: &RenderArgs) -> Result<()> {
                 "--part and --crop render one frame: they cannot go with --frames",
             ));
         }
-        return run_sequence(args, &opts, frames);
+        return run_sequence(args, &opts, frames, &color);
     }
     let path = args
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    target::check(&targets(args, &path, args.preview.as_deref()))?;
+    target::check(&targets(args, &path, args.color.preview.as_deref()))?;
     let resume = args.resume.as_deref().map(checkpoints::read).transpose()?;
     interrupt::install()?;
     let scene = scene::load_at(
@@ -190,14 +182,20 @@ fn run(args: &RenderArgs) -> Result<()> {
     }
     let output = Output {
         exr: &path,
-        preview: args.preview.as_deref(),
+        preview: args.color.preview.as_deref(),
+        color: &color,
     };
     render_frame(args, &opts, &scene, output, resume).map(|_| ())
 }
 
 /// `--frames`: every frame's outputs are checked first, the stage is opened once and read at
 /// each time code in turn; an interrupt ends the sequence after writing the frame under way.
-fn run_sequence(args: &RenderArgs, opts: &RenderOptions, frames: &FrameRange) -> Result<()> {
+fn run_sequence(
+    args: &RenderArgs,
+    opts: &RenderOptions,
+    frames: &FrameRange,
+    color: &ColorOutput,
+) -> Result<()> {
     let pattern = args
         .output
         .clone()
@@ -207,6 +205,7 @@ fn run_sequence(args: &RenderArgs, opts: &RenderOptions, frames: &FrameRange) ->
     for t in frames.times() {
         let exr = frame_path(&pattern, t)?;
         let preview = args
+            .color
             .preview
             .as_deref()
             .map(|p| frame_path(p, t))
@@ -229,6 +228,7 @@ fn run_sequence(args: &RenderArgs, opts: &RenderOptions, frames: &FrameRange) ->
         let output = Output {
             exr,
             preview: preview.as_deref(),
+            color,
         };
         if render_frame(args, opts, &scene, output, None)?.is_some() {
             eprintln!("the sequence stops after frame {t}");
@@ -243,6 +243,7 @@ fn run_sequence(args: &RenderArgs, opts: &RenderOptions, frames: &FrameRange) ->
 struct Output<'a> {
     exr: &'a Path,
     preview: Option<&'a Path>,
+    color: &'a ColorOutput,
 }
 
 /// Renders `scene` and writes its outputs; the signal that interrupted it, if any.
@@ -361,32 +362,36 @@ fn made<'a>(
 }
 
 /// Writes `out` as the calibrated EXR at `path` with `made`'s metadata (the integrator named
-/// `integrator_name`), and the preview when asked for; returns the metadata.
+/// `integrator_name`), its RGB in `color`'s working space, and the preview when asked for;
+/// returns the metadata.
 pub(super) fn write_image(
     made: &Made,
     integrator_name: String,
     path: &Path,
-    preview: Option<(&Path, f32)>,
+    preview: Option<&Path>,
+    color: &ColorOutput,
     out: &RenderOutput,
 ) -> Result<exr::ExrMetadata> {
     let mut meta = made.metadata();
     meta.integrator = integrator_name;
+    meta.working_space = color.space;
     let white = spectral::color::white_xy().map(|c| c as f32);
     if let Some(c) = out.crop {
-        return super::crop::write_window(path, preview, out, c, white, meta);
+        return super::crop::write_window(path, preview, color, out, c, white, meta);
     }
+    let rgb = color.rgb(out);
     exr::write_with_layers(
         path,
         out.width,
         out.height,
-        &out.rgb,
+        &rgb,
         &out.xyz,
         &output::layers::exr_layers(&out.layers),
         white,
         &meta,
     )?;
-    if let Some((preview, exposure)) = preview {
-        png::write_preview(preview, out.width, out.height, &out.rgb, exposure)?;
+    if let Some(preview) = preview {
+        color.write_preview(preview, out, &rgb)?;
     }
     Ok(meta)
 }
@@ -405,7 +410,8 @@ fn write_outputs(
         &made(args, opts, scene, &chosen, out),
         metadata_name(&chosen, out.auto.as_ref()),
         path,
-        output.preview.map(|p| (p, args.preview_exposure)),
+        output.preview,
+        output.color,
         out,
     )?;
     let white = spectral::color::white_xy().map(|c| c as f32);
@@ -438,7 +444,7 @@ fn write_strategies(
         let depth = img.s + img.t - 2;
         for (kind, xyz) in [("weighted", &img.weighted), ("unweighted", &img.unweighted)] {
             let name = format!("d{depth:02}_s{:02}_t{:02}_{kind}.exr", img.s, img.t);
-            let rgb: Vec<[f32; 3]> = xyz.iter().map(|p| xyz_to_rgb(*p)).collect();
+            let rgb = meta.working_space.convert(xyz);
             exr::write(
                 &dir.join(name),
                 out.width,

@@ -6,12 +6,13 @@
 //!
 //! | channel | content |
 //! |---|---|
-//! | `R`, `G`, `B` | float32, linear Rec.709 / sRGB primaries with D65 white, absolute: (1, 1, 1) is D65 white of luminance 1 cd/m² (DESIGN §2) |
+//! | `R`, `G`, `B` | float32, in the working space (default linear Rec.709 / sRGB primaries with D65 white), absolute: (1, 1, 1) is D65 white of luminance 1 cd/m² (DESIGN §2) |
 //! | `XYZ.X`, `XYZ.Y`, `XYZ.Z` | float32, CIE 1931 XYZ on the same absolute scale: `XYZ.Y` is luminance in cd/m² |
 //!
 //! | header attribute | type | value |
 //! |---|---|---|
-//! | `chromaticities` | chromaticities | Rec.709 primaries red (0.64, 0.33), green (0.30, 0.60), blue (0.15, 0.06); white as passed to [`write()`] |
+//! | `chromaticities` | chromaticities | the working space's (`--colorspace`, `ExrMetadata::working_space`): Rec.709 primaries red (0.64, 0.33), green (0.30, 0.60), blue (0.15, 0.06) with the white passed to [`write()`]; ACEScg, P3-D65 or XYZ (`spectral::working_space`) |
+//! | `colorspace` | string | the working space's OCIO name, e.g. `ACEScg` or `Linear Rec.709 (sRGB)` |
 //! | `whiteLuminance` | float | 2^(−exposure) cd/m²: the luminance of RGB (1, 1, 1), the camera's `exposure` having scaled the image by 2^exposure |
 //! | `worldToCamera` | m44f | world (metres, Y up) to OpenEXR's camera space (left-handed, x right, y up, z along the view), when known |
 //! | `worldToNDC` | m44f | world to OpenEXR's NDC ((0, 0) top left, (1, 1) bottom right, after the homogeneous divide), when known |
@@ -54,6 +55,7 @@ use exr::meta::MetaData;
 
 use super::atomic::write_atomically;
 use crate::error::{Error, Reason, Result};
+use crate::spectral::working_space::WorkingSpace;
 
 /// Rec.709 / sRGB primaries (ITU-R BT.709-6, table 1 item 1.3) as CIE 1931 xy: red, green, blue.
 pub const REC709_PRIMARIES_XY: [[f32; 2]; 3] = [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]];
@@ -68,6 +70,8 @@ pub const SCENE_ATTRIBUTE: &str = "spectralRender:scene";
 pub const MAX_DEPTH_ATTRIBUTE: &str = "spectralRender:maxDepth";
 pub const EXPOSURE_ATTRIBUTE: &str = "spectralRender:exposure";
 pub const MIS_ATTRIBUTE: &str = "spectralRender:mis";
+/// The OCIO name of the RGB channels' colour space (the attribute OCIO-aware readers use).
+pub const COLORSPACE_ATTRIBUTE: &str = "colorspace";
 
 /// The names of the six channels, in the order of `rgb` then `xyz` components.
 const CHANNEL_NAMES: [&str; 6] = ["R", "G", "B", "XYZ.X", "XYZ.Y", "XYZ.Z"];
@@ -91,6 +95,9 @@ pub struct ExrMetadata {
     /// column order.
     pub world_to_camera: Option<[f32; 16]>,
     pub world_to_ndc: Option<[f32; 16]>,
+    /// The space of the R, G, B channels (`--colorspace`): the `chromaticities` and
+    /// `colorspace` attributes.
+    pub working_space: WorkingSpace,
 }
 
 /// An EXR file as read back: every channel by name (row-major, rows top to bottom) and every
@@ -363,14 +370,30 @@ fn build_image(
         AnyChannels::sort(list.into()),
     );
     let mut image = Image::from_layer(layer);
-    let [red, green, blue] = REC709_PRIMARIES_XY.map(|[x, y]| Vec2(x, y));
-    image.attributes.chromaticities = Some(Chromaticities {
+    image.attributes.chromaticities = Some(chromaticities(meta.working_space, white_xy));
+    image
+}
+
+/// The `chromaticities` of the RGB channels: Rec.709 with the white passed, or the working
+/// space's primaries and white.
+fn chromaticities(space: WorkingSpace, white_xy: [f32; 2]) -> Chromaticities {
+    let (primaries, white) = match space {
+        WorkingSpace::LinRec709 => (REC709_PRIMARIES_XY, white_xy),
+        _ => {
+            let c = space.chromaticities();
+            (
+                c.primaries.map(|p| p.map(|v| v as f32)),
+                c.white.map(|v| v as f32),
+            )
+        }
+    };
+    let [red, green, blue] = primaries.map(|[x, y]| Vec2(x, y));
+    Chromaticities {
         red,
         green,
         blue,
-        white: Vec2(white_xy[0], white_xy[1]),
-    });
-    image
+        white: Vec2(white[0], white[1]),
+    }
 }
 
 fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
@@ -404,6 +427,7 @@ fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
         (WALL_TIME_ATTRIBUTE, AttributeValue::F64(meta.wall_time_s)),
         (VERSION_ATTRIBUTE, string(&meta.version)),
         (SCENE_ATTRIBUTE, string(&meta.scene)),
+        (COLORSPACE_ATTRIBUTE, string(meta.working_space.ocio_name())),
     ];
     if let Some(mis) = &meta.mis {
         typed.push((MIS_ATTRIBUTE, string(mis)));
@@ -511,6 +535,7 @@ mod tests {
             scene: "scenes/Bühne – 場景.usda".into(),
             world_to_camera: Some(std::array::from_fn(|i| i as f32)),
             world_to_ndc: Some(std::array::from_fn(|i| -(i as f32) / 4.0)),
+            working_space: WorkingSpace::LinRec709,
         }
     }
 

@@ -4,10 +4,14 @@
 //! E_max and the uniformity U0 = E_min / E_avg.
 //!
 //! Cell (i, j) is centred at origin + (i + ½)/NU · u + (j + ½)/NV · v (stage coordinates, as
-//! given on the command line). In the image u runs to the right and v upwards; between cell
-//! centres the colours are interpolated bilinearly and the isolines are traced by marching
-//! squares on the same lattice (`map/contour.rs`). Each file is replaced atomically
-//! (`output::atomic`); PNG encoding goes through `crate::imageio`.
+//! given on the command line). In the image u runs to the right and v upwards, with axes in
+//! metres from the origin (the lower-left corner, marked); the cell centres' lattice is
+//! extended to the grid's edges by linear extrapolation (`to_edges`), the colours are
+//! interpolated bilinearly on it and the isolines traced by marching squares on the same
+//! lattice (`map/contour.rs`), so both reach the edges. On coarse grids each cell shows its
+//! reading; `range` fixes the colour scale. The drawing stays on the hand-written canvas
+//! (`map/canvas.rs`), see docs/design.md "Previews, working spaces and false colour". Each
+//! file is replaced atomically (`output::atomic`); PNG encoding goes through `crate::imageio`.
 //!
 //! ```text
 //! i,j,x,y,z,lux,ci95
@@ -40,6 +44,11 @@ pub struct IlluminanceMap {
     pub normal: [f64; 3],
     /// One reading per cell, cell (i, j) at index j·NU + i.
     pub readings: Vec<Reading>,
+    /// A fixed colour scale [min, max] in lx (`--range`); None: from the readings, widened
+    /// to whole steps.
+    pub range: Option<(f64, f64)>,
+    /// Metres per stage unit (the stage's metersPerUnit), for the axes.
+    pub meters_per_unit: f64,
 }
 
 /// EN 12464-1's figures for a calculation grid.
@@ -210,11 +219,16 @@ impl IlluminanceMap {
         let mut c = Canvas::new(layout.width, layout.height, WHITE);
         let values = self.values();
         let sm = self.summary();
-        let (lo, hi, step) = contour::scale(sm.e_min, sm.e_max);
-        let levels = contour::levels(sm.e_min, sm.e_max, step);
+        let (lo, hi, step) = match self.range {
+            Some((lo, hi)) => (lo, hi, contour::nice_step(hi - lo, 6)),
+            None => contour::scale(sm.e_min, sm.e_max),
+        };
+        let levels = contour::levels(sm.e_min.max(lo), sm.e_max.min(hi), step);
         self.paint_map(&mut c, &layout, &values, (lo, hi));
         self.paint_isolines(&mut c, &layout, &values, &levels, (lo, hi), step);
         paint_legend(&mut c, &layout, (lo, hi, step), &levels);
+        self.paint_axes(&mut c, &layout);
+        self.paint_cell_values(&mut c, &layout, &values, (lo, hi));
         let footer = format!(
             "Emin {}  Eavg {}  Emax {} lx  U0 {}",
             sig(sm.e_min),
@@ -227,20 +241,96 @@ impl IlluminanceMap {
     }
 
     fn paint_map(&self, c: &mut Canvas, l: &Layout, values: &[f64], (lo, hi): (f64, f64)) {
+        let (ext, _, _) = to_edges(values, self.nu, self.nv);
         for py in 0..l.map_h {
             for px in 0..l.map_w {
                 let (gx, gy) = l.pixel_to_grid(px as f64 + 0.5, py as f64 + 0.5);
-                let e = bilinear(values, self.nu, self.nv, gx, gy);
+                let e = bilinear(
+                    &ext,
+                    self.nu + 2,
+                    self.nv + 2,
+                    to_ext(gx, self.nu),
+                    to_ext(gy, self.nv),
+                );
                 let colour = viridis(((e - lo) / (hi - lo)) as f32);
-                c.put(MARGIN + px as i64, l.top + py as i64, colour);
+                c.put(MAP_X + px as i64, l.top + py as i64, colour);
             }
         }
         let (w, h) = (l.map_w as i64, l.map_h as i64);
-        let (x0, y0) = (MARGIN - 1, l.top - 1);
+        let (x0, y0) = (MAP_X - 1, l.top - 1);
         c.line((x0, y0), (x0 + w + 1, y0), INK);
         c.line((x0, y0 + h + 1), (x0 + w + 1, y0 + h + 1), INK);
         c.line((x0, y0), (x0, y0 + h + 1), INK);
         c.line((x0 + w + 1, y0), (x0 + w + 1, y0 + h + 1), INK);
+    }
+
+    /// The u axis below the map and the v axis left of it, in metres from the grid's origin
+    /// (its lower-left corner, marked with a square).
+    fn paint_axes(&self, c: &mut Canvas, l: &Layout) {
+        let len = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        let (lu, lv) = (
+            len(self.u) * self.meters_per_unit,
+            len(self.v) * self.meters_per_unit,
+        );
+        let bottom = l.top + l.map_h as i64;
+        let (w, h) = (l.map_w as f64, l.map_h as f64);
+        for (length, along_u) in [(lu, true), (lv, false)] {
+            if !(length.is_finite() && length > 0.0) {
+                continue;
+            }
+            let step = contour::nice_step(length, 5);
+            let mut k = 0.0;
+            while k * step <= length * (1.0 + 1e-9) {
+                let d = k * step;
+                let text = tick_label(d, step);
+                if along_u {
+                    let x = MAP_X + (d / length * w).round() as i64;
+                    c.line((x, bottom + 1), (x, bottom + 4), INK);
+                    let tx = x - text_width(&text, 1) as i64 / 2;
+                    c.text(tx, bottom + 7, &text, 1, INK);
+                } else {
+                    let y = bottom - (d / length * h).round() as i64;
+                    c.line((MAP_X - 5, y), (MAP_X - 2, y), INK);
+                    let tx = MAP_X - 8 - text_width(&text, 1) as i64;
+                    c.text(tx, y - GLYPH_H as i64 / 2, &text, 1, INK);
+                }
+                k += 1.0;
+            }
+        }
+        c.text(MAP_X + l.map_w as i64 + 6, bottom + 7, "m", 1, INK);
+        c.text(
+            MAP_X - 8 - text_width("m", 1) as i64,
+            l.top - GLYPH_H as i64 - 4,
+            "m",
+            1,
+            INK,
+        );
+        c.fill_rect(MAP_X - 4, bottom - 3, 7, 7, INK);
+    }
+
+    /// Each cell's reading at its centre, on grids coarse enough for the text to fit.
+    fn paint_cell_values(&self, c: &mut Canvas, l: &Layout, values: &[f64], (lo, hi): (f64, f64)) {
+        let cell_w = l.map_w as f64 / self.nu as f64;
+        let cell_h = l.map_h as f64 / self.nv as f64;
+        let widest = values
+            .iter()
+            .map(|v| text_width(&sig(*v), 1))
+            .max()
+            .unwrap_or(0);
+        if cell_w < widest as f64 + 8.0 || cell_h < 2.0 * GLYPH_H as f64 + 4.0 {
+            return;
+        }
+        for j in 0..self.nv {
+            for i in 0..self.nu {
+                let v = values[j * self.nu + i];
+                let (x, y) = l.grid_to_pixel(i as f64, j as f64);
+                let fill = viridis(((v - lo) / (hi - lo)) as f32);
+                let ink = if is_light(fill) { INK } else { WHITE };
+                let text = sig(v);
+                let tx = x - text_width(&text, 1) as i64 / 2;
+                c.text(tx, y - GLYPH_H as i64 / 2, &text, 1, ink);
+            }
+        }
     }
 
     /// Isolux lines, each labelled once where its label fits clear of the others.
@@ -257,8 +347,10 @@ impl IlluminanceMap {
         for &level in levels {
             let fill = viridis(((level - lo) / (hi - lo)) as f32);
             let ink = if is_light(fill) { INK } else { WHITE };
-            let segs = contour::isoline(values, self.nu, self.nv, level);
-            let to_px = |g: [f64; 2]| l.grid_to_pixel(g[0], g[1]);
+            let (ext, nx, ny) = to_edges(values, self.nu, self.nv);
+            let segs = contour::isoline(&ext, nx, ny, level);
+            let (nu, nv) = (self.nu, self.nv);
+            let to_px = |g: [f64; 2]| l.grid_to_pixel(from_edges(g[0], nu), from_edges(g[1], nv));
             for (a, b) in &segs {
                 c.line(to_px(*a), to_px(*b), ink);
             }
@@ -273,16 +365,16 @@ impl IlluminanceMap {
                 .collect();
             // Prefer spots far from the map's edges.
             spots.sort_by_key(|&(x, y)| {
-                let d = (x - MARGIN)
-                    .min(MARGIN + l.map_w as i64 - x)
+                let d = (x - MAP_X)
+                    .min(MAP_X + l.map_w as i64 - x)
                     .min(y - l.top)
                     .min(l.top + l.map_h as i64 - y);
                 (-d, x, y)
             });
             let fits = |r: &[i64; 4]| {
-                r[0] >= MARGIN
+                r[0] >= MAP_X
                     && r[1] >= l.top
-                    && r[0] + r[2] <= MARGIN + l.map_w as i64
+                    && r[0] + r[2] <= MAP_X + l.map_w as i64
                     && r[1] + r[3] <= l.top + l.map_h as i64
                     && placed.iter().all(|q| !overlaps(r, q))
             };
@@ -303,6 +395,10 @@ const WHITE: [u8; 3] = [255, 255, 255];
 const INK: [u8; 3] = [20, 20, 20];
 /// Border around everything, in pixels.
 const MARGIN: i64 = 12;
+/// The map's left edge: the margin and the v axis's labels.
+const MAP_X: i64 = MARGIN + 44;
+/// Below the map: the u axis's ticks and labels.
+const AXIS_H: i64 = GLYPH_H as i64 + 12;
 /// The map's longer side, in pixels.
 const MAP_LONG_SIDE: f64 = 480.0;
 const BAR_W: i64 = 18;
@@ -330,9 +426,9 @@ impl Layout {
         let map_w = ((lu * k).round() as usize).clamp(48, MAP_LONG_SIDE as usize);
         let map_h = ((lv * k).round() as usize).clamp(48, MAP_LONG_SIDE as usize);
         let top = MARGIN + 2 * GLYPH_H as i64 + 8;
-        let bar_x = MARGIN + map_w as i64 + 24;
+        let bar_x = MAP_X + map_w as i64 + 24;
         let bar_h = map_h.max(LEGEND_MIN_H);
-        let footer_y = top + bar_h as i64 + 14;
+        let footer_y = top + bar_h.max(map_h + AXIS_H as usize) as i64 + 14;
         let legend_right = bar_x + BAR_W + 8 + text_width("0000000.00", 2) as i64 + MARGIN;
         let footer_right =
             2 * MARGIN + text_width("Emin 00000  Eavg 00000  Emax 00000 lx  U0 0.000", 2) as i64;
@@ -362,7 +458,7 @@ impl Layout {
         let px = (gx + 0.5) / self.nu as f64 * self.map_w as f64;
         let py = (1.0 - (gy + 0.5) / self.nv as f64) * self.map_h as f64;
         (
-            MARGIN + (px.floor() as i64).min(self.map_w as i64 - 1),
+            MAP_X + (px.floor() as i64).min(self.map_w as i64 - 1),
             self.top + (py.floor() as i64).min(self.map_h as i64 - 1),
         )
     }
@@ -382,9 +478,11 @@ fn paint_legend(c: &mut Canvas, l: &Layout, (lo, hi, step): (f64, f64, f64), lev
         let ink = if is_light(fill) { INK } else { WHITE };
         c.line((l.bar_x, y_of(v)), (l.bar_x + BAR_W - 1, y_of(v)), ink);
     }
-    let ticks = ((hi - lo) / step).round() as i64;
-    for k in 0..=ticks {
-        let v = lo + k as f64 * step;
+    // Multiples of the step within the scale (its ends, for a scale from the readings).
+    let first = (lo / step - 1e-9).ceil() as i64;
+    let last = (hi / step + 1e-9).floor() as i64;
+    for k in first..=last {
+        let v = k as f64 * step;
         let y = y_of(v);
         c.line((l.bar_x + BAR_W, y), (l.bar_x + BAR_W + 4, y), INK);
         c.text(
@@ -400,6 +498,58 @@ fn paint_legend(c: &mut Canvas, l: &Layout, (lo, hi, step): (f64, f64, f64), lev
 
 fn overlaps(a: &[i64; 4], b: &[i64; 4]) -> bool {
     a[0] < b[0] + b[2] && b[0] < a[0] + a[2] && a[1] < b[1] + b[3] && b[1] < a[1] + a[3]
+}
+
+/// The readings with a ring of values on the grid's edges, half a cell beyond the outer
+/// centres, extrapolated linearly from the two nearest centres along each axis (a single
+/// cell's value is kept): the colours and the isolines then reach the map's edges.
+/// Returns the (NU + 2) × (NV + 2) lattice.
+fn to_edges(values: &[f64], nu: usize, nv: usize) -> (Vec<f64>, usize, usize) {
+    let (nx, ny) = (nu + 2, nv + 2);
+    let clamp = |k: isize, n: usize| k.clamp(0, n as isize - 1) as usize;
+    // Index into the readings, extrapolating beyond the border: k = −1 or n.
+    let along = |get: &dyn Fn(usize) -> f64, k: isize, n: usize| -> f64 {
+        if (0..n as isize).contains(&k) || n == 1 {
+            get(clamp(k, n))
+        } else if k < 0 {
+            1.5 * get(0) - 0.5 * get(1)
+        } else {
+            1.5 * get(n - 1) - 0.5 * get(n - 2)
+        }
+    };
+    let mut out = vec![0.0; nx * ny];
+    for ey in 0..ny {
+        for ex in 0..nx {
+            let (i, j) = (ex as isize - 1, ey as isize - 1);
+            let row = |j: usize| along(&|i| values[j * nu + i], i, nu);
+            out[ey * nx + ex] = along(&row, j, nv);
+        }
+    }
+    (out, nx, ny)
+}
+
+/// Grid coordinate (centre k at k, edges at −½ and n − ½) → coordinate on the lattice of
+/// [`to_edges`] (edges at 0 and n + 1, centre k at k + 1).
+fn to_ext(g: f64, n: usize) -> f64 {
+    let last = n as f64 - 1.0;
+    if g < 0.0 {
+        1.0 + 2.0 * g.max(-0.5)
+    } else if g > last {
+        n as f64 + 2.0 * (g - last).min(0.5)
+    } else {
+        g + 1.0
+    }
+}
+
+/// The inverse of [`to_ext`].
+fn from_edges(e: f64, n: usize) -> f64 {
+    if e < 1.0 {
+        -0.5 + 0.5 * e
+    } else if e > n as f64 {
+        n as f64 - 1.0 + 0.5 * (e - n as f64)
+    } else {
+        e - 1.0
+    }
 }
 
 /// Bilinear interpolation between cell centres, clamped at the grid's border.
@@ -491,7 +641,25 @@ mod tests {
             readings: (0..nu * nv)
                 .map(|k| reading(100.0 + 10.0 * (k % nu) as f64 + (k / nu) as f64))
                 .collect(),
+            range: None,
+            meters_per_unit: 1.0,
         }
+    }
+
+    #[test]
+    fn a_fixed_range_sets_the_colours() {
+        let mut m = ramp(4, 3);
+        m.range = Some((0.0, 400.0));
+        let l = Layout::new(&m);
+        let c = m.image();
+        // Beside cell (0, 0)'s value label: about 100 lx, a quarter of the way up.
+        let (x, y) = l.grid_to_pixel(0.0, 0.0);
+        let p = c.pixels[(y - GLYPH_H as i64) as usize * c.width + x as usize];
+        let want = viridis(0.25);
+        assert!(
+            (0..3).all(|k| (p[k] as i32 - want[k] as i32).abs() <= 3),
+            "{p:?} {want:?}"
+        );
     }
 
     #[test]
@@ -525,18 +693,38 @@ mod tests {
         let at = |x: i64, y: i64| img.pixels[y as usize * img.width + x as usize];
         let (lo, hi, _) = contour::scale(100.0, 219.0);
         let low = viridis(((100.0 - lo) / (hi - lo)) as f32);
-        let p = at(MARGIN, l.top + l.map_h as i64 - 1);
+        // (Beside the origin's mark.)
+        let p = at(MAP_X + 5, l.top + l.map_h as i64 - 1);
         assert!(
             (0..3).all(|k| (p[k] as i32 - low[k] as i32).abs() <= 3),
             "{p:?} vs {low:?}"
         );
         let mut isoline_pixels = 0;
         for y in l.top..l.top + l.map_h as i64 {
-            for x in MARGIN..MARGIN + l.map_w as i64 {
+            for x in MAP_X..MAP_X + l.map_w as i64 {
                 isoline_pixels += [INK, WHITE].contains(&at(x, y)) as usize;
             }
         }
         assert!(isoline_pixels > 100, "{isoline_pixels}");
+    }
+
+    #[test]
+    fn edges_extrapolate_the_readings_linearly() {
+        // A ramp in u: 100, 110, 120, 130 → edges 95 and 135; constant in v.
+        let values: Vec<f64> = (0..8).map(|k| 100.0 + 10.0 * (k % 4) as f64).collect();
+        let (ext, nx, ny) = to_edges(&values, 4, 2);
+        assert_eq!((nx, ny), (6, 4));
+        assert_eq!(&ext[0..6], &[95.0, 100.0, 110.0, 120.0, 130.0, 135.0]);
+        assert_eq!(&ext[18..24], &ext[0..6]);
+        for g in [-0.5, -0.2, 0.0, 1.5, 3.0, 3.25, 3.5] {
+            assert!((from_edges(to_ext(g, 4), 4) - g).abs() < 1e-12, "{g}");
+        }
+        // Isolines reach the edge: the 97.5 lx line lies between the edge and centre 0.
+        let segs = contour::isoline(&ext, nx, ny, 97.5);
+        assert!(!segs.is_empty());
+        for (a, _) in segs {
+            assert!((from_edges(a[0], 4) - (-0.25)).abs() < 1e-9, "{a:?}");
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@ pub mod atomic;
 #[cfg(not(feature = "testing"))]
 pub(crate) mod atomic;
 pub mod exr;
+pub mod falsecolor;
 #[cfg(feature = "testing")]
 #[doc(hidden)]
 pub mod json;
@@ -16,8 +17,11 @@ pub mod json;
 pub(crate) mod json;
 pub mod layers;
 pub mod map;
+pub mod ocio;
 pub mod plot;
 pub mod png;
+pub mod preview;
 pub mod reference;
 pub mod report;
+pub mod rounding;
 pub mod target;

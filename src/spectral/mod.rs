@@ -15,6 +15,7 @@ pub mod sellmeier;
 pub mod spectrum;
 pub mod uplift;
 pub mod wavelengths;
+pub mod working_space;
 pub mod xyz;
 
 pub use dense::DenseSpectrum;
