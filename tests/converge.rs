@@ -2,7 +2,7 @@
 //! −1/2 slope of the path tracer on an analytic scene, 1 against 4 wavelengths on the
 //! ColorChecker under a spiky LED, meters' time to 1 % and ci95 coverage in an integrating
 //! sphere, and the command's report: its files, its determinism (all but the times) and its
-//! errors. Nothing here needs ../shared or a peer renderer.
+//! errors. Nothing here needs a peer renderer or any file outside the repository.
 
 mod common;
 use common::colorchecker::{patch_xyz, PATCHES};

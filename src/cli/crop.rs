@@ -1,5 +1,5 @@
-//! `--crop x0,y0,x1,y1` (and RenderSettings `dataWindowNDC`) of the render command: the
-//! window's EXR and preview (`session::crop`).
+//! `--crop x0,y0,x1,y1` of the render command: the window's EXR and preview
+//! (`session::crop`).
 
 use super::color::ColorOutput;
 use crate::error::Result;

@@ -32,8 +32,8 @@ pub struct PartArgs {
     #[arg(long, value_name = "K/N", value_parser = Part::parse)]
     pub part: Option<Part>,
     /// Render only the pixels x0..x1 of rows y0..y1 (whole numbers: pixels; with decimal
-    /// points: NDC, y down, as pbrt-v4's --cropwindow), overriding RenderSettings'
-    /// dataWindowNDC. The EXR's data window is the crop; OUTPUT.part is written for `merge`.
+    /// points: NDC, y down, as pbrt-v4's --cropwindow). The EXR's data window is the crop;
+    /// OUTPUT.part is written for `merge`.
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = CropSpec::parse)]
     pub crop: Option<CropSpec>,
 }

@@ -16,6 +16,7 @@
 use super::map::canvas::{text_width, Canvas, GLYPH_H};
 use super::map::colormap::{is_light, viridis};
 use super::map::contour;
+use super::map::sig;
 
 /// What the image shows.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -180,13 +181,14 @@ impl FalseColor {
     }
 }
 
-/// A legend value: three significant digits, no exponent for everyday luminances.
+/// A legend value: three significant digits, no exponent for everyday luminances (the
+/// maps' [`sig`]); "0" for a value that is not finite.
 pub fn label(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return "0".into();
+    if v.is_finite() {
+        sig(v)
+    } else {
+        "0".into()
     }
-    let decimals = (2 - v.abs().log10().floor() as i64).clamp(0, 6) as usize;
-    format!("{v:.decimals$}")
 }
 
 /// A round top for the scale: the smallest 1, 2 or 5 × 10ᵏ at or above `max` (1 when the

@@ -581,7 +581,7 @@ fn tick_label(v: f64, step: f64) -> String {
 }
 
 /// Three significant digits, without exponent for everyday lux values.
-fn sig(v: f64) -> String {
+pub fn sig(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
     }

@@ -1,4 +1,4 @@
-//! A crop window: the pixels a render renders (`--crop`, RenderSettings `dataWindowNDC`).
+//! A crop window: the pixels a render renders (`--crop`).
 //!
 //! A window is given in pixels (`x0,y0,x1,y1`, whole numbers, half-open: pixels x0..x1 of
 //! rows y0..y1) or in NDC (any value with a decimal point: fractions of the image's width
@@ -7,7 +7,9 @@
 //! windows that share an NDC edge share no pixel and leave none out.
 //!
 //! USD's `dataWindowNDC` is (xmin, ymin, xmax, ymax) with y up from the bottom (NDC of
-//! `UsdRenderSettingsBase`): it is the window (xmin, 1 − ymax, xmax, 1 − ymin) here.
+//! `UsdRenderSettingsBase`): it is the window (xmin, 1 − ymax, xmax, 1 − ymin) here. The
+//! stage reader does not read it yet (it warns that it ignores a window other than the whole
+//! image); [`CropSpec::from_data_window_ndc`] is the conversion it will use.
 //!
 //! A crop render renders every sample of its window's pixels, and only those: its camera
 //! samples are those of the whole render for the same (seed, pixel, sample). Integrators
