@@ -503,4 +503,16 @@ pub struct RenderSettingsDesc {
     pub resolution: Option<(u32, u32)>,
     /// Prim path of the camera the settings name.
     pub camera: Option<String>,
+    /// `dataWindowNDC`, when it is not the whole image.
+    pub data_window: Option<DataWindowDesc>,
+}
+
+/// A RenderSettings or RenderProduct `dataWindowNDC`: the part of the image to render,
+/// (xmin, ymin, xmax, ymax) in NDC with y up from the bottom (UsdRenderSettingsBase),
+/// within [0, 1] and not empty (the reader refuses others).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataWindowDesc {
+    pub ndc: [f64; 4],
+    /// The prim that authored it (for messages).
+    pub prim_path: String,
 }

@@ -4,7 +4,8 @@
 //! Crop windows (`--crop`, pixels or NDC) that tile the image, alone or crossed with sample
 //! parts, merge into the single render bit for bit for path, light, bdpt and vcm; a crop's EXR
 //! has the crop as its data window and the full image as its display window; merge refuses
-//! overlapping and missing windows.
+//! overlapping and missing windows. A stage's RenderSettings `dataWindowNDC` is rendered as a
+//! window (not a part), its sample parts merge into it, and `--crop` replaces it.
 
 mod common;
 
@@ -392,4 +393,95 @@ fn merge_refuses_overlapping_and_missing_windows() {
         assert_eq!(o.status.code(), Some(1), "{crop}: {}", stderr(&o));
         assert!(stderr(&o).contains(want), "{crop}: {}", stderr(&o));
     }
+}
+
+/// The Cornell box with a RenderSettings `dataWindowNDC` (y up): on 24×16, NDC y down
+/// (0.25, 0.125, 0.75, 0.75), pixels ⌈24·0.25⌉.. ⌈24·0.75⌉ × ⌈16·0.125⌉.. ⌈16·0.75⌉ =
+/// 6..18 × 2..12.
+fn windowed_stage(dir: &Path) -> String {
+    let text = std::fs::read_to_string(cbox_path()).unwrap();
+    let settings = "\ndef RenderSettings \"Settings\" {\n    \
+                    float4 dataWindowNDC = (0.25, 0.25, 0.75, 0.875)\n}\n";
+    let path = dir.join("windowed.usda");
+    std::fs::write(&path, format!("{text}{settings}")).unwrap();
+    path.display().to_string()
+}
+
+/// Renders `stage` with `extra` into `dir/name`; its stderr.
+fn render_stage(dir: &Path, stage: &str, name: &str, extra: &[&str]) -> String {
+    let mut args = vec![stage, "--resolution", RES, "-o", name];
+    args.extend_from_slice(extra);
+    let o = spectral_render(&args, dir);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    stderr(&o)
+}
+
+#[test]
+fn a_stage_data_window_is_rendered_as_a_window_and_its_parts_merge() {
+    let dir = temp_dir("data-window");
+    let stage = windowed_stage(&dir);
+    let base = ["--spp", "4", "--integrator", "path", "--seed", "2"];
+    render(&dir, "whole.exr", &base);
+    let said = render_stage(&dir, &stage, "window.exr", &base);
+    assert!(said.contains("data window 6,2,18,12"), "{said}");
+    let (whole, window) = (
+        exr::read(&dir.join("whole.exr")).unwrap(),
+        exr::read(&dir.join("window.exr")).unwrap(),
+    );
+    assert_eq!((window.width, window.height), (12, 10));
+    assert_eq!(
+        window.attributes.get("displayWindow"),
+        whole.attributes.get("displayWindow")
+    );
+    let (w, c) = (&whole.channels["XYZ.Y"], &window.channels["XYZ.Y"]);
+    for row in 0..10 {
+        for col in 0..12 {
+            let v = w[(row + 2) * 24 + col + 6];
+            assert_eq!(c[row * 12 + col].to_bits(), v.to_bits(), "({col}, {row})");
+        }
+    }
+    // Not a part: no sidecar, and the default integrator (auto, its pilot in the window)
+    // and extra layers go with it.
+    assert!(!dir.join("window.part").exists());
+    render_stage(
+        &dir,
+        &stage,
+        "auto.exr",
+        &["--spp", "4", "--spectral-bins", "4"],
+    );
+    let auto = exr::read(&dir.join("auto.exr")).unwrap();
+    assert_eq!((auto.width, auto.height), (12, 10));
+    assert_eq!(
+        auto.channels
+            .keys()
+            .filter(|k| k.starts_with("S0."))
+            .count(),
+        4
+    );
+    // Sample parts of the windowed render merge into it bit for bit.
+    let bdpt = ["--spp", "5", "--integrator", "bdpt", "--seed", "4"];
+    render_stage(&dir, &stage, "single.exr", &bdpt);
+    for k in 0..2 {
+        let part = format!("{k}/2");
+        let mut args = bdpt.to_vec();
+        args.extend_from_slice(&["--part", &part]);
+        render_stage(&dir, &stage, &format!("p{k}.exr"), &args);
+    }
+    let o = merge(&dir, &["p1.exr", "p0.exr", "-o", "merged.exr"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_channels(&dir, "single.exr", "merged.exr", "windowed bdpt, 2 parts");
+    // A --crop replaces the stage's window, said on the console; a crop outside the window
+    // does not merge into the windowed render.
+    let mut args = base.to_vec();
+    args.extend_from_slice(&["--crop", "0,0,6,16"]);
+    let said = render_stage(&dir, &stage, "left.exr", &args);
+    assert!(
+        said.contains("--crop replaces the data window 6,2,18,12"),
+        "{said}"
+    );
+    assert_refused(
+        &dir,
+        &["left.exr", "-o", "out.exr"],
+        &["left.exr", "outside the render's window 6,2,18,12"],
+    );
 }

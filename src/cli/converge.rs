@@ -145,6 +145,12 @@ fn run(args: &ConvergeArgs, command: String) -> Result<()> {
         .map_err(|e| Error::io(&args.output, format!("cannot create the directory: {e}")))?;
     let scene = scene::load(&args.scene, args.resolution)?;
     print_summary(&scene);
+    if let (Some(w), false) = (&scene.data_window, meters_asked) {
+        eprintln!(
+            "note: converge measures the whole image; <{}>'s dataWindowNDC is left out",
+            w.prim_path
+        );
+    }
     let opts = RunOptions {
         time_s: args.time,
         max_samples: args.max_spp,

@@ -1,5 +1,5 @@
-//! `--crop x0,y0,x1,y1` of the render command: the window's EXR and preview
-//! (`session::crop`).
+//! The EXR and preview of a window (`--crop x0,y0,x1,y1` of the render command, or a stage's
+//! `dataWindowNDC`: `session::crop`).
 
 use super::color::ColorOutput;
 use crate::error::Result;
@@ -9,7 +9,8 @@ use crate::session::RenderOutput;
 use std::path::Path;
 
 /// Writes the window `c` of `out` as an EXR whose data window is the crop and whose display
-/// window is the full image, its RGB in `color`'s working space, and the window's preview.
+/// window is the full image, its RGB in `color`'s working space and its extra layers cut to
+/// the window too, and the window's preview.
 pub fn write_window(
     path: &Path,
     preview: Option<&Path>,
@@ -23,6 +24,10 @@ pub fn write_window(
         c.cut(&color.rgb(out), out.width),
         c.cut(&out.xyz, out.width),
     );
+    let mut layers = crate::output::layers::exr_layers(&out.layers);
+    for (_, values) in &mut layers.channels {
+        *values = c.cut(values, out.width);
+    }
     let window = [c.x0, c.y0, c.width(), c.height()];
     exr::write_window(
         path,
@@ -30,6 +35,7 @@ pub fn write_window(
         window,
         &rgb,
         &xyz,
+        &layers,
         white,
         &meta,
     )?;

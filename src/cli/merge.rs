@@ -182,7 +182,7 @@ fn output(scene: &scene::Scene, m: &part::Merged) -> Result<RenderOutput> {
         auto: None,
         depth_cut: DepthCut::new(max_depth, &cut.sums(), cut.capped, cut.limited),
         clamped: m.film.clamped(),
-        crop: None,
+        crop: m.window,
         layers: Default::default(),
     })
 }

@@ -15,7 +15,7 @@ use crate::output::atomic::write_atomically;
 use crate::output::target::{Format, Target};
 use crate::scene::Scene;
 use crate::session::checkpoint::Checkpoint;
-use crate::session::crop::{Crop, CropSpec};
+use crate::session::crop::{self, Crop, CropSpec};
 use crate::session::part::{self, Part};
 use crate::session::{ImageSession, RenderOptions, RenderOutput, DEFAULT_SPP};
 use std::io::Write;
@@ -33,7 +33,7 @@ pub struct PartArgs {
     pub part: Option<Part>,
     /// Render only the pixels x0..x1 of rows y0..y1 (whole numbers: pixels; with decimal
     /// points: NDC, y down, as pbrt-v4's --cropwindow). The EXR's data window is the crop;
-    /// OUTPUT.part is written for `merge`.
+    /// OUTPUT.part is written for `merge`. Replaces the stage's dataWindowNDC.
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = CropSpec::parse)]
     pub crop: Option<CropSpec>,
 }
@@ -90,29 +90,46 @@ impl PartArgs {
             .then(|| Target::new("--part", sidecar(output), Format::Any))
     }
 
-    /// Restricts `session` to the part's samples and window.
+    /// Restricts `session` to the part's samples (its window is `RenderOptions::crop`,
+    /// from [`PartArgs::window`]).
     pub fn start(&self, session: &mut ImageSession, opts: &RenderOptions) -> Result<()> {
         if let Some(p) = self.part {
             let (first, end) = p.samples(u64::from(opts.spp.unwrap_or(DEFAULT_SPP)));
             session.start_part(first, end).map_err(Error::option)?;
             eprintln!("part {}: samples {first}..{end} of every pixel", p.label());
         }
-        if let Some(c) = self.crop(session)? {
-            session.start_crop(c).map_err(Error::option)?;
-            eprintln!("crop {}: {}×{} pixels", c.label(), c.width(), c.height());
-        }
         Ok(())
     }
 
-    /// The window `--crop` names on the session's image.
-    fn crop(&self, session: &ImageSession) -> Result<Option<Crop>> {
-        let (w, h) = session.size();
-        self.crop
-            .map(|s| {
-                s.resolve(w, h)
-                    .map_err(|e| Error::option(format!("--crop {e}")))
-            })
-            .transpose()
+    /// The window a render of `scene` renders: `--crop`'s, else the stage's
+    /// `dataWindowNDC` (`session::crop`), else None (the whole image); said on the console.
+    pub fn window(&self, scene: &Scene) -> Result<Option<Crop>> {
+        let stage = crop::stage_window(scene)?;
+        let Some(spec) = self.crop else {
+            if let (Some(c), Some(dw)) = (stage, &scene.data_window) {
+                eprintln!(
+                    "data window {} ({}×{} pixels) from <{}>'s dataWindowNDC",
+                    c.label(),
+                    c.width(),
+                    c.height(),
+                    dw.prim_path
+                );
+            }
+            return Ok(stage);
+        };
+        let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+        let c = spec
+            .resolve(w, h)
+            .map_err(|e| Error::option(format!("--crop {e}")))?;
+        if let (Some(s), Some(dw)) = (stage, &scene.data_window) {
+            eprintln!(
+                "note: --crop replaces the data window {} of <{}>'s dataWindowNDC",
+                s.label(),
+                dw.prim_path
+            );
+        }
+        eprintln!("crop {}: {}×{} pixels", c.label(), c.width(), c.height());
+        Ok(Some(c))
     }
 
     /// Writes the part's raw state beside `output` (atomically).

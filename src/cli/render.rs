@@ -256,10 +256,12 @@ fn render_frame(
 ) -> Result<Option<&'static str>> {
     warn_limits(&opts.integrator, scene, true);
     // auto continues with the integrator the checkpoint was rendered with, no pilot.
-    let opts = &match &resume {
+    let mut opts = match &resume {
         Some(c) => session::auto::for_checkpoint(scene, opts, c),
         None => opts.clone(),
     };
+    opts.crop = args.part.window(scene)?;
+    let opts = &opts;
     let mut session = ImageSession::new(scene, opts)?;
     print_auto(session.auto());
     if let (Some(c), Some(file)) = (resume, &args.resume) {
@@ -270,7 +272,10 @@ fn render_frame(
         eprintln!("resuming {} at {done} spp", file.display());
     }
     args.part.start(&mut session, opts)?;
-    let pixels = u64::from(scene.camera.width) * u64::from(scene.camera.height);
+    let pixels = match opts.crop {
+        Some(c) => c.pixel_count() as u64,
+        None => u64::from(scene.camera.width) * u64::from(scene.camera.height),
+    };
     let target = opts.spp.map(u64::from).or(match opts.time_budget {
         Some(_) => None,
         None => Some(u64::from(session::DEFAULT_SPP)),

@@ -179,8 +179,48 @@ pub fn write_with_layers(
     meta: &ExrMetadata,
 ) -> Result<()> {
     let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
-    check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
-    check_finite(width, rgb, xyz).map_err(fail)?;
+    let image = layered_image((width, height), rgb, xyz, layers, white_xy, meta).map_err(fail)?;
+    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+}
+
+/// [`write_with_layers()`] of a window of an image (`--crop`, a stage's `dataWindowNDC`):
+/// `rgb`, `xyz` and the layers' channels hold the window's `window.2 × window.3` pixels at
+/// (`window.0`, `window.1`) of a `full.0 × full.1` image. The file's data window is the
+/// window, its display window the full image.
+#[allow(clippy::too_many_arguments)]
+pub fn write_window(
+    path: &Path,
+    full: (usize, usize),
+    window: [usize; 4],
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    layers: &ExrLayers,
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> Result<()> {
+    let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
+    let [x, y, width, height] = window;
+    let to_i32 = |v: usize| i32::try_from(v).map_err(|_| fail(format!("{v} pixels is too far")));
+    let (x, y, fw, fh) = (to_i32(x)?, to_i32(y)?, full.0, full.1);
+    let mut image =
+        layered_image((width, height), rgb, xyz, layers, white_xy, meta).map_err(fail)?;
+    image.layer_data.attributes.layer_position = Vec2(x, y);
+    image.attributes.display_window = exr::meta::attribute::IntegerBounds::new((0, 0), (fw, fh));
+    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+}
+
+/// The image of a `size.0 × size.1` block of pixels with the `layers`' channels and
+/// attributes, every value checked finite.
+fn layered_image(
+    (width, height): (usize, usize),
+    rgb: &[[f32; 3]],
+    xyz: &[[f32; 3]],
+    layers: &ExrLayers,
+    white_xy: [f32; 2],
+    meta: &ExrMetadata,
+) -> std::result::Result<FlatImage, String> {
+    check_sizes(width, height, rgb.len(), xyz.len())?;
+    check_finite(width, rgb, xyz)?;
     let extra: Vec<(&str, Vec<f32>)> = layers
         .channels
         .iter()
@@ -188,13 +228,11 @@ pub fn write_with_layers(
         .collect();
     for (name, values) in &extra {
         if values.len() != rgb.len() || !values.iter().all(|v| v.is_finite()) {
-            return Err(fail(format!(
-                "channel {name} needs one finite value per pixel"
-            )));
+            return Err(format!("channel {name} needs one finite value per pixel"));
         }
     }
     if !white_xy.iter().all(|c| c.is_finite()) {
-        return Err(fail(format!("white point {white_xy:?} is not finite")));
+        return Err(format!("white point {white_xy:?} is not finite"));
     }
     let mut image = build_image(width, height, rgb, xyz, &extra, white_xy, meta);
     let other = &mut image.layer_data.attributes.other;
@@ -203,34 +241,10 @@ pub fn write_with_layers(
             .insert(text(name), AttributeValue::Text(text(value)))
             .is_some()
         {
-            return Err(fail(format!("attribute {name} is written twice")));
+            return Err(format!("attribute {name} is written twice"));
         }
     }
-    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
-}
-
-/// [`write()`] of a window of an image (`--crop`): `rgb` and `xyz` hold the window's
-/// `window.2 × window.3` pixels at (`window.0`, `window.1`) of a `full.0 × full.1` image.
-/// The file's data window is the window, its display window the full image.
-pub fn write_window(
-    path: &Path,
-    full: (usize, usize),
-    window: [usize; 4],
-    rgb: &[[f32; 3]],
-    xyz: &[[f32; 3]],
-    white_xy: [f32; 2],
-    meta: &ExrMetadata,
-) -> Result<()> {
-    let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
-    let [x, y, width, height] = window;
-    check_sizes(width, height, rgb.len(), xyz.len()).map_err(fail)?;
-    check_finite(width, rgb, xyz).map_err(fail)?;
-    let to_i32 = |v: usize| i32::try_from(v).map_err(|_| fail(format!("{v} pixels is too far")));
-    let (x, y, fw, fh) = (to_i32(x)?, to_i32(y)?, full.0, full.1);
-    let mut image = build_image(width, height, rgb, xyz, &[], white_xy, meta);
-    image.layer_data.attributes.layer_position = Vec2(x, y);
-    image.attributes.display_window = exr::meta::attribute::IntegerBounds::new((0, 0), (fw, fh));
-    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+    Ok(image)
 }
 
 /// Reads an EXR file: all channels of its first layer by name, converted to f32, and all

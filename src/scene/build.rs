@@ -140,6 +140,7 @@ pub fn build_with(
         stage_to_world: desc.stage_to_world,
         content_hash: desc.content_hash,
         features: SceneFeatures::default(),
+        data_window: desc.render.data_window.clone(),
     };
     let material_paths: Vec<String> = desc.materials.iter().map(|m| m.prim_path.clone()).collect();
     scene.features = analysis::analyze(&scene, &material_paths);

@@ -3,6 +3,7 @@
 
 use super::analysis::SceneFeatures;
 use crate::accel::bvh::Bvh;
+use crate::desc::DataWindowDesc;
 use crate::geometry::triangle::hit_point_error;
 use crate::geometry::Ray;
 use crate::light::emit::SceneSphere;
@@ -110,6 +111,9 @@ pub struct Scene {
     pub content_hash: u64,
     /// What the stage calls for (`scene::analysis`), found once when the scene is built.
     pub features: SceneFeatures,
+    /// The RenderSettings' `dataWindowNDC`, when it is not the whole image: the part of the
+    /// image a render renders (`session::crop`).
+    pub data_window: Option<DataWindowDesc>,
 }
 
 impl Scene {

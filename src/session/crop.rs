@@ -7,9 +7,10 @@
 //! windows that share an NDC edge share no pixel and leave none out.
 //!
 //! USD's `dataWindowNDC` is (xmin, ymin, xmax, ymax) with y up from the bottom (NDC of
-//! `UsdRenderSettingsBase`): it is the window (xmin, 1 − ymax, xmax, 1 − ymin) here. The
-//! stage reader does not read it yet (it warns that it ignores a window other than the whole
-//! image); [`CropSpec::from_data_window_ndc`] is the conversion it will use.
+//! `UsdRenderSettingsBase`): it is the window (xmin, 1 − ymax, xmax, 1 − ymin) here
+//! ([`CropSpec::from_data_window_ndc`]). A stage's window ([`stage_window`]) is the window
+//! of every render of the stage that gives no `--crop`: the image is that window's, but the
+//! render is not a part unless `--part` makes it one.
 //!
 //! A crop render renders every sample of its window's pixels, and only those: its camera
 //! samples are those of the whole render for the same (seed, pixel, sample). Integrators
@@ -17,8 +18,22 @@
 //! lands, so crops that tile the image partition the whole render's work and merge into it
 //! bit for bit (`session::part`).
 
-use crate::error::Reason;
+use crate::error::{Error, Reason, Result};
+use crate::scene::Scene;
 use crate::sensor::film::Tile;
+
+/// The window of `scene`'s RenderSettings `dataWindowNDC` on its camera's image, when it is
+/// not the whole image; an error names the prim when the window holds no whole pixel.
+pub fn stage_window(scene: &Scene) -> Result<Option<Crop>> {
+    let Some(w) = &scene.data_window else {
+        return Ok(None);
+    };
+    let (width, height) = (scene.camera.width as usize, scene.camera.height as usize);
+    CropSpec::from_data_window_ndc(w.ndc)
+        .and_then(|spec| spec.resolve(width, height))
+        .map(Some)
+        .map_err(|e| Error::prim(&scene.source, &w.prim_path, format!("dataWindowNDC: {e}")))
+}
 
 /// A window as given: pixels or NDC, not yet tied to a resolution.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -100,6 +100,9 @@ pub struct RenderOptions {
     pub sampler: SamplerKind,
     /// Extra layers: spectral radiance, AOVs (`session::layers`).
     pub layers: LayerOptions,
+    /// Render only this window's pixels (`--crop`, or the stage's `dataWindowNDC`:
+    /// `session::crop`); None: the whole image. Auto's pilot renders the same window.
+    pub crop: Option<Crop>,
 }
 
 /// The wavelength counts [`RenderOptions::wavelengths`] may take.
@@ -120,6 +123,7 @@ impl Default for RenderOptions {
             max_memory: None,
             sampler: SamplerKind::ZSobol,
             layers: LayerOptions::default(),
+            crop: None,
         }
     }
 }
@@ -228,7 +232,7 @@ impl<'a> ImageSession<'a> {
             meters: false,
         };
         let splats = opts.integrator.capabilities().splats;
-        Ok(ImageSession {
+        let mut session = ImageSession {
             scene,
             pool: pool::new(opts.threads)?,
             estimator: opts.integrator.estimator(scene, settings)?,
@@ -260,7 +264,11 @@ impl<'a> ImageSession<'a> {
             auto: None,
             samplers: pixel_samplers(opts, w as u64),
             opts: opts.clone(),
-        })
+        };
+        if let Some(c) = opts.crop {
+            session.start_crop(c).map_err(crate::error::Error::option)?;
+        }
+        Ok(session)
     }
 
     /// The samples per pixel a pause of a session of `integrator` on `scene` must be a

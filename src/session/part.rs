@@ -27,6 +27,10 @@ pub const STAGE_FILE_KEY: &str = "stage file";
 /// The identity key of a part's window (`--crop`, `session::crop`), `x0,y0,x1,y1` in pixels;
 /// absent for the whole image.
 pub const CROP_KEY: &str = "crop";
+/// The identity key of the render's own window (the stage's `dataWindowNDC`,
+/// `session::crop::stage_window`), `x0,y0,x1,y1` in pixels; absent for the whole image. The
+/// parts' windows tile it, and the merged image is its window.
+pub const WINDOW_KEY: &str = "window";
 
 /// Part `index` of `count` (0 ≤ index < count).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,6 +83,10 @@ pub fn identity(
     crop: Option<Crop>,
 ) -> Vec<(String, String)> {
     let mut id = checkpoint::identity(scene, opts);
+    // A stage whose window cannot be resolved renders nothing, so no part names it.
+    if let Ok(Some(w)) = super::crop::stage_window(scene) {
+        id.push((WINDOW_KEY.into(), w.label()));
+    }
     id.push((INTEGRATOR_NAME_KEY.into(), opts.integrator.name().into()));
     let mis = match opts.integrator {
         Integrator::Bdpt { mis } | Integrator::Auto { mis } => Some(mis),
@@ -128,6 +136,8 @@ pub struct Merged {
     /// The parts' wall-clock times added (the CPU time of the render, as a farm sees it).
     pub wall_time_s: f64,
     pub depth_cut: BatchedRatio,
+    /// The render's window (the stage's `dataWindowNDC`), when not the whole image.
+    pub window: Option<Crop>,
 }
 
 /// A part as merge sees it: its sample part, its window (None: the whole image) and its
@@ -161,6 +171,7 @@ pub fn add(merged: &mut Option<Merged>, c: &Checkpoint) -> Result<(), String> {
                 dropped: c.dropped,
                 wall_time_s: c.wall_time_s,
                 depth_cut: c.depth_cut,
+                window: value(&c.identity, WINDOW_KEY).and_then(Crop::from_label),
             })
         }
         Some(m) => {
@@ -183,8 +194,9 @@ fn render_identity(c: &Checkpoint) -> Vec<(String, String)> {
 }
 
 /// Checks that `parts` are parts of one render (same identity but the part and crop), each
-/// rendered whole, and that for every sample part the windows cover each pixel exactly once:
-/// none missing, none twice. Only the films' sizes are read, so the parts may be given with
+/// rendered whole, and that for every sample part the windows cover each pixel of the
+/// render's window (the whole image, or [`WINDOW_KEY`]'s) exactly once: none missing, none
+/// twice, none outside. Only the films' sizes are read, so the parts may be given with
 /// their films' data left out (merge then reads them one at a time). Returns the merge order
 /// (by part, then window). An error names the index of the part at fault, when there is one.
 pub fn check(parts: &[Checkpoint]) -> Result<Vec<usize>, (Option<usize>, String)> {
@@ -216,7 +228,13 @@ pub fn check(parts: &[Checkpoint]) -> Result<Vec<usize>, (Option<usize>, String)
         })?;
     }
     labelled.sort_by_key(|l| (l.part.index, l.crop.map(|c| (c.y0, c.x0))));
-    check_cover(parts, &labelled, first.part.count)?;
+    let window = match value(&expected, WINDOW_KEY) {
+        None => None,
+        Some(s) => {
+            Some(Crop::from_label(s).ok_or((Some(first.at), format!("bad render window '{s}'")))?)
+        }
+    };
+    check_cover(parts, &labelled, first.part.count, window)?;
     let spp: u64 = value(&expected, "spp")
         .and_then(|s| s.parse().ok())
         .ok_or((
@@ -258,14 +276,21 @@ fn label(parts: &[Checkpoint]) -> Result<Vec<Labelled>, (Option<usize>, String)>
 }
 
 /// For every sample part 0..count, the parts' windows (`labelled`, sorted by part) cover
-/// every pixel of the film exactly once.
+/// every pixel of the render's `window` (None: the whole film) exactly once.
 fn check_cover(
     parts: &[Checkpoint],
     labelled: &[Labelled],
     count: u64,
+    window: Option<Crop>,
 ) -> Result<(), (Option<usize>, String)> {
     let film = &parts[labelled[0].at].film;
     let (w, h) = (film.width, film.height);
+    let target = window.unwrap_or(Crop::whole(w, h));
+    if target.x1 > w || target.y1 > h {
+        return Err((None, "the render's window is outside its film".into()));
+    }
+    let inside =
+        |c: &Crop| c.x0 >= target.x0 && c.y0 >= target.y0 && c.x1 <= target.x1 && c.y1 <= target.y1;
     let mut covered = vec![0u8; w * h];
     for k in 0..count {
         covered.fill(0);
@@ -277,11 +302,15 @@ fn check_cover(
             if of_k[..j].iter().any(|o| o.crop == l.crop) {
                 return Err((Some(l.at), format!("part {} given twice", l.label())));
             }
-            let c = l.crop.unwrap_or(Crop::whole(w, h));
-            if c.x1 > w || c.y1 > h {
+            let c = l.crop.unwrap_or(target);
+            if !inside(&c) {
                 return Err((
                     Some(l.at),
-                    format!("part {}: crop outside the film", l.label()),
+                    format!(
+                        "part {}: crop outside the render's window {}",
+                        l.label(),
+                        target.label()
+                    ),
                 ));
             }
             for y in c.y0..c.y1 {
@@ -299,15 +328,13 @@ fn check_cover(
                 }
             }
         }
-        if let Some(i) = covered.iter().position(|&v| v == 0) {
-            return Err((
-                None,
-                format!(
-                    "missing pixels of part {k}/{count}: no crop covers ({}, {})",
-                    i % w,
-                    i / w
-                ),
-            ));
+        for y in target.y0..target.y1 {
+            if let Some(x) = (target.x0..target.x1).find(|&x| covered[y * w + x] == 0) {
+                return Err((
+                    None,
+                    format!("missing pixels of part {k}/{count}: no crop covers ({x}, {y})"),
+                ));
+            }
         }
     }
     Ok(())

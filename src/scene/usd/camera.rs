@@ -4,7 +4,7 @@ use glam::{DMat4, DVec3};
 use openusd::{sdf, usd};
 
 use super::values::{self, Ctx};
-use crate::desc::{CameraDesc, RenderSettingsDesc};
+use crate::desc::{CameraDesc, DataWindowDesc, RenderSettingsDesc};
 use crate::error::Result;
 
 /// Reads a camera. `local_to_world` is in stage space (units, up axis).
@@ -141,7 +141,9 @@ pub(super) fn read_render_settings(
         let product = settings_of(ctx, &product_prim)?;
         desc.resolution = product.resolution.or(desc.resolution);
         desc.camera = product.camera.or(desc.camera);
+        desc.data_window = product.data_window.or(desc.data_window);
     }
+    desc.data_window = desc.data_window.filter(|w| w.ndc != WHOLE_IMAGE);
     if let Some(camera) = &desc.camera {
         if !cameras.iter().any(|c| &c.prim_path == camera) {
             return Err(ctx.err(
@@ -185,7 +187,10 @@ fn chosen_settings(ctx: &mut Ctx, settings: &[sdf::Path]) -> Result<Option<sdf::
 }
 
 /// The RenderSettings / RenderProduct properties that are read.
-const HONOURED_SETTINGS: [&str; 3] = ["resolution", "camera", "products"];
+const HONOURED_SETTINGS: [&str; 4] = ["resolution", "camera", "products", "dataWindowNDC"];
+
+/// `dataWindowNDC`'s schema fallback: the whole image.
+const WHOLE_IMAGE: [f64; 4] = [0.0, 0.0, 1.0, 1.0];
 
 /// Warns about every authored property of a RenderSettings or RenderProduct prim that is
 /// not read, unless it holds its schema fallback or what the renderer does anyway.
@@ -220,7 +225,6 @@ fn matches_behaviour(name: &str, value: &sdf::Value) -> bool {
     };
     match name {
         "pixelAspectRatio" => values::to_f64(value) == Some(1.0),
-        "dataWindowNDC" => values::to_vec4(value, 1.0) == Some([0.0, 0.0, 1.0, 1.0]),
         "aspectRatioConformPolicy" => values::to_token(value).as_deref() == Some("expandAperture"),
         "disableMotionBlur" | "instantaneousShutter" => true,
         "disableDepthOfField" => values::to_bool(value) == Some(false),
@@ -253,5 +257,41 @@ fn settings_of(ctx: &mut Ctx, prim: &usd::Prim) -> Result<RenderSettingsDesc> {
         .into_iter()
         .next()
         .map(|p| p.as_str().to_string());
-    Ok(RenderSettingsDesc { resolution, camera })
+    Ok(RenderSettingsDesc {
+        resolution,
+        camera,
+        data_window: data_window_of(ctx, prim)?,
+    })
+}
+
+/// An authored `dataWindowNDC` (the whole image included, so that a product's whole window
+/// overrides its settings' window). A window reaching outside [0, 1] (overscan: pixels
+/// beyond the screen window) or an empty one is refused.
+fn data_window_of(ctx: &mut Ctx, prim: &usd::Prim) -> Result<Option<DataWindowDesc>> {
+    let Some(value) = ctx.raw(prim, "dataWindowNDC")? else {
+        return Ok(None);
+    };
+    let Some(ndc) = values::to_vec4(&value, 1.0) else {
+        return Err(ctx.err(prim, "dataWindowNDC is not a float4"));
+    };
+    let [x0, y0, x1, y1] = ndc;
+    if !ndc.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)) {
+        return Err(ctx.err(
+            prim,
+            format!(
+                "dataWindowNDC ({x0}, {y0}, {x1}, {y1}) reaches outside the screen window \
+                 [0, 1]²; overscan is not supported"
+            ),
+        ));
+    }
+    if x0 >= x1 || y0 >= y1 {
+        return Err(ctx.err(
+            prim,
+            format!("dataWindowNDC ({x0}, {y0}, {x1}, {y1}) is empty (xmin ≥ xmax or ymin ≥ ymax)"),
+        ));
+    }
+    Ok(Some(DataWindowDesc {
+        ndc,
+        prim_path: prim.path().as_str().to_string(),
+    }))
 }

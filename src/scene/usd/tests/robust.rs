@@ -291,16 +291,63 @@ fn ignored_render_settings_are_named() {
         &desc,
         &["/Settings", "pixelAspectRatio is not supported; ignored"],
     );
-    assert_warned(
-        &desc,
-        &["/Settings", "dataWindowNDC is not supported; ignored"],
-    );
-    assert_eq!(desc.warnings.len(), 2, "{:?}", desc.warnings);
+    assert_eq!(desc.warnings.len(), 1, "{:?}", desc.warnings);
+    let window = desc
+        .render
+        .data_window
+        .as_ref()
+        .expect("the window is read");
+    assert_eq!(window.ndc, [0.0, 0.0, 0.5, 0.5]);
+    assert_eq!(window.prim_path, "/Settings");
     let fallbacks = settings
         .replace("float pixelAspectRatio = 2", "float pixelAspectRatio = 1")
         .replace("(0, 0, 0.5, 0.5)", "(0, 0, 1, 1)");
     let desc = load_body(&format!("{SCENE}{fallbacks}"));
     assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    assert_eq!(
+        desc.render.data_window, None,
+        "the whole image is no window"
+    );
+}
+
+#[test]
+fn data_windows_outside_the_screen_or_empty_are_refused() {
+    for (window, reason) in [
+        ("(-0.1, 0, 1, 1)", "overscan is not supported"),
+        ("(0, 0, 1.5, 1)", "overscan is not supported"),
+        ("(0.5, 0, 0.5, 1)", "is empty"),
+        ("(0, 0.7, 1, 0.2)", "is empty"),
+    ] {
+        let settings = format!(
+            "def RenderSettings \"Settings\" {{\n    float4 dataWindowNDC = {window}\n}}\n"
+        );
+        let err = load_body_err(&format!("{SCENE}{settings}"));
+        assert_error(&err, Some("/Settings"), reason);
+    }
+}
+
+#[test]
+fn a_product_window_overrides_the_settings_window() {
+    let settings = "def RenderSettings \"Settings\" {
+    float4 dataWindowNDC = (0, 0, 0.5, 0.5)
+    rel products = </Product>
+}
+def RenderProduct \"Product\" {
+    float4 dataWindowNDC = (0, 0, 1, 1)
+}
+";
+    let desc = load_body(&format!("{SCENE}{settings}"));
+    assert_eq!(
+        desc.render.data_window, None,
+        "the product's whole image wins"
+    );
+    let narrower = settings.replace("(0, 0, 1, 1)", "(0.25, 0.5, 0.75, 1)");
+    let desc = load_body(&format!("{SCENE}{narrower}"));
+    let w = desc.render.data_window.expect("the product's window");
+    assert_eq!(
+        (w.ndc, w.prim_path.as_str()),
+        ([0.25, 0.5, 0.75, 1.0], "/Product")
+    );
 }
 
 #[test]
