@@ -38,8 +38,8 @@ const BAR_W: i64 = 24;
 const LEGEND_MIN_H: usize = 240;
 /// From the bar to its labels: clear of the tick mark, so that it does not read as a minus.
 const LABEL_GAP: i64 = 16;
-/// The unit over the legend (the font has no superscript).
-pub const UNIT: &str = "cd/m2";
+/// The unit over the legend.
+pub const UNIT: &str = "cd/m²";
 
 /// Where the parts of the image are, in pixels.
 #[derive(Clone, Copy, Debug)]

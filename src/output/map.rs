@@ -229,15 +229,25 @@ impl IlluminanceMap {
         paint_legend(&mut c, &layout, (lo, hi, step), &levels);
         self.paint_axes(&mut c, &layout);
         self.paint_cell_values(&mut c, &layout, &values, (lo, hi));
-        let footer = format!(
+        c.text(MARGIN, layout.footer_y, &self.footer(), 2, INK);
+        c
+    }
+
+    /// The summary line under the map, with the stage's unit when it is not the metre (the
+    /// axes are in metres).
+    fn footer(&self) -> String {
+        let sm = self.summary();
+        let mut line = format!(
             "Emin {}  Eavg {}  Emax {} lx  U0 {}",
             sig(sm.e_min),
             sig(sm.e_avg),
             sig(sm.e_max),
             sig(sm.u0)
         );
-        c.text(MARGIN, layout.footer_y, &footer, 2, INK);
-        c
+        if self.meters_per_unit != 1.0 {
+            line += &format!("   (axes in m; stage unit {} m)", sig(self.meters_per_unit));
+        }
+        line
     }
 
     fn paint_map(&self, c: &mut Canvas, l: &Layout, values: &[f64], (lo, hi): (f64, f64)) {
@@ -430,8 +440,8 @@ impl Layout {
         let bar_h = map_h.max(LEGEND_MIN_H);
         let footer_y = top + bar_h.max(map_h + AXIS_H as usize) as i64 + 14;
         let legend_right = bar_x + BAR_W + 8 + text_width("0000000.00", 2) as i64 + MARGIN;
-        let footer_right =
-            2 * MARGIN + text_width("Emin 00000  Eavg 00000  Emax 00000 lx  U0 0.000", 2) as i64;
+        let widest = text_width("Emin 00000  Eavg 00000  Emax 00000 lx  U0 0.000", 2);
+        let footer_right = 2 * MARGIN + widest.max(text_width(&m.footer(), 2)) as i64;
         Layout {
             map_w,
             map_h,

@@ -1,6 +1,7 @@
 //! `convergence.png`: error against wall time on log-log axes, one line per configuration
 //! (our integrators solid with dots, peers dashed with squares), the fitted slope in each
-//! legend entry, and the target errors as grey horizontal lines. The only module naming
+//! legend entry, and the target errors as grey horizontal lines; and the text of the maps'
+//! and false colour's rasters ([`draw_text`], `output/map/canvas.rs`). The only module naming
 //! plotters; text is drawn with the DejaVu Sans font shipped in `assets/fonts/` (its licence
 //! beside it), so no system font library is needed.
 
@@ -38,6 +39,33 @@ fn register() {
         // The font is ours and valid; a failure would only leave the labels out.
         let _ = register_font(FONT, FontStyle::Normal, FONT_BYTES);
     });
+}
+
+/// Draws `text` in DejaVu Sans of `px` pixels (the em) onto the RGB8 raster `pixels` of
+/// `size`, the top of its line box at `at.1` and its left at `at.0`; what falls outside the
+/// raster is clipped. Glyph edges are blended into what is beneath them.
+pub fn draw_text(
+    pixels: &mut [u8],
+    size: (u32, u32),
+    at: (i32, i32),
+    text: &str,
+    px: f64,
+    color: [u8; 3],
+) {
+    register();
+    let root = BitMapBackend::with_buffer(pixels, size).into_drawing_area();
+    let style = (FONT, px)
+        .into_font()
+        .color(&RGBColor(color[0], color[1], color[2]));
+    // The font is ours and valid: a failure could only leave this text out.
+    let _ = root.draw_text(text, &style, at);
+    let _ = root.present();
+}
+
+/// Width and height in pixels of `text` as [`draw_text`] draws it at `px`.
+pub fn text_size(text: &str, px: f64) -> (u32, u32) {
+    register();
+    (FONT, px).into_font().box_size(text).unwrap_or((0, 0))
 }
 
 /// One line of the plot.

@@ -1,45 +1,22 @@
-//! A small 8-bit RGB raster for the illuminance map: filled rectangles, 1-pixel lines
-//! (Bresenham 1965) and text in a built-in 5×7 bitmap font, so that legends need no font
-//! files or extra crates.
+//! A small 8-bit RGB raster for the illuminance map and the false-colour legend: filled
+//! rectangles and 1-pixel lines (Bresenham 1965), the numerics of the maps' pictures, and text
+//! in DejaVu Sans drawn by plotters (`output::plot::draw_text`, the font shipped in
+//! `assets/fonts/`). Text was once a hand-written 5×7 bitmap font with only the legends'
+//! glyphs; the font gives every character (`cd/m²`, a stage's unit name) and anti-aliased
+//! edges, and the layout keeps its sizes: a text of scale k is an em of `TEXT_PX`·k pixels whose
+//! capital letters are about `GLYPH_H`·k pixels tall.
 
-/// Glyphs of the 5×7 font: 7 rows of 5 bits, most significant bit on the left. Only the
-/// characters map and false-colour legends use (digits, a decimal point, signs, the words of
-/// the summary and the unit cd/m2).
-const FONT: &[(char, [u8; 7])] = &[
-    ('0', [0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e]),
-    ('1', [0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e]),
-    ('2', [0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f]),
-    ('3', [0x1f, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0e]),
-    ('4', [0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02]),
-    ('5', [0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e]),
-    ('6', [0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e]),
-    ('7', [0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08]),
-    ('8', [0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e]),
-    ('9', [0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c]),
-    ('.', [0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c]),
-    ('-', [0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00]),
-    ('+', [0x00, 0x04, 0x04, 0x1f, 0x04, 0x04, 0x00]),
-    ('=', [0x00, 0x00, 0x1f, 0x00, 0x1f, 0x00, 0x00]),
-    (':', [0x00, 0x0c, 0x0c, 0x00, 0x0c, 0x0c, 0x00]),
-    ('e', [0x00, 0x00, 0x0e, 0x11, 0x1f, 0x10, 0x0e]),
-    ('E', [0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x1f]),
-    ('U', [0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0e]),
-    ('/', [0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00]),
-    ('a', [0x00, 0x00, 0x0e, 0x01, 0x0f, 0x11, 0x0f]),
-    ('c', [0x00, 0x00, 0x0e, 0x10, 0x10, 0x11, 0x0e]),
-    ('d', [0x01, 0x01, 0x0d, 0x13, 0x11, 0x11, 0x0f]),
-    ('g', [0x00, 0x00, 0x0f, 0x11, 0x0f, 0x01, 0x0e]),
-    ('i', [0x04, 0x00, 0x0c, 0x04, 0x04, 0x04, 0x0e]),
-    ('l', [0x0c, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e]),
-    ('m', [0x00, 0x00, 0x1a, 0x15, 0x15, 0x11, 0x11]),
-    ('n', [0x00, 0x00, 0x16, 0x19, 0x11, 0x11, 0x11]),
-    ('v', [0x00, 0x00, 0x11, 0x11, 0x11, 0x0a, 0x04]),
-    ('x', [0x00, 0x00, 0x11, 0x0a, 0x04, 0x0a, 0x11]),
-];
+use crate::output::plot;
 
-/// Glyph cell of the font at scale 1: 5 columns plus 1 of spacing, 7 rows.
-pub const GLYPH_W: usize = 6;
-pub const GLYPH_H: usize = 7;
+/// The em of scale-1 text, in pixels: DejaVu Sans's capitals are 0.73 em tall (its
+/// `capHeight` 1493 of 2048 units), so 8 pixels, [`GLYPH_H`].
+const TEXT_PX: f64 = 11.0;
+/// The distance from the top plotters places a text at to the top of its capitals, in ems:
+/// measured, the capitals start 0.15 em above it (`text_is_drawn_where…` checks it).
+const CAP_GAP_EM: f64 = -0.15;
+
+/// The height of scale-1 capitals (and digits) in pixels: the layouts' line unit.
+pub const GLYPH_H: usize = 8;
 
 /// An RGB8 image, row-major, top row first.
 pub struct Canvas {
@@ -95,23 +72,15 @@ impl Canvas {
         }
     }
 
-    /// Draws `text` with its top-left corner at (x, y), each font pixel `scale`² pixels.
-    /// Characters the font lacks are left blank.
+    /// Draws `text` with the top-left corner of its capitals at (x, y), at `scale` (capitals
+    /// `GLYPH_H`·scale pixels tall).
     pub fn text(&mut self, x: i64, y: i64, text: &str, scale: usize, c: [u8; 3]) {
-        let s = scale as i64;
-        for (k, ch) in text.chars().enumerate() {
-            let Some((_, rows)) = FONT.iter().find(|(g, _)| *g == ch) else {
-                continue;
-            };
-            let x0 = x + (k * GLYPH_W * scale) as i64;
-            for (row, bits) in rows.iter().enumerate() {
-                for col in 0..5 {
-                    if bits & (0x10 >> col) != 0 {
-                        self.fill_rect(x0 + col as i64 * s, y + row as i64 * s, s, s, c);
-                    }
-                }
-            }
-        }
+        let px = TEXT_PX * scale as f64;
+        let top = y - (CAP_GAP_EM * px).round() as i64;
+        let clamp = |v: i64| v.clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+        let size = (self.width as u32, self.height as u32);
+        let bytes = self.pixels.as_flattened_mut();
+        plot::draw_text(bytes, size, (clamp(x), clamp(top)), text, px, c);
     }
 
     /// Interleaved bytes for PNG encoding.
@@ -120,9 +89,9 @@ impl Canvas {
     }
 }
 
-/// Width in pixels of `text` drawn at `scale` (without the trailing spacing column).
+/// Width in pixels of `text` drawn at `scale`.
 pub fn text_width(text: &str, scale: usize) -> usize {
-    (text.chars().count() * GLYPH_W).saturating_sub(1) * scale
+    plot::text_size(text, TEXT_PX * scale as f64).0 as usize
 }
 
 #[cfg(test)]
@@ -130,10 +99,36 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_summary_character_has_a_glyph() {
-        for ch in "0123456789.-+=: Emin Eavg Emax lx U0 e".chars() {
-            assert!(ch == ' ' || FONT.iter().any(|(g, _)| *g == ch), "{ch}");
+    fn text_is_drawn_where_its_width_and_cap_height_say() {
+        let ink = [0, 0, 0];
+        for scale in [1, 2] {
+            let mut c = Canvas::new(200, 40, [255; 3]);
+            let (x, y) = (10, 12);
+            c.text(x, y, "E 10 lx", scale, ink);
+            let w = text_width("E 10 lx", scale) as i64;
+            let dark = |p: &[u8; 3]| p[0] < 128;
+            let (mut x0, mut x1, mut y0, mut y1) = (i64::MAX, 0, i64::MAX, 0);
+            for (i, p) in c.pixels.iter().enumerate() {
+                if dark(p) {
+                    let (px, py) = ((i % 200) as i64, (i / 200) as i64);
+                    (x0, x1, y0, y1) = (x0.min(px), x1.max(px), y0.min(py), y1.max(py));
+                }
+            }
+            // The capital E's top within a pixel of y; the ink within the text's width; the
+            // capitals GLYPH_H·scale tall (no descender in the text).
+            let cap = (GLYPH_H * scale) as i64;
+            assert!((y0 - y).abs() <= 1, "scale {scale}: top {y0}");
+            assert!(
+                x0 >= x && x0 <= x + 2 && x1 < x + w + 1,
+                "scale {scale}: {x0}..{x1}, {w}"
+            );
+            assert!(
+                (y1 + 1 - y - cap).abs() <= scale as i64 + 1,
+                "scale {scale}: {y0}..{y1}"
+            );
         }
+        assert!(text_width("0000", 1) > text_width("00", 1));
+        assert!(text_width("00", 2) > text_width("00", 1));
     }
 
     #[test]
