@@ -14,7 +14,7 @@ use super::{Light, LightHit, LightSampleContext};
 use crate::geometry::offset::gamma;
 use crate::math::Frame;
 use crate::sampling::warp::{
-    concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_sphere, uniform_triangle,
+    concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_triangle,
 };
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
@@ -126,8 +126,7 @@ impl Light {
                 self.emit_cosine(p, gamma(6) * p.abs(), r.n, r.area, false, u_dir, lambda)
             }
             Light::Disk(d) => {
-                let q = concentric_disk(u_pos) * d.radius;
-                let p = d.center + q.x * d.frame.s + q.y * d.frame.t;
+                let p = d.point(concentric_disk(u_pos));
                 self.emit_cosine(
                     p,
                     gamma(6) * p.abs(),
@@ -139,10 +138,9 @@ impl Light {
                 )
             }
             Light::Sphere(s) => {
-                let n = uniform_sphere(u_pos);
-                let p = s.center + s.radius * n;
-                let err = gamma(5) * (s.center.abs() + (s.radius * n).abs());
-                self.emit_cosine(p, err, n, s.area(), false, u_dir, lambda)
+                let (p, n, pdf_a) = s.sample_area(u_pos);
+                let err = gamma(5) * (s.center.abs() + (p - s.center).abs());
+                self.emit_cosine(p, err, n, 1.0 / pdf_a, false, u_dir, lambda)
             }
             Light::Cylinder(c) => {
                 let (p, n) = c.point_on_side(u_pos);
@@ -157,9 +155,10 @@ impl Light {
     /// Densities with which [`Light::sample_le`] produces the point `p` (geometric normal `n`)
     /// and the direction `w` leaving it; for infinite lights `p` and `n` are ignored and `w`
     /// is the direction of travel. Every light's points are uniform over its area (a
-    /// textured emitter's too: only its radiance varies), so `_p` is not needed. A delta
-    /// direction has density 1 relative to its delta, as in `sample_li`.
-    pub fn pdf_le(&self, _p: Vec3, n: Vec3, w: Vec3, sphere: &SceneSphere) -> LePdf {
+    /// textured emitter's too: only its radiance varies) except an ellipsoidal sphere light's,
+    /// whose density depends on `p`. A delta direction has density 1 relative to its delta,
+    /// as in `sample_li`.
+    pub fn pdf_le(&self, p: Vec3, n: Vec3, w: Vec3, sphere: &SceneSphere) -> LePdf {
         let cosine = |area: f32, two_sided: bool| {
             let c = n.dot(w);
             let dir_w = if two_sided {
@@ -176,7 +175,7 @@ impl Light {
             Light::Triangle(t) => cosine(t.area, t.two_sided),
             Light::Rect(r) => cosine(r.area, false),
             Light::Disk(d) => cosine(d.area(), false),
-            Light::Sphere(s) => cosine(s.area(), false),
+            Light::Sphere(s) => cosine(1.0 / s.pdf_area(p), false),
             Light::Cylinder(c) => cosine(c.area(), false),
             Light::Distant(d) => LePdf {
                 pos_a: 1.0 / sphere.disk_area(),
@@ -191,6 +190,8 @@ impl Light {
 
     /// A point already chosen on a flat or spherical emitter with normal `n`, and a
     /// cosine-weighted direction about it (PBR 4ed §12.5.1, DiffuseAreaLight::SampleLe).
+    /// `area` is the reciprocal of the point's density per unit area (the emitter's area
+    /// when points are uniform).
     #[allow(clippy::too_many_arguments)]
     fn emit_cosine(
         &self,
@@ -272,6 +273,7 @@ impl Light {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::light::ellipsoid::Ellipsoid;
     use crate::light::{DiskLight, RectLight, SphereLight, TriangleLight};
     use crate::sampling::Sampler;
     use crate::spectral::Spectrum;
@@ -293,20 +295,44 @@ mod tests {
                 -Vec3::Y,
                 white.clone(),
             )),
+            Light::Disk(DiskLight::round(
+                "/d".into(),
+                Vec3::ZERO,
+                Frame::from_normal(Vec3::new(0.0, 0.6, 0.8)),
+                0.3,
+                white.clone(),
+            )),
             Light::Disk(DiskLight {
-                prim_path: "/d".into(),
-                center: Vec3::ZERO,
-                frame: Frame::from_normal(Vec3::new(0.0, 0.6, 0.8)),
-                radius: 0.3,
-                radiance: white.clone(),
-                shaping: None,
+                axes: [Vec3::new(0.5, 0.1, 0.0), Vec3::new(0.2, 0.0, 0.1)],
+                ..DiskLight::round(
+                    "/ellipse".into(),
+                    Vec3::ONE,
+                    // ∝ a × b, the ellipse's plane normal.
+                    Frame::from_normal(Vec3::new(0.01, -0.05, -0.02).normalize()),
+                    0.3,
+                    white.clone(),
+                )
             }),
             Light::Sphere(SphereLight {
                 prim_path: "/s".into(),
                 center: Vec3::splat(0.5),
                 radius: 0.2,
+                radiance: white.clone(),
+                shaping: None,
+                ellipsoid: None,
+            }),
+            Light::Sphere(SphereLight {
+                prim_path: "/e".into(),
+                center: Vec3::splat(-0.5),
+                radius: 0.6,
                 radiance: white,
                 shaping: None,
+                ellipsoid: Ellipsoid::new(glam::Mat3::from_cols(
+                    Vec3::new(0.3, 0.1, 0.0),
+                    Vec3::new(0.0, 0.5, 0.2),
+                    Vec3::new(0.1, 0.0, 0.15),
+                ))
+                .map(Box::new),
             }),
         ]
     }
@@ -343,10 +369,12 @@ mod tests {
         let mut s = Sampler::new(4, 5, 6);
         for light in lights() {
             let n = 4000;
-            let mut sum = 0.0f64;
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
             for _ in 0..n {
                 if let Some(le) = light.sample_le(s.get_2d(), s.get_2d(), &sphere, &lambda) {
-                    sum += (le.l[0] * le.cos_light() / (le.pdf_pos_a * le.pdf_dir_w)) as f64;
+                    let v = (le.l[0] * le.cos_light() / (le.pdf_pos_a * le.pdf_dir_w)) as f64;
+                    sum += v;
+                    sum2 += v * v;
                 }
             }
             let (area, sides) = match &light {
@@ -356,8 +384,15 @@ mod tests {
                 Light::Sphere(s) => (s.area(), 1.0),
                 _ => unreachable!(),
             };
-            let expected = PI * area * sides;
-            assert!((sum / n as f64 / expected as f64 - 1.0).abs() < 1e-4);
+            let expected = (PI * area * sides) as f64;
+            // Uniform points make every term equal (rounding only); an ellipsoid's points are
+            // not uniform, so its mean gets 5 standard errors of the terms' spread on top.
+            let mean = sum / n as f64;
+            let sem = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            assert!(
+                (mean - expected).abs() < 1e-4 * expected + 5.0 * sem,
+                "{light:?}: {mean} vs {expected}"
+            );
         }
     }
 }

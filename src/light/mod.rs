@@ -12,6 +12,7 @@ pub mod cylinder;
 pub mod disk;
 pub mod distant;
 pub mod dome;
+pub mod ellipsoid;
 pub mod emission;
 pub mod emit;
 pub mod ies;

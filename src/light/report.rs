@@ -114,7 +114,10 @@ fn single(light: &Light) -> LightReport {
                 kind: "SphereLight",
                 area: l.area(),
                 flux_per_nit: PI * l.area(),
-                peak_per_nit: PI * l.radius * l.radius,
+                peak_per_nit: l
+                    .ellipsoid
+                    .as_ref()
+                    .map_or(PI * l.radius * l.radius, |e| e.peak_projected_area()),
             },
             &l.radiance,
             &l.shaping,
@@ -380,6 +383,7 @@ mod tests {
             d65(100.0),
         ));
         let sphere = Light::Sphere(SphereLight {
+            ellipsoid: None,
             prim_path: "/S".into(),
             center: Vec3::ZERO,
             radius: 0.5,

@@ -12,6 +12,7 @@ use crate::error::Reason;
 use crate::error::{Error, Result};
 use crate::imageio;
 use crate::light::dome::LatLong;
+use crate::light::ellipsoid::Ellipsoid;
 use crate::light::emission::{self, Photometric};
 use crate::light::ies::IesProfile;
 use crate::light::rect::RectTexture;
@@ -785,12 +786,39 @@ fn rect(l: &LightDesc, width: f32, height: f32, texture: Option<&TextureDesc>) -
     ))
 }
 
-/// DiskLight: radius scaled by the transform's uniform scale, emitting along local −Z.
+/// DiskLight, emitting along local −Z: a round disk under a uniform in-plane scale, else the
+/// ellipse the transform makes of it (semi-axes the images of the local X and Y radii).
 fn disk(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
-    let r = radius * round_scale(m, &[0, 1], "DiskLight")?;
-    let area = PI * r * r;
-    let n = -m.transform_vector3(Vec3::Z).normalize();
+    let center = m.transform_point3(Vec3::ZERO);
+    let axes = [Vec3::X, Vec3::Y].map(|a| m.transform_vector3(a * radius));
+    let back = m.transform_vector3(Vec3::Z);
+    let round = round_scale(m, &[0, 1], "DiskLight").map(|scale| {
+        let frame = Frame::from_normal(-back.normalize());
+        DiskLight::round(String::new(), center, frame, radius * scale, Spectrum::Constant(0.0))
+    });
+    let disk = match round {
+        Ok(d) => d,
+        Err(_) => {
+            let n = axes[0].cross(axes[1]).normalize_or_zero();
+            if n == Vec3::ZERO {
+                return Err("the transform makes this DiskLight degenerate".into());
+            }
+            let n = if n.dot(back) > 0.0 { -n } else { n };
+            DiskLight {
+                axes,
+                ..DiskLight::round(
+                    String::new(),
+                    center,
+                    Frame::from_normal(n),
+                    axes[0].length().max(axes[1].length()),
+                    Spectrum::Constant(0.0),
+                )
+            }
+        }
+    };
+    let frame = disk.frame;
+    let (area, n) = (disk.area(), frame.n);
     let flat = Photometric {
         area: Some(area),
         flux_per_nit: Some(PI * area),
@@ -799,18 +827,22 @@ fn disk(l: &LightDesc, radius: f32) -> Reason<Light> {
     let (shaping, g) = shaped(l, flat, |w| area * n.dot(w).max(0.0))?;
     Ok(Light::Disk(DiskLight {
         prim_path: l.prim_path.clone(),
-        center: m.transform_point3(Vec3::ZERO),
-        frame: Frame::from_normal(n),
-        radius: r,
         radiance: emission::radiance(&l.emission, g)?,
         shaping,
+        ..disk
     }))
 }
 
-/// SphereLight: Φ = π · 4πr² · L, projected area πr² in every direction.
+/// SphereLight: Φ = π A L. Under a uniform scale a sphere of radius r (A = 4πr², projected
+/// area πr² in every direction); otherwise the ellipsoid the transform makes of it, sampled
+/// as such (`light/ellipsoid.rs`), never rounded to a sphere.
 fn sphere(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
-    let r = (radius * round_scale(m, &[0, 1, 2], "SphereLight")?).max(1e-6);
+    let center = m.transform_point3(Vec3::ZERO);
+    let Ok(scale) = round_scale(m, &[0, 1, 2], "SphereLight") else {
+        return ellipsoid(l, radius, center);
+    };
+    let r = (radius * scale).max(1e-6);
     let area = 4.0 * PI * r * r;
     let round = Photometric {
         area: Some(area),
@@ -820,10 +852,33 @@ fn sphere(l: &LightDesc, radius: f32) -> Reason<Light> {
     let (shaping, g) = shaped(l, round, |_| PI * r * r)?;
     Ok(Light::Sphere(SphereLight {
         prim_path: l.prim_path.clone(),
-        center: m.transform_point3(Vec3::ZERO),
+        center,
         radius: r,
         radiance: emission::radiance(&l.emission, g)?,
         shaping,
+        ellipsoid: None,
+    }))
+}
+
+/// A SphereLight under a non-uniform scale or a shear: the unit sphere mapped by the
+/// transform's linear part times the radius.
+fn ellipsoid(l: &LightDesc, radius: f32, center: Vec3) -> Reason<Light> {
+    let linear = Mat3::from_mat4(l.to_world) * radius.max(1e-6);
+    let e = Ellipsoid::new(linear)
+        .ok_or_else(|| "the transform makes this SphereLight degenerate".to_string())?;
+    let shape = Photometric {
+        area: Some(e.area),
+        flux_per_nit: Some(PI * e.area),
+        intensity_per_nit: Some(e.peak_projected_area()),
+    };
+    let (shaping, g) = shaped(l, shape, |w| e.projected_area(w))?;
+    Ok(Light::Sphere(SphereLight {
+        prim_path: l.prim_path.clone(),
+        center,
+        radius: e.bounding_radius(),
+        radiance: emission::radiance(&l.emission, g)?,
+        shaping,
+        ellipsoid: Some(Box::new(e)),
     }))
 }
 
