@@ -21,6 +21,7 @@ use spectral_render::bxdf::{
 use spectral_render::geometry::{triangle, Ray};
 use spectral_render::light::dome::LatLong;
 use spectral_render::light::ellipsoid::Ellipsoid;
+use spectral_render::light::portal::Portal;
 use spectral_render::light::{
     DiskLight, DistantLight, DomeLight, Light, LightHit, LightSampleContext, RectLight,
     SphereLight, TriangleLight,
@@ -339,7 +340,13 @@ fn disk_lights() -> Vec<LightCase> {
         radius: 0.6,
         ..disk
     };
-    cases.extend(flat_light_cases("ellipse", &Light::Disk(ellipse), c, n, 1.2));
+    cases.extend(flat_light_cases(
+        "ellipse",
+        &Light::Disk(ellipse),
+        c,
+        n,
+        1.2,
+    ));
     cases
 }
 
@@ -391,9 +398,15 @@ fn ellipsoid_lights() -> Vec<LightCase> {
     let r = sphere.radius;
     let receivers = [
         ("outside, near", c + m * Vec3::new(0.9, -1.2, 0.6)),
-        ("outside, along the short axis", c + m * Vec3::new(0.0, 0.0, 3.0)),
+        (
+            "outside, along the short axis",
+            c + m * Vec3::new(0.0, 0.0, 3.0),
+        ),
         ("outside, far", c + 40.0 * Vec3::new(0.3, -0.8, 0.5)),
-        ("inside, near the centre", c + m * Vec3::new(0.1, -0.2, 0.15)),
+        (
+            "inside, near the centre",
+            c + m * Vec3::new(0.1, -0.2, 0.15),
+        ),
         ("inside, near the surface", c + m * Vec3::new(0.0, 0.9, 0.1)),
     ];
     receivers
@@ -480,11 +493,30 @@ fn dome_lights() -> Vec<LightCase> {
             world_to_local: Mat3::from_mat4(to_world).inverse(),
             radiance: Spectrum::Constant(1.0),
             map,
+            portals: Vec::new(),
         }),
         receiver: Vec3::new(0.1, 0.2, 0.3),
         domain: SphericalDomain::sphere(),
     };
+    // Two portals facing the receiver (0.1, 0.2, 0.3) and one it is behind, over the
+    // lat-long map: the one-sample mixture of `light/portal.rs`.
+    let portal = |c: Vec3, eu: Vec3, ev: Vec3, out: Vec3| Portal::new(c, eu, ev, out).unwrap();
+    let portals = vec![
+        portal(Vec3::new(-0.5, 0.0, 1.0), Vec3::X, Vec3::Y * 0.8, Vec3::Z),
+        portal(
+            Vec3::new(1.0, -0.3, -0.2),
+            Vec3::Z * 0.6,
+            Vec3::new(0.1, 0.5, 0.0),
+            Vec3::X,
+        ),
+        portal(Vec3::new(-0.4, -1.0, -0.4), Vec3::X, Vec3::Z, Vec3::Y),
+    ];
+    let mut guided = dome("lat-long map with portals", rotation, Some(latlong()));
+    if let Light::Dome(d) = &mut guided.light {
+        d.portals = portals;
+    }
     vec![
+        guided,
         dome("constant", rotation, None),
         dome("lat-long map, rotated", rotation, Some(latlong())),
         dome(

@@ -19,11 +19,11 @@
 
 mod common;
 use common::*;
+use glam::{DMat4, DVec3};
 use spectral_render::output::exr;
 use spectral_render::scene;
 use spectral_render::session::{measure, MeterOptions, Stop};
 use spectral_render::{Integrator, Meter};
-use glam::{DMat4, DVec3};
 use std::f64::consts::PI as PI_F64;
 use std::path::Path;
 
@@ -227,7 +227,10 @@ fn stretched_ops(ops: &[(&str, f64)], scale: [f64; 3]) -> (String, DMat4) {
         scale[0], scale[1], scale[2]
     );
     order.push("\"xformOp:scale\"".into());
-    text += &format!("    uniform token[] xformOpOrder = [{}]\n", order.join(", "));
+    text += &format!(
+        "    uniform token[] xformOpOrder = [{}]\n",
+        order.join(", ")
+    );
     (text, m * DMat4::from_scale(DVec3::from(scale)))
 }
 
@@ -298,7 +301,10 @@ fn check_against_quadrature(
         let readings = lux(&dir, stage, points, integrator);
         for ((r, ci), e) in readings.iter().zip(exact) {
             eprintln!("{name} {integrator}: {r} ± {ci} lx vs {e}");
-            assert!(*ci < 0.04 * e, "{name} {integrator}: too noisy ({ci} of {r})");
+            assert!(
+                *ci < 0.04 * e,
+                "{name} {integrator}: too noisy ({ci} of {r})"
+            );
             assert!(
                 (r - e).abs() < 2.5 * ci,
                 "{name} {integrator}: {r} ± {ci} lx vs the quadrature's {e}"
@@ -384,4 +390,231 @@ fn light_filters_are_named_in_the_warning() {
         w.contains("light filters are not supported; ignored: /f1, /f2"),
         "{w}"
     );
+}
+
+/// Readings against closed forms: within 2.5 × ci95 (about 5 σ of the estimator's variance),
+/// plus 1e-4 relative for the rounding of noiseless estimates (next event estimation of one
+/// delta light has no variance), with the ci95 below 4 % so the test can fail.
+fn check_closed_form(name: &str, stage: &str, points: &[[f32; 3]], exact: &[f64]) {
+    let dir = temp_dir(name);
+    for integrator in INTEGRATORS {
+        let readings = lux(&dir, stage, points, integrator);
+        for ((r, ci), e) in readings.iter().zip(exact) {
+            eprintln!("{name} {integrator}: {r} ± {ci} lx vs {e}");
+            assert!(
+                *ci < 0.04 * e,
+                "{name} {integrator}: too noisy ({ci} of {r})"
+            );
+            assert!(
+                (r - e).abs() < 2.5 * ci + 1e-4 * e,
+                "{name} {integrator}: {r} ± {ci} lx vs the closed form's {e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn treat_as_point_is_a_point_light_with_the_spheres_intensity() {
+    // I = L π r² (the sphere's far field, normalize off): E = I cos θ / d² (inverse square
+    // and cosine law), below, off to the side, and 0.34 m away at 63° from the normal.
+    let (l, r) = (1000.0, 0.1);
+    let stage = format!(
+        "{}def SphereLight \"bulb\" {{\n    float inputs:radius = {r}\n    \
+         float inputs:intensity = {l}\n    bool treatAsPoint = 1\n    \
+         double3 xformOp:translate = (0, 1, 0)\n    \
+         uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n",
+        header()
+    );
+    let i_cd = l * PI_F64 * r * r;
+    let points = [[0.0, 0.0, 0.0], [0.8, 0.0, -0.5], [0.3, 0.85, 0.0]];
+    let exact: Vec<f64> = points
+        .iter()
+        .map(|p| {
+            let d = DVec3::new(0.0, 1.0, 0.0) - DVec3::from(p.map(f64::from));
+            i_cd * d.y / d.length().powi(3)
+        })
+        .collect();
+    check_closed_form("point", &stage, &points, &exact);
+    let dir = temp_dir("point-report");
+    let scene = scene::load(&write(&dir, "s.usda", &stage), Some((1, 1))).unwrap();
+    assert!(scene.summary.warnings.is_empty());
+    let report = &spectral_render::report::report(&scene.lights)[0];
+    let flux = report.luminous_flux.unwrap();
+    assert!((flux / (4.0 * PI_F64 * i_cd) - 1.0).abs() < 1e-4, "{flux}");
+    assert!(report.area.is_none() && report.luminance.is_none());
+}
+
+#[test]
+fn treat_as_line_is_a_line_light_with_the_cylinders_intensity() {
+    // Along world X from −ℓ/2 to ℓ/2 at height 1: dI/dℓ = 2 r L sin β. A point at height 0,
+    // offset z₀ across the line and a along it, facing up: with ρ² = 1 + z₀², d² = ρ² + u²
+    // (u = x − a), sin β = ρ/d and cos θ = 1/d, E = 2 r L ρ ∫ du / (ρ² + u²)², whose
+    // antiderivative is u / (2ρ²(ρ² + u²)) + atan(u/ρ) / (2ρ³).
+    let (l, r, len) = (1000.0, 0.05, 1.2);
+    let stage = format!(
+        "{}def CylinderLight \"tube\" {{\n    float inputs:radius = {r}\n    \
+         float inputs:length = {len}\n    float inputs:intensity = {l}\n    \
+         bool treatAsLine = 1\n    double3 xformOp:translate = (0, 1, 0)\n    \
+         uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n",
+        header()
+    );
+    let points = [[0.0, 0.0, 0.0], [0.9, 0.0, 0.0], [0.3, 0.0, -0.7]];
+    let exact: Vec<f64> = points
+        .iter()
+        .map(|p| {
+            let (a, z0) = (f64::from(p[0]), f64::from(p[2]));
+            let rho = (1.0 + z0 * z0).sqrt();
+            let g = |u: f64| {
+                u / (2.0 * rho * rho * (rho * rho + u * u)) + (u / rho).atan() / (2.0 * rho.powi(3))
+            };
+            2.0 * r * l * rho * (g(0.5 * len - a) - g(-0.5 * len - a))
+        })
+        .collect();
+    check_closed_form("line", &stage, &points, &exact);
+    let dir = temp_dir("line-report");
+    let scene = scene::load(&write(&dir, "s.usda", &stage), Some((1, 1))).unwrap();
+    let flux = spectral_render::report::report(&scene.lights)[0]
+        .luminous_flux
+        .unwrap();
+    let expected = PI_F64 * 2.0 * PI_F64 * r * len * l;
+    assert!((flux / expected - 1.0).abs() < 1e-4, "{flux} vs {expected}");
+}
+
+/// A 1 m square at height `y` facing down, black (`spectral:diffuse` of reflectance 0).
+fn black_blocker(y: f32) -> String {
+    let points = [
+        [-0.5, y, -0.5],
+        [-0.5, y, 0.5],
+        [0.5, y, 0.5],
+        [0.5, y, -0.5],
+    ];
+    looks_scope(&flat_diffuse("Black", 0)) + &polygon("blocker", &points, None, &binding("Black"))
+}
+
+/// A SphereLight 1 m up, `shadow` authored as `inputs:shadow:enable` when Some.
+fn shadow_stage(shadow: Option<bool>, blocker: bool) -> String {
+    let enable = shadow.map_or(String::new(), |s| {
+        format!("    bool inputs:shadow:enable = {}\n", s as i32)
+    });
+    format!(
+        "{}def SphereLight \"lamp\" {{\n    float inputs:radius = 0.1\n    \
+         float inputs:intensity = 1000\n{enable}    double3 xformOp:translate = (0, 1, 0)\n    \
+         uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}}\n{}",
+        header(),
+        if blocker {
+            black_blocker(0.5)
+        } else {
+            String::new()
+        }
+    )
+}
+
+#[test]
+fn shadow_enable_off_lets_next_event_shadow_rays_through() {
+    let dir = temp_dir("shadow-enable");
+    let read = |text: &str, integrator: &str| {
+        let path = write(&dir, "stage.usda", text);
+        let scene = scene::load(&path, Some((1, 1))).unwrap_or_else(|e| panic!("{e}"));
+        let meters = [Meter::illuminance(glam::Vec3::ZERO, glam::Vec3::Y).unwrap()];
+        let opts = MeterOptions {
+            stop: Stop::Samples(1 << 14),
+            seed: 5,
+            integrator: Integrator::from_name(integrator).unwrap(),
+            ..MeterOptions::default()
+        };
+        let r = measure(&scene, &meters, &opts)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .readings[0];
+        (r.value, r.ci95, scene)
+    };
+    let (open, open_ci, _) = read(&shadow_stage(None, false), "path");
+    let (shadowed, _, _) = read(&shadow_stage(Some(true), true), "path");
+    let (through, through_ci, scene) = read(&shadow_stage(Some(false), true), "path");
+    // The black blocker covers the whole sphere as seen from the meter.
+    assert!(open > 0.0 && shadowed == 0.0, "{open} {shadowed}");
+    // Next event estimation alone, unoccluded: the open reading (the BSDF-sampled half of the
+    // open run's MIS is noise only, so the bound is their combined ci95, over 4 σ doubled).
+    assert!(
+        (through - open).abs() < 2.0 * (open_ci + through_ci) + 1e-5 * open,
+        "{through} ± {through_ci} vs {open} ± {open_ci}"
+    );
+    let w = scene.summary.warnings.join("; ");
+    assert!(
+        w.contains("/lamp") && w.contains("shadow:enable = 0"),
+        "{w}"
+    );
+    // Bidirectional integrators say they render the shadow.
+    let bdpt = Integrator::from_name("bdpt")
+        .unwrap()
+        .warnings(&scene, false);
+    assert!(
+        bdpt.iter()
+            .any(|l| l.contains("/lamp") && l.contains("path only")),
+        "{bdpt:?}"
+    );
+}
+
+/// scenes/portal-room.usda, and the same text without its PortalLight.
+fn portal_room() -> (String, String) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/portal-room.usda");
+    let text = std::fs::read_to_string(path).unwrap();
+    let start = text.find("    def PortalLight").expect("a portal");
+    let end = start + text[start..].find("\n    }\n").unwrap() + "\n    }\n".len();
+    let plain = format!("{}{}", &text[..start], &text[end..]);
+    assert!(!plain.contains("def PortalLight"));
+    (text, plain)
+}
+
+#[test]
+fn a_portal_guides_the_dome_without_changing_the_light() {
+    let dir = temp_dir("portal");
+    let (with, without) = portal_room();
+    // Floor points: under the window, in the middle, in a far corner (facing up).
+    let points = [[0.0, 0.0, 1.5], [0.0, 0.0, 0.0], [-1.5, 0.0, -1.5]];
+    let read = |text: &str| {
+        let path = write(&dir, "room.usda", text);
+        let scene = scene::load(&path, Some((1, 1))).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            scene.summary.warnings.is_empty(),
+            "{:?}",
+            scene.summary.warnings
+        );
+        let meters: Vec<Meter> = points
+            .iter()
+            .map(|p| Meter::illuminance((*p).into(), glam::Vec3::Y).unwrap())
+            .collect();
+        let opts = MeterOptions {
+            stop: Stop::Samples(1 << 14),
+            seed: 9,
+            max_depth: Some(3),
+            integrator: Integrator::Path,
+            ..MeterOptions::default()
+        };
+        let run = measure(&scene, &meters, &opts).unwrap_or_else(|e| panic!("{e}"));
+        run.readings
+            .iter()
+            .map(|r| (r.value, r.ci95))
+            .collect::<Vec<_>>()
+    };
+    let (guided, plain) = (read(&with), read(&without));
+    for (i, (g, p)) in guided.iter().zip(&plain).enumerate() {
+        eprintln!(
+            "point {i}: portal {} ± {}, none {} ± {}",
+            g.0, g.1, p.0, p.1
+        );
+        // Independent runs: the ci95 of the difference is √(ci_g² + ci_p²); 2.5 of it ≈ 5 σ.
+        let bound = 2.5 * (g.1 * g.1 + p.1 * p.1).sqrt();
+        assert!((g.0 - p.0).abs() < bound, "point {i}: {g:?} vs {p:?}");
+        assert!(p.1 < 0.2 * p.0, "point {i}: too noisy to compare ({p:?})");
+    }
+    // Under the window and in the middle of the room, most of the light comes straight
+    // through the window: the portal must cut the noise at equal samples.
+    for i in [0, 1] {
+        assert!(
+            guided[i].1 < 0.7 * plain[i].1,
+            "point {i}: portal ci95 {} vs {} without",
+            guided[i].1,
+            plain[i].1
+        );
+    }
 }

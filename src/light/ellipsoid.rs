@@ -239,9 +239,14 @@ mod tests {
         let receiver = Vec3::new(1.5, -0.4, 0.6);
         let o = receiver - center;
         for i in 0..400 {
-            let u = [((i * 37) % 400) as f32 / 400.0 + 1e-3, (i as f32 + 0.5) / 400.0];
+            let u = [
+                ((i * 37) % 400) as f32 / 400.0 + 1e-3,
+                (i as f32 + 0.5) / 400.0,
+            ];
             let s = e.sample_cone(o, u).unwrap();
-            let (t, off, n) = e.intersect(o, s.wi, f32::INFINITY).expect("a cone sample misses");
+            let (t, off, n) = e
+                .intersect(o, s.wi, f32::INFINITY)
+                .expect("a cone sample misses");
             assert!(n.dot(-s.wi) > -1e-3, "back side");
             assert!(((e.m_inv * off).length() - 1.0).abs() < 1e-4);
             let hit = LightHit {

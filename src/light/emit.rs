@@ -10,11 +10,12 @@
 //! lights sample a direction as their `sample_li` does and a point on the disk of the
 //! scene's bounding sphere perpendicular to it, pdf 1/(πR²) (PBR 4ed §12.4.1, §12.5.1).
 
-use super::{Light, LightHit, LightSampleContext};
+use super::{Light, LightHit, LightSampleContext, LineLight, PointLight};
 use crate::geometry::offset::gamma;
 use crate::math::Frame;
+use crate::math::INV_4PI;
 use crate::sampling::warp::{
-    concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_triangle,
+    concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_sphere, uniform_triangle,
 };
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
@@ -42,6 +43,8 @@ impl SceneSphere {
                 Light::Disk(l) => (l.center, l.radius),
                 Light::Sphere(l) => (l.center, l.radius),
                 Light::Cylinder(l) => (l.center, l.radius + 0.5 * l.length),
+                Light::Point(l) => (l.p(), 0.0),
+                Light::Line(l) => (l.cylinder.center, 0.5 * l.length()),
                 _ => continue,
             };
             r = r.max((c - center).length() + e);
@@ -75,6 +78,8 @@ pub struct LightLeSample {
     pub pdf_dir_w: f32,
     /// The direction distribution is a Dirac delta (distant light of zero angle).
     pub delta_dir: bool,
+    /// The position is a delta (point light) or a delta across a line (line light).
+    pub delta_pos: bool,
     pub infinite: bool,
 }
 
@@ -99,10 +104,26 @@ pub struct LePdf {
 }
 
 impl Light {
-    /// True for lights whose emission is a Dirac delta (a distant light of zero angle): no
-    /// ray can hit them, and their densities are relative to the delta.
+    /// True for lights whose emission is a Dirac delta (a distant light of zero angle, a point
+    /// or a line light): no ray can hit them, and their densities are relative to the delta.
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Distant(d) if d.is_delta())
+        matches!(self, Light::Point(_) | Light::Line(_))
+            || matches!(self, Light::Distant(d) if d.is_delta())
+    }
+
+    /// True for lights whose position is a delta (point, line): no ray can hit them, and
+    /// their rays leave from a point with no surface.
+    pub fn is_delta_position(&self) -> bool {
+        matches!(self, Light::Point(_) | Light::Line(_))
+    }
+
+    /// A delta light's next-event density relative to its delta: 1, or 1/ℓ per unit length
+    /// for a line light (its `sample_li` picks the point along the segment).
+    pub fn delta_pdf(&self) -> f32 {
+        match self {
+            Light::Line(l) => 1.0 / l.length(),
+            _ => 1.0,
+        }
     }
 
     /// Samples an emitted ray: `u_pos` picks the point, `u_dir` the direction.
@@ -149,6 +170,11 @@ impl Light {
                 self.emit_cosine(p, err, n, c.area(), false, u_dir, lambda)
             }
             Light::Distant(_) | Light::Dome(_) => self.emit_infinite(u_pos, u_dir, sphere, lambda),
+            Light::Point(l) => self.emit_uniform(l.p(), 1.0, u_dir, lambda),
+            Light::Line(l) => {
+                let p = l.point(u_pos[0]);
+                self.emit_uniform(p, 1.0 / l.length(), u_dir, lambda)
+            }
         }
     }
 
@@ -183,7 +209,16 @@ impl Light {
             },
             Light::Dome(d) => LePdf {
                 pos_a: 1.0 / sphere.disk_area(),
-                dir_w: d.pdf_li(-w),
+                // Emission samples the dome as `sample_li` does from the sphere's centre.
+                dir_w: d.pdf_li(sphere.center, -w),
+            },
+            Light::Point(_) => LePdf {
+                pos_a: 1.0,
+                dir_w: PointLight::DIR_PDF,
+            },
+            Light::Line(l) => LePdf {
+                pos_a: 1.0 / l.length(),
+                dir_w: LineLight::DIR_PDF,
             },
         }
     }
@@ -231,6 +266,37 @@ impl Light {
             pdf_pos_a: 1.0 / area,
             pdf_dir_w,
             delta_dir: false,
+            delta_pos: false,
+            infinite: false,
+        })
+    }
+
+    /// Point and line lights: the point already chosen (density `pdf_pos`: 1 relative to a
+    /// point's delta, 1/ℓ along a line) and a uniform direction (PBR 4ed §12.1,
+    /// PointLight::SampleLe). The normal is set to the direction, so `cos_light` is 1: the
+    /// carried quantity is an intensity, with no projected-area cosine.
+    fn emit_uniform(
+        &self,
+        p: Vec3,
+        pdf_pos: f32,
+        u_dir: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLeSample> {
+        if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
+            return None;
+        }
+        let w = uniform_sphere(u_dir);
+        let hit = LightHit { p, n: w, t: 0.0 };
+        Some(LightLeSample {
+            p,
+            p_error: gamma(5) * p.abs(),
+            n: w,
+            w,
+            l: self.l(&hit, w, lambda),
+            pdf_pos_a: pdf_pos,
+            pdf_dir_w: INV_4PI,
+            delta_dir: false,
+            delta_pos: true,
             infinite: false,
         })
     }
@@ -265,6 +331,7 @@ impl Light {
             pdf_pos_a: 1.0 / sphere.disk_area(),
             pdf_dir_w: li.pdf_w,
             delta_dir: li.delta,
+            delta_pos: false,
             infinite: true,
         })
     }

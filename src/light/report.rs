@@ -134,6 +134,18 @@ fn single(light: &Light) -> LightReport {
         ),
         Light::Distant(l) => return distant(l),
         Light::Dome(l) => return dome(l),
+        // The far field of the shape they stand for: its flux and intensities, no area and no
+        // luminance (nothing can see them).
+        Light::Point(l) => {
+            return delta_position(
+                single(&Light::Sphere(l.sphere.clone())),
+                "SphereLight (point)",
+            )
+        }
+        Light::Line(l) => {
+            let r = single(&Light::Cylinder(l.cylinder.clone()));
+            return delta_position(r, "CylinderLight (line)");
+        }
         Light::Triangle(t) => return mesh(&[t]),
     };
     let sp = photometry::summarize(&spectrum.to_dense());
@@ -153,6 +165,15 @@ fn single(light: &Light) -> LightReport {
         sp,
         shaping.is_some(),
     )
+}
+
+fn delta_position(shape: LightReport, kind: &'static str) -> LightReport {
+    LightReport {
+        kind,
+        area: None,
+        luminance: None,
+        ..shape
+    }
 }
 
 fn finite_report(
