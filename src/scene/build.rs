@@ -109,6 +109,9 @@ pub fn build_with(
             d.portals.clone_from(&portals);
         }
     }
+    if !portals.is_empty() && !lights.iter().any(|l| matches!(l, Light::Dome(_))) {
+        warnings.push("the stage's PortalLights guide no DomeLight: they change nothing".into());
+    }
     if lights.is_empty() {
         warnings.push(
             "the stage has no lights (UsdLux lights, MeshLightAPI prims or emissive \
