@@ -402,6 +402,9 @@ pub struct LightDesc {
     pub emission: EmissionDesc,
     /// UsdLux ShapingAPI inputs, when the light has any (rect, disk, sphere, cylinder).
     pub shaping: Option<ShapingDesc>,
+    /// `inputs:shadow:enable` (fallback true). False: next-event shadow rays towards this
+    /// light pass through occluders (not physical; the path integrator and meters only).
+    pub shadows: bool,
 }
 
 /// The UsdLux ShapingAPI inputs of a light (`inputs:shaping:*`), with the schema's meaning:
@@ -453,25 +456,22 @@ pub enum LightKind {
         texture: Option<Box<TextureDesc>>,
     },
     /// Centred on the origin in the local XY plane, emitting towards -Z.
-    Disk {
-        radius: f32,
-    },
-    Sphere {
-        radius: f32,
-    },
-    /// Along the local X axis.
+    Disk { radius: f32 },
+    /// `point`: `treatAsPoint`, a point light with the sphere's far field.
+    Sphere { radius: f32, point: bool },
+    /// Along the local X axis; `line`: `treatAsLine`, a line light with the cylinder's far field.
     Cylinder {
         radius: f32,
         length: f32,
+        line: bool,
     },
     /// Shining along the local -Z axis; `angle` is the angular diameter in degrees.
-    Distant {
-        angle_deg: f32,
-    },
+    Distant { angle_deg: f32 },
     /// An environment; `texture` is a lat-long image (absolute path) or None for constant.
-    Dome {
-        texture: Option<PathBuf>,
-    },
+    Dome { texture: Option<PathBuf> },
+    /// A UsdLux PortalLight: a `width` × `height` rectangle in the local XY plane guiding the
+    /// sampling of the dome lights (their light passes along local −Z); emits nothing.
+    Portal { width: f32, height: f32 },
 }
 
 /// A UsdGeomCamera.

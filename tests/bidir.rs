@@ -1502,7 +1502,8 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
             l: spectral_render::spectral::SampledSpectrum::ONE,
             pdf_pos_a: pdf.pos_a,
             pdf_dir_w: pdf.dir_w,
-            delta_dir: light.is_delta(),
+            delta_dir: light.is_delta() && !light.is_delta_position(),
+            delta_pos: light.is_delta_position(),
             infinite: path.infinite(),
         };
         let o =
@@ -1683,6 +1684,8 @@ fn check_mis(
             Light::Distant(d) if d.is_delta() => "distant (delta)",
             Light::Distant(_) => "distant",
             Light::Dome(_) => "dome",
+            Light::Point(_) => "point",
+            Light::Line(_) => "line",
         })
         .collect();
     let mut ctx = BidirContext::new(scene, Mis::bdpt(heuristic), 100);

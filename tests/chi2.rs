@@ -12,7 +12,7 @@
 //! list and every incident direction in [`INCIDENT`] (including grazing, θ = 89°, and one
 //! below the surface).
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{EulerRot, Mat3, Mat4, Quat, Vec2, Vec3};
 use rayon::prelude::*;
 use spectral_render::bxdf::{
     Bxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, OrenNayarBxdf, PlasticBxdf, TransportMode,
@@ -20,6 +20,8 @@ use spectral_render::bxdf::{
 };
 use spectral_render::geometry::{triangle, Ray};
 use spectral_render::light::dome::LatLong;
+use spectral_render::light::ellipsoid::Ellipsoid;
+use spectral_render::light::portal::Portal;
 use spectral_render::light::{
     DiskLight, DistantLight, DomeLight, Light, LightHit, LightSampleContext, RectLight,
     SphereLight, TriangleLight,
@@ -321,16 +323,31 @@ fn rect_lights() -> Vec<LightCase> {
 }
 
 fn disk_lights() -> Vec<LightCase> {
-    let disk = DiskLight {
-        prim_path: "/disk".into(),
-        center: Vec3::new(0.3, 2.0, 0.1),
-        frame: Frame::from_normal(Vec3::new(0.2, -1.0, 0.3).normalize()),
-        radius: 0.4,
-        radiance: Spectrum::Constant(1.0),
-        shaping: None,
-    };
+    let disk = DiskLight::round(
+        "/disk".into(),
+        Vec3::new(0.3, 2.0, 0.1),
+        Frame::from_normal(Vec3::new(0.2, -1.0, 0.3).normalize()),
+        0.4,
+        Spectrum::Constant(1.0),
+    );
     let (c, n) = (disk.center, disk.frame.n);
-    flat_light_cases("disk", &Light::Disk(disk), c, n, 0.8)
+    let mut cases = flat_light_cases("disk", &Light::Disk(disk.clone()), c, n, 0.8);
+    // The ellipse a shear and a non-uniform scale make of it: semi-axes 0.6 s and
+    // 0.15 (s + t), normal still n.
+    let (s, t) = (disk.frame.s, disk.frame.t);
+    let ellipse = DiskLight {
+        axes: [0.6 * s, 0.15 * (s + t)],
+        radius: 0.6,
+        ..disk
+    };
+    cases.extend(flat_light_cases(
+        "ellipse",
+        &Light::Disk(ellipse),
+        c,
+        n,
+        1.2,
+    ));
+    cases
 }
 
 fn sphere_lights() -> Vec<LightCase> {
@@ -340,6 +357,7 @@ fn sphere_lights() -> Vec<LightCase> {
         radius: 0.5,
         radiance: Spectrum::Constant(1.0),
         shaping: None,
+        ellipsoid: None,
     };
     let c = sphere.center;
     let dir = Vec3::new(0.3, -0.8, 0.5).normalize();
@@ -357,6 +375,47 @@ fn sphere_lights() -> Vec<LightCase> {
             light: Light::Sphere(sphere.clone()),
             receiver: p,
             domain: cap_towards(p, c, sphere.radius),
+        })
+        .collect()
+}
+
+/// A sphere light under a rotation, a non-uniform scale (semi-axes 0.6, 0.25, 0.1) and a
+/// shear: the cone through the map from outside, area sampling from inside.
+fn ellipsoid_lights() -> Vec<LightCase> {
+    let rot = Mat3::from_quat(Quat::from_euler(EulerRot::XYZ, 0.5, -0.3, 0.9));
+    let shear = Mat3::from_cols(Vec3::X, Vec3::new(0.4, 1.0, 0.0), Vec3::Z);
+    let m = rot * shear * Mat3::from_diagonal(Vec3::new(0.6, 0.25, 0.1));
+    let e = Ellipsoid::new(m).unwrap();
+    let sphere = SphereLight {
+        prim_path: "/ellipsoid".into(),
+        center: Vec3::new(0.0, 1.0, 0.0),
+        radius: e.bounding_radius(),
+        radiance: Spectrum::Constant(1.0),
+        shaping: None,
+        ellipsoid: Some(Box::new(e)),
+    };
+    let c = sphere.center;
+    let r = sphere.radius;
+    let receivers = [
+        ("outside, near", c + m * Vec3::new(0.9, -1.2, 0.6)),
+        (
+            "outside, along the short axis",
+            c + m * Vec3::new(0.0, 0.0, 3.0),
+        ),
+        ("outside, far", c + 40.0 * Vec3::new(0.3, -0.8, 0.5)),
+        (
+            "inside, near the centre",
+            c + m * Vec3::new(0.1, -0.2, 0.15),
+        ),
+        ("inside, near the surface", c + m * Vec3::new(0.0, 0.9, 0.1)),
+    ];
+    receivers
+        .into_iter()
+        .map(|(label, p)| LightCase {
+            name: format!("light ellipsoid, receiver {label}"),
+            light: Light::Sphere(sphere.clone()),
+            receiver: p,
+            domain: cap_towards(p, c, r),
         })
         .collect()
 }
@@ -434,11 +493,30 @@ fn dome_lights() -> Vec<LightCase> {
             world_to_local: Mat3::from_mat4(to_world).inverse(),
             radiance: Spectrum::Constant(1.0),
             map,
+            portals: Vec::new(),
         }),
         receiver: Vec3::new(0.1, 0.2, 0.3),
         domain: SphericalDomain::sphere(),
     };
+    // Two portals facing the receiver (0.1, 0.2, 0.3) and one it is behind, over the
+    // lat-long map: the one-sample mixture of `light/portal.rs`.
+    let portal = |c: Vec3, eu: Vec3, ev: Vec3, out: Vec3| Portal::new(c, eu, ev, out).unwrap();
+    let portals = vec![
+        portal(Vec3::new(-0.5, 0.0, 1.0), Vec3::X, Vec3::Y * 0.8, Vec3::Z),
+        portal(
+            Vec3::new(1.0, -0.3, -0.2),
+            Vec3::Z * 0.6,
+            Vec3::new(0.1, 0.5, 0.0),
+            Vec3::X,
+        ),
+        portal(Vec3::new(-0.4, -1.0, -0.4), Vec3::X, Vec3::Z, Vec3::Y),
+    ];
+    let mut guided = dome("lat-long map with portals", rotation, Some(latlong()));
+    if let Light::Dome(d) = &mut guided.light {
+        d.portals = portals;
+    }
     vec![
+        guided,
         dome("constant", rotation, None),
         dome("lat-long map, rotated", rotation, Some(latlong())),
         dome(
@@ -455,6 +533,7 @@ fn light_cases() -> Vec<Case> {
         rect_lights(),
         disk_lights(),
         sphere_lights(),
+        ellipsoid_lights(),
         distant_lights(),
         dome_lights(),
     ]

@@ -133,7 +133,7 @@ fn light_sample(
         return SampledSpectrum::ZERO;
     }
     let pdf_light = pmf * ls.pdf_w;
-    if ls.delta {
+    if ls.delta || !scene.casts_shadows(light as u32) {
         return ls.l * (tr * cos / pdf_light);
     }
     let w = power_heuristic(pdf_light, cos * INV_PI);

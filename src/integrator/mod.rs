@@ -264,6 +264,21 @@ impl Integrator {
                 Integrator::names_with(|c| c.infinite_lights_seen_directly)
             ));
         }
+        // Light subpaths carry light through occluders only by bouncing around them; a
+        // shadowless light is a next-event notion, which only path tracing has alone.
+        if !matches!(self, Integrator::Path) && !scene.shadowless.is_empty() {
+            let names: Vec<&str> = scene
+                .shadowless
+                .iter()
+                .map(|&i| scene.lights[i as usize].prim_path())
+                .collect();
+            out.push(format!(
+                "--integrator {} renders the shadows of {} (inputs:shadow:enable = 0 is \
+                 honoured by --integrator path only)",
+                self.name(),
+                names.join(", ")
+            ));
+        }
         out
     }
 

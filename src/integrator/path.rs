@@ -326,6 +326,8 @@ impl PathIntegrator {
         let lgt = &scene.lights[light as usize];
         let le = lgt.l(hit, w, lambda);
         match prev {
+            // Next event estimation took all of a shadowless light's direct light.
+            Some(p) if !p.specular && !scene.casts_shadows(light) => SampledSpectrum::ZERO,
             Some(p) if !p.specular && !le.is_black() => {
                 let pdf_light =
                     scene.light_sampler.pmf(light as usize) * lgt.pdf_li(&p.ctx, -w, hit);
@@ -356,6 +358,7 @@ impl PathIntegrator {
                 continue;
             }
             l += match prev {
+                Some(p) if !p.specular && !scene.casts_shadows(i) => SampledSpectrum::ZERO,
                 Some(p) if !p.specular => {
                     let pdf_light =
                         scene.light_sampler.pmf(i as usize) * lgt.pdf_li(&p.ctx, d, &far);
@@ -399,7 +402,7 @@ impl PathIntegrator {
             return SampledSpectrum::ZERO;
         }
         let pdf_light = pmf * ls.pdf_w;
-        if ls.delta {
+        if ls.delta || !scene.casts_shadows(light as u32) {
             return f * ls.l * (tr / pdf_light);
         }
         let w = power_heuristic(pdf_light, bsdf.pdf(wo, ls.wi, TransportMode::Radiance));
@@ -441,6 +444,9 @@ pub(crate) fn transmittance(
     ls: &LightLiSample,
     light: u32,
 ) -> f32 {
+    if !scene.casts_shadows(light) {
+        return 1.0;
+    }
     let lgt = &scene.lights[light as usize];
     let (mut ray, mut t) = shadow_ray(p, p_error, ng, ls, lgt);
     if !scene.occluded(&ray, t, Some(light)) {

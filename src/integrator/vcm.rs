@@ -514,13 +514,17 @@ mod tests {
         });
         desc.lights.push(LightDesc {
             prim_path: "/Bulb".into(),
-            kind: LightKind::Sphere { radius: 0.05 },
+            kind: LightKind::Sphere {
+                radius: 0.05,
+                point: false,
+            },
             to_world: Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0)),
             emission: EmissionDesc {
                 intensity: 100.0,
                 ..Default::default()
             },
             shaping: None,
+            shadows: true,
         });
         desc
     }

@@ -1,5 +1,10 @@
 //! UsdLux DiskLight: a one-sided disk emitting along its local −Z, sampled uniformly by area
 //! with the concentric map (PBR 4ed §6.2.3 / §A.5.1).
+//!
+//! Under a non-uniform scale or a shear in its plane the disk is an ellipse: the image
+//! c + a·x + b·y of the unit disk x² + y² ≤ 1 under the in-plane semi-axes `axes` = [a, b]
+//! (r·s and r·t for a round disk). A linear map has a constant Jacobian |a × b|, so the
+//! concentric map's uniform points stay uniform over the ellipse, of area π|a × b|.
 
 use super::shaping::{self, Shaping};
 use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
@@ -15,15 +20,42 @@ pub struct DiskLight {
     pub center: Vec3,
     /// Frame whose `n` is the emission direction; `s`, `t` span the disk.
     pub frame: Frame,
+    /// The largest semi-axis (the radius of a round disk).
     pub radius: f32,
+    /// The images a, b of the local unit X and Y semi-axes: points c + x·a + y·b, x² + y² ≤ 1.
+    pub axes: [Vec3; 2],
     pub radiance: Spectrum,
     /// UsdLux ShapingAPI, if any.
     pub shaping: Option<Shaping>,
 }
 
 impl DiskLight {
+    /// A round disk of `radius` in the plane of `frame.s`, `frame.t`.
+    pub fn round(
+        prim_path: String,
+        center: Vec3,
+        frame: Frame,
+        radius: f32,
+        radiance: Spectrum,
+    ) -> DiskLight {
+        DiskLight {
+            prim_path,
+            center,
+            frame,
+            radius,
+            axes: [radius * frame.s, radius * frame.t],
+            radiance,
+            shaping: None,
+        }
+    }
+
     pub fn area(&self) -> f32 {
-        PI * self.radius * self.radius
+        PI * self.axes[0].cross(self.axes[1]).length()
+    }
+
+    /// The point of the ellipse at `q` in the unit disk.
+    pub fn point(&self, q: glam::Vec2) -> Vec3 {
+        self.center + q.x * self.axes[0] + q.y * self.axes[1]
     }
 
     pub fn sample_li(
@@ -32,8 +64,7 @@ impl DiskLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let d = concentric_disk(u) * self.radius;
-        let p = self.center + d.x * self.frame.s + d.y * self.frame.t;
+        let p = self.point(concentric_disk(u));
         sample_by_area(ctx, p, self.frame.n, self.area(), false, |w| {
             shaping::shape(&self.shaping, w, self.radiance.sample(lambda), lambda)
         })
@@ -60,7 +91,13 @@ impl DiskLight {
             return None;
         }
         let p = o + t * d;
-        if (p - self.center).length_squared() > self.radius * self.radius {
+        // The coordinates (x, y) of p − c = x·a + y·b by the dual basis: x = ((p − c) × b)·N/|N|²,
+        // y = (a × (p − c))·N/|N|², N = a × b.
+        let (q, [a, b]) = (p - self.center, self.axes);
+        let n = a.cross(b);
+        let (x, y) = (q.cross(b).dot(n), a.cross(q).dot(n));
+        let n2 = n.length_squared();
+        if x * x + y * y > n2 * n2 {
             return None;
         }
         Some(LightHit {

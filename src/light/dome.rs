@@ -3,7 +3,9 @@
 //! +π/2 along +X; the image's left column is longitude +π, its top row latitude +π/2).
 //! Constant domes are sampled uniformly over the sphere; textured ones by a piecewise-constant
 //! 2D distribution over luminance · sin θ (PBR 4ed §12.5.2, pdf_w = pdf_uv / (2π² sin θ)).
+//! With UsdLux portals, a receiver facing one samples the mixture of `portal.rs`.
 
+use super::portal::{self, Portal};
 use super::{LightLiSample, LightSampleContext};
 use crate::math::INV_PI;
 use crate::sampling::distribution::Distribution2D;
@@ -32,10 +34,48 @@ pub struct DomeLight {
     /// Constant radiance (when `map` is None) or the scale of the map.
     pub radiance: Spectrum,
     pub map: Option<LatLong>,
+    /// UsdLux PortalLights guiding the sampling (none: the dome's own distribution alone).
+    pub portals: Vec<Portal>,
 }
 
 impl DomeLight {
     pub fn sample_li(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        if self.portals.is_empty() {
+            return self.sample_dome(ctx, u, lambda);
+        }
+        let (facing, alpha) = portal::facing(&self.portals, ctx.p);
+        let wi = if u[0] < alpha {
+            // Reuse u₀ (PBR 4ed §2.2.1's remapping): first the portal, then a point on it.
+            let x = u[0] / alpha * facing.len() as f32;
+            let k = (x as usize).min(facing.len() - 1);
+            let u0 = (x - k as f32).min(1.0 - f32::EPSILON);
+            self.portals[facing[k]].sample(ctx.p, [u0, u[1]])?.0
+        } else {
+            let u0 = ((u[0] - alpha) / (1.0 - alpha)).min(1.0 - f32::EPSILON);
+            self.sample_dome(ctx, [u0, u[1]], lambda)?.wi
+        };
+        let pdf_w = self.pdf_mixture(ctx.p, wi, &facing, alpha);
+        if !(pdf_w > 0.0 && pdf_w.is_finite()) {
+            return None;
+        }
+        Some(LightLiSample {
+            l: self.le(wi, lambda),
+            wi,
+            pdf_w,
+            p_light: ctx.p + 2.0e7 * wi,
+            n_light: Vec3::ZERO,
+            delta: false,
+            infinite: true,
+        })
+    }
+
+    /// The dome's own distribution (uniform, or the map's).
+    fn sample_dome(
         &self,
         ctx: &LightSampleContext,
         u: [f32; 2],
@@ -65,7 +105,25 @@ impl DomeLight {
         })
     }
 
-    pub fn pdf_li(&self, wi: Vec3) -> f32 {
+    /// The density of `sample_li` from `p` towards `wi`.
+    pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        if self.portals.is_empty() {
+            return self.pdf_dome(wi);
+        }
+        let (facing, alpha) = portal::facing(&self.portals, p);
+        self.pdf_mixture(p, wi, &facing, alpha)
+    }
+
+    fn pdf_mixture(&self, p: Vec3, wi: Vec3, facing: &[usize], alpha: f32) -> f32 {
+        let guided = if alpha > 0.0 {
+            alpha * portal::pdf(&self.portals, facing, p, wi)
+        } else {
+            0.0
+        };
+        guided + (1.0 - alpha) * self.pdf_dome(wi)
+    }
+
+    fn pdf_dome(&self, wi: Vec3) -> f32 {
         match &self.map {
             None => UNIFORM_SPHERE_PDF,
             Some(map) => {

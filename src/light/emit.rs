@@ -10,9 +10,10 @@
 //! lights sample a direction as their `sample_li` does and a point on the disk of the
 //! scene's bounding sphere perpendicular to it, pdf 1/(πR²) (PBR 4ed §12.4.1, §12.5.1).
 
-use super::{Light, LightHit, LightSampleContext};
+use super::{Light, LightHit, LightSampleContext, LineLight, PointLight};
 use crate::geometry::offset::gamma;
 use crate::math::Frame;
+use crate::math::INV_4PI;
 use crate::sampling::warp::{
     concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_sphere, uniform_triangle,
 };
@@ -42,6 +43,8 @@ impl SceneSphere {
                 Light::Disk(l) => (l.center, l.radius),
                 Light::Sphere(l) => (l.center, l.radius),
                 Light::Cylinder(l) => (l.center, l.radius + 0.5 * l.length),
+                Light::Point(l) => (l.p(), 0.0),
+                Light::Line(l) => (l.cylinder.center, 0.5 * l.length()),
                 _ => continue,
             };
             r = r.max((c - center).length() + e);
@@ -75,6 +78,8 @@ pub struct LightLeSample {
     pub pdf_dir_w: f32,
     /// The direction distribution is a Dirac delta (distant light of zero angle).
     pub delta_dir: bool,
+    /// The position is a delta (point light) or a delta across a line (line light).
+    pub delta_pos: bool,
     pub infinite: bool,
 }
 
@@ -99,10 +104,26 @@ pub struct LePdf {
 }
 
 impl Light {
-    /// True for lights whose emission is a Dirac delta (a distant light of zero angle): no
-    /// ray can hit them, and their densities are relative to the delta.
+    /// True for lights whose emission is a Dirac delta (a distant light of zero angle, a point
+    /// or a line light): no ray can hit them, and their densities are relative to the delta.
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Distant(d) if d.is_delta())
+        matches!(self, Light::Point(_) | Light::Line(_))
+            || matches!(self, Light::Distant(d) if d.is_delta())
+    }
+
+    /// True for lights whose position is a delta (point, line): no ray can hit them, and
+    /// their rays leave from a point with no surface.
+    pub fn is_delta_position(&self) -> bool {
+        matches!(self, Light::Point(_) | Light::Line(_))
+    }
+
+    /// A delta light's next-event density relative to its delta: 1, or 1/ℓ per unit length
+    /// for a line light (its `sample_li` picks the point along the segment).
+    pub fn delta_pdf(&self) -> f32 {
+        match self {
+            Light::Line(l) => 1.0 / l.length(),
+            _ => 1.0,
+        }
     }
 
     /// Samples an emitted ray: `u_pos` picks the point, `u_dir` the direction.
@@ -126,8 +147,7 @@ impl Light {
                 self.emit_cosine(p, gamma(6) * p.abs(), r.n, r.area, false, u_dir, lambda)
             }
             Light::Disk(d) => {
-                let q = concentric_disk(u_pos) * d.radius;
-                let p = d.center + q.x * d.frame.s + q.y * d.frame.t;
+                let p = d.point(concentric_disk(u_pos));
                 self.emit_cosine(
                     p,
                     gamma(6) * p.abs(),
@@ -139,10 +159,9 @@ impl Light {
                 )
             }
             Light::Sphere(s) => {
-                let n = uniform_sphere(u_pos);
-                let p = s.center + s.radius * n;
-                let err = gamma(5) * (s.center.abs() + (s.radius * n).abs());
-                self.emit_cosine(p, err, n, s.area(), false, u_dir, lambda)
+                let (p, n, pdf_a) = s.sample_area(u_pos);
+                let err = gamma(5) * (s.center.abs() + (p - s.center).abs());
+                self.emit_cosine(p, err, n, 1.0 / pdf_a, false, u_dir, lambda)
             }
             Light::Cylinder(c) => {
                 let (p, n) = c.point_on_side(u_pos);
@@ -151,15 +170,21 @@ impl Light {
                 self.emit_cosine(p, err, n, c.area(), false, u_dir, lambda)
             }
             Light::Distant(_) | Light::Dome(_) => self.emit_infinite(u_pos, u_dir, sphere, lambda),
+            Light::Point(l) => self.emit_uniform(l.p(), 1.0, u_dir, lambda),
+            Light::Line(l) => {
+                let p = l.point(u_pos[0]);
+                self.emit_uniform(p, 1.0 / l.length(), u_dir, lambda)
+            }
         }
     }
 
     /// Densities with which [`Light::sample_le`] produces the point `p` (geometric normal `n`)
     /// and the direction `w` leaving it; for infinite lights `p` and `n` are ignored and `w`
     /// is the direction of travel. Every light's points are uniform over its area (a
-    /// textured emitter's too: only its radiance varies), so `_p` is not needed. A delta
-    /// direction has density 1 relative to its delta, as in `sample_li`.
-    pub fn pdf_le(&self, _p: Vec3, n: Vec3, w: Vec3, sphere: &SceneSphere) -> LePdf {
+    /// textured emitter's too: only its radiance varies) except an ellipsoidal sphere light's,
+    /// whose density depends on `p`. A delta direction has density 1 relative to its delta,
+    /// as in `sample_li`.
+    pub fn pdf_le(&self, p: Vec3, n: Vec3, w: Vec3, sphere: &SceneSphere) -> LePdf {
         let cosine = |area: f32, two_sided: bool| {
             let c = n.dot(w);
             let dir_w = if two_sided {
@@ -176,7 +201,7 @@ impl Light {
             Light::Triangle(t) => cosine(t.area, t.two_sided),
             Light::Rect(r) => cosine(r.area, false),
             Light::Disk(d) => cosine(d.area(), false),
-            Light::Sphere(s) => cosine(s.area(), false),
+            Light::Sphere(s) => cosine(1.0 / s.pdf_area(p), false),
             Light::Cylinder(c) => cosine(c.area(), false),
             Light::Distant(d) => LePdf {
                 pos_a: 1.0 / sphere.disk_area(),
@@ -184,13 +209,24 @@ impl Light {
             },
             Light::Dome(d) => LePdf {
                 pos_a: 1.0 / sphere.disk_area(),
-                dir_w: d.pdf_li(-w),
+                // Emission samples the dome as `sample_li` does from the sphere's centre.
+                dir_w: d.pdf_li(sphere.center, -w),
+            },
+            Light::Point(_) => LePdf {
+                pos_a: 1.0,
+                dir_w: PointLight::DIR_PDF,
+            },
+            Light::Line(l) => LePdf {
+                pos_a: 1.0 / l.length(),
+                dir_w: LineLight::DIR_PDF,
             },
         }
     }
 
     /// A point already chosen on a flat or spherical emitter with normal `n`, and a
     /// cosine-weighted direction about it (PBR 4ed §12.5.1, DiffuseAreaLight::SampleLe).
+    /// `area` is the reciprocal of the point's density per unit area (the emitter's area
+    /// when points are uniform).
     #[allow(clippy::too_many_arguments)]
     fn emit_cosine(
         &self,
@@ -230,6 +266,37 @@ impl Light {
             pdf_pos_a: 1.0 / area,
             pdf_dir_w,
             delta_dir: false,
+            delta_pos: false,
+            infinite: false,
+        })
+    }
+
+    /// Point and line lights: the point already chosen (density `pdf_pos`: 1 relative to a
+    /// point's delta, 1/ℓ along a line) and a uniform direction (PBR 4ed §12.1,
+    /// PointLight::SampleLe). The normal is set to the direction, so `cos_light` is 1: the
+    /// carried quantity is an intensity, with no projected-area cosine.
+    fn emit_uniform(
+        &self,
+        p: Vec3,
+        pdf_pos: f32,
+        u_dir: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLeSample> {
+        if !(pdf_pos > 0.0 && pdf_pos.is_finite()) {
+            return None;
+        }
+        let w = uniform_sphere(u_dir);
+        let hit = LightHit { p, n: w, t: 0.0 };
+        Some(LightLeSample {
+            p,
+            p_error: gamma(5) * p.abs(),
+            n: w,
+            w,
+            l: self.l(&hit, w, lambda),
+            pdf_pos_a: pdf_pos,
+            pdf_dir_w: INV_4PI,
+            delta_dir: false,
+            delta_pos: true,
             infinite: false,
         })
     }
@@ -264,6 +331,7 @@ impl Light {
             pdf_pos_a: 1.0 / sphere.disk_area(),
             pdf_dir_w: li.pdf_w,
             delta_dir: li.delta,
+            delta_pos: false,
             infinite: true,
         })
     }
@@ -272,6 +340,7 @@ impl Light {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::light::ellipsoid::Ellipsoid;
     use crate::light::{DiskLight, RectLight, SphereLight, TriangleLight};
     use crate::sampling::Sampler;
     use crate::spectral::Spectrum;
@@ -293,20 +362,44 @@ mod tests {
                 -Vec3::Y,
                 white.clone(),
             )),
+            Light::Disk(DiskLight::round(
+                "/d".into(),
+                Vec3::ZERO,
+                Frame::from_normal(Vec3::new(0.0, 0.6, 0.8)),
+                0.3,
+                white.clone(),
+            )),
             Light::Disk(DiskLight {
-                prim_path: "/d".into(),
-                center: Vec3::ZERO,
-                frame: Frame::from_normal(Vec3::new(0.0, 0.6, 0.8)),
-                radius: 0.3,
-                radiance: white.clone(),
-                shaping: None,
+                axes: [Vec3::new(0.5, 0.1, 0.0), Vec3::new(0.2, 0.0, 0.1)],
+                ..DiskLight::round(
+                    "/ellipse".into(),
+                    Vec3::ONE,
+                    // ∝ a × b, the ellipse's plane normal.
+                    Frame::from_normal(Vec3::new(0.01, -0.05, -0.02).normalize()),
+                    0.3,
+                    white.clone(),
+                )
             }),
             Light::Sphere(SphereLight {
                 prim_path: "/s".into(),
                 center: Vec3::splat(0.5),
                 radius: 0.2,
+                radiance: white.clone(),
+                shaping: None,
+                ellipsoid: None,
+            }),
+            Light::Sphere(SphereLight {
+                prim_path: "/e".into(),
+                center: Vec3::splat(-0.5),
+                radius: 0.6,
                 radiance: white,
                 shaping: None,
+                ellipsoid: Ellipsoid::new(glam::Mat3::from_cols(
+                    Vec3::new(0.3, 0.1, 0.0),
+                    Vec3::new(0.0, 0.5, 0.2),
+                    Vec3::new(0.1, 0.0, 0.15),
+                ))
+                .map(Box::new),
             }),
         ]
     }
@@ -343,10 +436,12 @@ mod tests {
         let mut s = Sampler::new(4, 5, 6);
         for light in lights() {
             let n = 4000;
-            let mut sum = 0.0f64;
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
             for _ in 0..n {
                 if let Some(le) = light.sample_le(s.get_2d(), s.get_2d(), &sphere, &lambda) {
-                    sum += (le.l[0] * le.cos_light() / (le.pdf_pos_a * le.pdf_dir_w)) as f64;
+                    let v = (le.l[0] * le.cos_light() / (le.pdf_pos_a * le.pdf_dir_w)) as f64;
+                    sum += v;
+                    sum2 += v * v;
                 }
             }
             let (area, sides) = match &light {
@@ -356,8 +451,15 @@ mod tests {
                 Light::Sphere(s) => (s.area(), 1.0),
                 _ => unreachable!(),
             };
-            let expected = PI * area * sides;
-            assert!((sum / n as f64 / expected as f64 - 1.0).abs() < 1e-4);
+            let expected = (PI * area * sides) as f64;
+            // Uniform points make every term equal (rounding only); an ellipsoid's points are
+            // not uniform, so its mean gets 5 standard errors of the terms' spread on top.
+            let mean = sum / n as f64;
+            let sem = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            assert!(
+                (mean - expected).abs() < 1e-4 * expected + 5.0 * sem,
+                "{light:?}: {mean} vs {expected}"
+            );
         }
     }
 }

@@ -12,9 +12,13 @@ pub mod cylinder;
 pub mod disk;
 pub mod distant;
 pub mod dome;
+pub mod ellipsoid;
 pub mod emission;
 pub mod emit;
 pub mod ies;
+pub mod line;
+pub mod point;
+pub mod portal;
 pub mod rect;
 pub mod report;
 pub mod sampler;
@@ -29,6 +33,8 @@ pub use cylinder::CylinderLight;
 pub use disk::DiskLight;
 pub use distant::DistantLight;
 pub use dome::DomeLight;
+pub use line::LineLight;
+pub use point::PointLight;
 pub use rect::RectLight;
 pub use sampler::LightSampler;
 pub use sphere::SphereLight;
@@ -76,6 +82,10 @@ pub enum Light {
     Cylinder(CylinderLight),
     Distant(DistantLight),
     Dome(DomeLight),
+    /// A SphereLight with `treatAsPoint`: a delta in position.
+    Point(PointLight),
+    /// A CylinderLight with `treatAsLine`: a delta across its axis.
+    Line(LineLight),
 }
 
 impl Light {
@@ -95,6 +105,8 @@ impl Light {
             Light::Cylinder(l) => l.sample_li(ctx, u, lambda),
             Light::Distant(l) => l.sample_li(ctx, u, lambda),
             Light::Dome(l) => l.sample_li(ctx, u, lambda),
+            Light::Point(l) => l.sample_li(ctx, lambda),
+            Light::Line(l) => l.sample_li(ctx, u, lambda),
         }
     }
 
@@ -109,11 +121,15 @@ impl Light {
             Light::Sphere(l) => l.pdf_li(ctx, wi, hit),
             Light::Cylinder(l) => l.pdf_li(ctx, wi, hit),
             Light::Distant(l) => l.pdf_li(wi),
-            Light::Dome(l) => l.pdf_li(wi),
+            Light::Dome(l) => l.pdf_li(ctx.p, wi),
+            // No direction finds a delta light (its density relative to the delta: `delta_pdf`).
+            Light::Point(_) | Light::Line(_) => 0.0,
         }
     }
 
-    /// Radiance leaving an area light at `hit` towards `w` (pointing away from the light).
+    /// Radiance leaving an area light at `hit` towards `w` (pointing away from the light); for
+    /// a point light its intensity, for a line light its intensity per unit length (no ray
+    /// hits them: this is what their emitted rays carry).
     #[inline]
     pub fn l(&self, hit: &LightHit, w: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
@@ -122,6 +138,8 @@ impl Light {
             Light::Disk(l) => l.l(hit.n, w, lambda),
             Light::Sphere(l) => l.l(w, lambda),
             Light::Cylinder(l) => l.l(hit.n, w, lambda),
+            Light::Point(l) => l.intensity(w, lambda),
+            Light::Line(l) => l.intensity(w, lambda),
             Light::Distant(_) | Light::Dome(_) => SampledSpectrum::ZERO,
         }
     }
@@ -170,6 +188,8 @@ impl Light {
             Light::Cylinder(l) => l.luminous_power(),
             Light::Distant(l) => l.luminous_power(scene_radius),
             Light::Dome(l) => l.luminous_power(scene_radius),
+            Light::Point(l) => l.luminous_power(),
+            Light::Line(l) => l.luminous_power(),
         }
     }
 
@@ -183,6 +203,8 @@ impl Light {
             Light::Cylinder(l) => &l.prim_path,
             Light::Distant(l) => &l.prim_path,
             Light::Dome(l) => &l.prim_path,
+            Light::Point(l) => &l.sphere.prim_path,
+            Light::Line(l) => &l.cylinder.prim_path,
         }
     }
 }

@@ -114,7 +114,10 @@ fn single(light: &Light) -> LightReport {
                 kind: "SphereLight",
                 area: l.area(),
                 flux_per_nit: PI * l.area(),
-                peak_per_nit: PI * l.radius * l.radius,
+                peak_per_nit: l
+                    .ellipsoid
+                    .as_ref()
+                    .map_or(PI * l.radius * l.radius, |e| e.peak_projected_area()),
             },
             &l.radiance,
             &l.shaping,
@@ -131,6 +134,18 @@ fn single(light: &Light) -> LightReport {
         ),
         Light::Distant(l) => return distant(l),
         Light::Dome(l) => return dome(l),
+        // The far field of the shape they stand for: its flux and intensities, no area and no
+        // luminance (nothing can see them).
+        Light::Point(l) => {
+            return delta_position(
+                single(&Light::Sphere(l.sphere.clone())),
+                "SphereLight (point)",
+            )
+        }
+        Light::Line(l) => {
+            let r = single(&Light::Cylinder(l.cylinder.clone()));
+            return delta_position(r, "CylinderLight (line)");
+        }
         Light::Triangle(t) => return mesh(&[t]),
     };
     let sp = photometry::summarize(&spectrum.to_dense());
@@ -150,6 +165,15 @@ fn single(light: &Light) -> LightReport {
         sp,
         shaping.is_some(),
     )
+}
+
+fn delta_position(shape: LightReport, kind: &'static str) -> LightReport {
+    LightReport {
+        kind,
+        area: None,
+        luminance: None,
+        ..shape
+    }
 }
 
 fn finite_report(
@@ -380,6 +404,7 @@ mod tests {
             d65(100.0),
         ));
         let sphere = Light::Sphere(SphereLight {
+            ellipsoid: None,
             prim_path: "/S".into(),
             center: Vec3::ZERO,
             radius: 0.5,

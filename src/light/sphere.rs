@@ -1,11 +1,14 @@
 //! UsdLux SphereLight: a sphere emitting outwards. Seen from outside it is sampled uniformly
-//! in the cone it subtends (PBR 4ed §6.2.4); from inside, uniformly by area.
+//! in the cone it subtends (PBR 4ed §6.2.4); from inside, uniformly by area. Under a
+//! non-uniform scale or a shear it is the ellipsoid of `ellipsoid.rs`, sampled through the
+//! map from the unit sphere (`radius` is then the ellipsoid's bounding radius).
 //!
 //! The cone is handled through 1 − cos θmax = sin²θmax / (1 + cos θmax), sin²θmax = r²/d²,
 //! never as the f32 difference 1 − cos θmax: for a 2 mm sphere seen from 2 m that difference
 //! is 5e-7, below the f32 spacing near 1, and the pdf would be off by percents (PBR 4ed
 //! §6.2.4 handles small cones with a Taylor expansion for the same reason).
 
+use super::ellipsoid::Ellipsoid;
 use super::shaping::{self, Shaping};
 use super::{area_to_solid_angle, LightHit, LightLiSample, LightSampleContext};
 use crate::math::{safe_sqrt, Frame, INV_2PI};
@@ -22,11 +25,47 @@ pub struct SphereLight {
     pub radiance: Spectrum,
     /// UsdLux ShapingAPI, if any (relative to the light's local −Z axis).
     pub shaping: Option<Shaping>,
+    /// The shape under a non-uniform transform (None: the round sphere of `radius`).
+    pub ellipsoid: Option<Box<Ellipsoid>>,
 }
 
 impl SphereLight {
     pub fn area(&self) -> f32 {
-        4.0 * PI * self.radius * self.radius
+        match &self.ellipsoid {
+            Some(e) => e.area,
+            None => 4.0 * PI * self.radius * self.radius,
+        }
+    }
+
+    /// Area projected along unit `w` (πr² for the round sphere).
+    pub fn projected_area(&self, w: Vec3) -> f32 {
+        match &self.ellipsoid {
+            Some(e) => e.projected_area(w),
+            None => PI * self.radius * self.radius,
+        }
+    }
+
+    /// A point by area: (point, outward normal, density per unit area); uniform for the
+    /// round sphere, `Ellipsoid::sample_area`'s density for an ellipsoid.
+    pub fn sample_area(&self, u: [f32; 2]) -> (Vec3, Vec3, f32) {
+        match &self.ellipsoid {
+            Some(e) => {
+                let (off, n, pdf) = e.sample_area(u);
+                (self.center + off, n, pdf)
+            }
+            None => {
+                let n = uniform_sphere(u);
+                (self.center + self.radius * n, n, 1.0 / self.area())
+            }
+        }
+    }
+
+    /// Density per unit area of [`SphereLight::sample_area`] at the surface point `p`.
+    pub fn pdf_area(&self, p: Vec3) -> f32 {
+        match &self.ellipsoid {
+            Some(e) => e.pdf_area(p - self.center),
+            None => 1.0 / self.area(),
+        }
     }
 
     /// 1 − cos θmax of the cone subtended at `p`, or None when `p` is inside the sphere.
@@ -48,6 +87,9 @@ impl SphereLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
+        if let Some(e) = &self.ellipsoid {
+            return self.sample_li_ellipsoid(e, ctx, u, lambda);
+        }
         let Some(gap) = self.cone_gap(ctx.p) else {
             return self.sample_li_inside(ctx, u, lambda);
         };
@@ -76,16 +118,40 @@ impl SphereLight {
         })
     }
 
+    /// An ellipsoid: the cone through the map from outside, by area from inside.
+    fn sample_li_ellipsoid(
+        &self,
+        e: &Ellipsoid,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        let o = ctx.p - self.center;
+        let Some(s) = e.sample_cone(o, u) else {
+            return self.sample_li_inside(ctx, u, lambda);
+        };
+        // Tangent rays may graze past in f32: such a sample is dropped (measure zero).
+        let (_, off, n) = e.intersect(o, s.wi, f32::INFINITY)?;
+        Some(LightLiSample {
+            l: shaping::shape(&self.shaping, -s.wi, self.radiance.sample(lambda), lambda),
+            wi: s.wi,
+            pdf_w: s.pdf_w,
+            p_light: self.center + off,
+            n_light: n,
+            delta: false,
+            infinite: false,
+        })
+    }
+
     fn sample_li_inside(
         &self,
         ctx: &LightSampleContext,
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let n = uniform_sphere(u);
-        let p = self.center + self.radius * n;
+        let (p, n, pdf_a) = self.sample_area(u);
         let wi = (p - ctx.p).normalize_or_zero();
-        let pdf_w = area_to_solid_angle(1.0 / self.area(), ctx.p, p, n);
+        let pdf_w = area_to_solid_angle(pdf_a, ctx.p, p, n);
         // Seen from inside, every point faces away from the receiver, and `l` emits on both
         // sides, so no facing test here (one would reject every sample).
         if wi == Vec3::ZERO || pdf_w == 0.0 || !pdf_w.is_finite() {
@@ -102,7 +168,10 @@ impl SphereLight {
         })
     }
 
-    pub fn pdf_li(&self, ctx: &LightSampleContext, _wi: Vec3, hit: &LightHit) -> f32 {
+    pub fn pdf_li(&self, ctx: &LightSampleContext, wi: Vec3, hit: &LightHit) -> f32 {
+        if let Some(e) = &self.ellipsoid {
+            return e.pdf_li(ctx.p - self.center, ctx.p, wi, hit, self.center);
+        }
         match self.cone_gap(ctx.p) {
             Some(gap) => INV_2PI / gap,
             None => area_to_solid_angle(1.0 / self.area(), ctx.p, hit.p, hit.n),
@@ -117,6 +186,14 @@ impl SphereLight {
     /// Nearest ray–sphere hit with t in (0, t_max), on the side facing the ray origin
     /// (the quadratic in the numerically stable form of PBR 4ed §6.8.4 / Haines et al. 2019).
     pub fn intersect(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<LightHit> {
+        if let Some(e) = &self.ellipsoid {
+            let (t, off, n) = e.intersect(o - self.center, d, t_max)?;
+            return Some(LightHit {
+                p: self.center + off,
+                n,
+                t,
+            });
+        }
         let f = o - self.center;
         let a = d.length_squared();
         let b_half = f.dot(d);
@@ -145,7 +222,7 @@ impl SphereLight {
         })
     }
 
-    /// Φv = π · 4πr² · Lv, or the shaped integral.
+    /// Φv = π A Lv (A = 4πr² for the round sphere), or the shaped integral.
     pub fn luminous_power(&self) -> f32 {
         let lv = xyz::luminance(&self.radiance.to_dense()) as f32;
         shaping::luminous_power(&self.shaping, PI * self.area(), lv)
@@ -168,6 +245,7 @@ mod tests {
                 radius: r,
                 radiance: Spectrum::Constant(1.0),
                 shaping: None,
+                ellipsoid: None,
             };
             let ctx = LightSampleContext {
                 p: Vec3::new(0.0, 0.0, d),

@@ -12,8 +12,10 @@ use crate::error::Reason;
 use crate::error::{Error, Result};
 use crate::imageio;
 use crate::light::dome::LatLong;
+use crate::light::ellipsoid::Ellipsoid;
 use crate::light::emission::{self, Photometric};
 use crate::light::ies::IesProfile;
+use crate::light::portal::Portal;
 use crate::light::rect::RectTexture;
 use crate::light::report;
 use crate::light::shaping::Shaping;
@@ -92,8 +94,23 @@ pub fn build_with(
     let (tri_refs, triangles) = flatten_triangles(&meshes);
     let bvh = Bvh::build(&triangles);
     let (center, radius) = bounding_sphere(&bvh);
+    let mut portals = Vec::new();
     for l in &desc.lights {
-        lights.push(light(l).map_err(|r| Error::prim(file, &l.prim_path, r))?);
+        let at = |r| Error::prim(file, &l.prim_path, r);
+        match l.kind {
+            LightKind::Portal { width, height } => {
+                portals.push(portal(l, width, height).map_err(at)?)
+            }
+            _ => lights.push(light(l).map_err(at)?),
+        }
+    }
+    for l in &mut lights {
+        if let Light::Dome(d) = l {
+            d.portals.clone_from(&portals);
+        }
+    }
+    if !portals.is_empty() && !lights.iter().any(|l| matches!(l, Light::Dome(_))) {
+        warnings.push("the stage's PortalLights guide no DomeLight: they change nothing".into());
     }
     if lights.is_empty() {
         warnings.push(
@@ -110,6 +127,11 @@ pub fn build_with(
     };
     let infinite_lights = indices_where(&lights, Light::is_infinite);
     let shape_lights = indices_where(&lights, Light::is_analytic_shape);
+    let shadowless = indices_where(&lights, |l| {
+        desc.lights
+            .iter()
+            .any(|d| !d.shadows && d.prim_path == l.prim_path())
+    });
     let summary = Summary {
         meshes: meshes.len(),
         triangles: triangles.len(),
@@ -133,6 +155,7 @@ pub fn build_with(
         light_sampler,
         infinite_lights,
         shape_lights,
+        shadowless,
         camera,
         center,
         radius,
@@ -689,9 +712,9 @@ fn round_scale(m: &Mat4, axes: &[usize], what: &str) -> Reason<f32> {
 fn light(l: &LightDesc) -> Reason<Light> {
     let size = match &l.kind {
         LightKind::Rect { width, height, .. } => width.max(*height),
-        LightKind::Disk { radius } | LightKind::Sphere { radius } => *radius,
-        LightKind::Cylinder { radius, length } => radius.max(*length),
-        LightKind::Distant { .. } | LightKind::Dome { .. } => 1.0,
+        LightKind::Disk { radius } | LightKind::Sphere { radius, .. } => *radius,
+        LightKind::Cylinder { radius, length, .. } => radius.max(*length),
+        LightKind::Distant { .. } | LightKind::Dome { .. } | LightKind::Portal { .. } => 1.0,
     };
     limits::check_transform(&l.to_world, size)?;
     let light = build_light(l)?;
@@ -713,6 +736,8 @@ fn peak_luminance(light: &Light) -> f64 {
         Light::Disk(l) => shaped(&l.radiance, &l.shaping),
         Light::Sphere(l) => shaped(&l.radiance, &l.shaping),
         Light::Cylinder(l) => shaped(&l.radiance, &l.shaping),
+        Light::Point(l) => shaped(&l.sphere.radiance, &l.sphere.shaping),
+        Light::Line(l) => shaped(&l.cylinder.radiance, &l.cylinder.shaping),
         Light::Triangle(l) => limits::luminance(&l.radiance),
         Light::Distant(l) => limits::luminance(&l.radiance),
         // A textured dome's texels are checked as it is built (`dome`).
@@ -749,11 +774,27 @@ fn build_light(l: &LightDesc) -> Reason<Light> {
             texture,
         } => rect(l, *width, *height, texture.as_deref())?,
         LightKind::Disk { radius } => disk(l, *radius)?,
-        LightKind::Sphere { radius } => sphere(l, *radius)?,
-        LightKind::Cylinder { radius, length } => cylinder(l, *radius, *length)?,
+        LightKind::Sphere { radius, point } => as_point(sphere(l, *radius)?, *point),
+        LightKind::Cylinder {
+            radius,
+            length,
+            line,
+        } => as_line(cylinder(l, *radius, *length)?, *line),
         LightKind::Distant { angle_deg } => distant(l, *angle_deg)?,
         LightKind::Dome { texture } => dome(l, texture.as_deref())?,
+        LightKind::Portal { .. } => return Err("a PortalLight is not a light".into()),
     })
+}
+
+/// PortalLight: the rectangle in world space, its dome side along the light's local +Z.
+fn portal(l: &LightDesc, width: f32, height: f32) -> Reason<Portal> {
+    let m = &l.to_world;
+    limits::check_transform(m, width.max(height))?;
+    let corner = m.transform_point3(Vec3::new(-0.5 * width, -0.5 * height, 0.0));
+    let eu = m.transform_vector3(Vec3::new(width, 0.0, 0.0));
+    let ev = m.transform_vector3(Vec3::new(0.0, height, 0.0));
+    Portal::new(corner, eu, ev, m.transform_vector3(Vec3::Z))
+        .ok_or_else(|| "the PortalLight has no area".to_string())
 }
 
 /// RectLight: the rectangle's corner and edges in world space, emitting along world −Z of
@@ -786,12 +827,45 @@ fn rect(l: &LightDesc, width: f32, height: f32, texture: Option<&TextureDesc>) -
     ))
 }
 
-/// DiskLight: radius scaled by the transform's uniform scale, emitting along local −Z.
+/// DiskLight, emitting along local −Z: a round disk under a uniform in-plane scale, else the
+/// ellipse the transform makes of it (semi-axes the images of the local X and Y radii).
 fn disk(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
-    let r = radius * round_scale(m, &[0, 1], "DiskLight")?;
-    let area = PI * r * r;
-    let n = -m.transform_vector3(Vec3::Z).normalize();
+    let center = m.transform_point3(Vec3::ZERO);
+    let axes = [Vec3::X, Vec3::Y].map(|a| m.transform_vector3(a * radius));
+    let back = m.transform_vector3(Vec3::Z);
+    let round = round_scale(m, &[0, 1], "DiskLight").map(|scale| {
+        let frame = Frame::from_normal(-back.normalize());
+        DiskLight::round(
+            String::new(),
+            center,
+            frame,
+            radius * scale,
+            Spectrum::Constant(0.0),
+        )
+    });
+    let disk = match round {
+        Ok(d) => d,
+        Err(_) => {
+            let n = axes[0].cross(axes[1]).normalize_or_zero();
+            if n == Vec3::ZERO {
+                return Err("the transform makes this DiskLight degenerate".into());
+            }
+            let n = if n.dot(back) > 0.0 { -n } else { n };
+            DiskLight {
+                axes,
+                ..DiskLight::round(
+                    String::new(),
+                    center,
+                    Frame::from_normal(n),
+                    axes[0].length().max(axes[1].length()),
+                    Spectrum::Constant(0.0),
+                )
+            }
+        }
+    };
+    let frame = disk.frame;
+    let (area, n) = (disk.area(), frame.n);
     let flat = Photometric {
         area: Some(area),
         flux_per_nit: Some(PI * area),
@@ -800,18 +874,22 @@ fn disk(l: &LightDesc, radius: f32) -> Reason<Light> {
     let (shaping, g) = shaped(l, flat, |w| area * n.dot(w).max(0.0))?;
     Ok(Light::Disk(DiskLight {
         prim_path: l.prim_path.clone(),
-        center: m.transform_point3(Vec3::ZERO),
-        frame: Frame::from_normal(n),
-        radius: r,
         radiance: emission::radiance(&l.emission, g)?,
         shaping,
+        ..disk
     }))
 }
 
-/// SphereLight: Φ = π · 4πr² · L, projected area πr² in every direction.
+/// SphereLight: Φ = π A L. Under a uniform scale a sphere of radius r (A = 4πr², projected
+/// area πr² in every direction); otherwise the ellipsoid the transform makes of it, sampled
+/// as such (`light/ellipsoid.rs`), never rounded to a sphere.
 fn sphere(l: &LightDesc, radius: f32) -> Reason<Light> {
     let m = &l.to_world;
-    let r = (radius * round_scale(m, &[0, 1, 2], "SphereLight")?).max(1e-6);
+    let center = m.transform_point3(Vec3::ZERO);
+    let Ok(scale) = round_scale(m, &[0, 1, 2], "SphereLight") else {
+        return ellipsoid(l, radius, center);
+    };
+    let r = (radius * scale).max(1e-6);
     let area = 4.0 * PI * r * r;
     let round = Photometric {
         area: Some(area),
@@ -821,11 +899,50 @@ fn sphere(l: &LightDesc, radius: f32) -> Reason<Light> {
     let (shaping, g) = shaped(l, round, |_| PI * r * r)?;
     Ok(Light::Sphere(SphereLight {
         prim_path: l.prim_path.clone(),
-        center: m.transform_point3(Vec3::ZERO),
+        center,
         radius: r,
         radiance: emission::radiance(&l.emission, g)?,
         shaping,
+        ellipsoid: None,
     }))
+}
+
+/// A SphereLight under a non-uniform scale or a shear: the unit sphere mapped by the
+/// transform's linear part times the radius.
+fn ellipsoid(l: &LightDesc, radius: f32, center: Vec3) -> Reason<Light> {
+    let linear = Mat3::from_mat4(l.to_world) * radius.max(1e-6);
+    let e = Ellipsoid::new(linear)
+        .ok_or_else(|| "the transform makes this SphereLight degenerate".to_string())?;
+    let shape = Photometric {
+        area: Some(e.area),
+        flux_per_nit: Some(PI * e.area),
+        intensity_per_nit: Some(e.peak_projected_area()),
+    };
+    let (shaping, g) = shaped(l, shape, |w| e.projected_area(w))?;
+    Ok(Light::Sphere(SphereLight {
+        prim_path: l.prim_path.clone(),
+        center,
+        radius: e.bounding_radius(),
+        radiance: emission::radiance(&l.emission, g)?,
+        shaping,
+        ellipsoid: Some(Box::new(e)),
+    }))
+}
+
+/// `treatAsPoint`: the sphere (or ellipsoid) becomes a point light with its far field.
+fn as_point(light: Light, point: bool) -> Light {
+    match light {
+        Light::Sphere(sphere) if point => Light::Point(PointLight { sphere }),
+        other => other,
+    }
+}
+
+/// `treatAsLine`: the cylinder becomes a line light along its axis with its far field.
+fn as_line(light: Light, line: bool) -> Light {
+    match light {
+        Light::Cylinder(cylinder) if line => Light::Line(LineLight { cylinder }),
+        other => other,
+    }
 }
 
 /// CylinderLight along local X: the length scales with the X axis, the radius with the
@@ -940,6 +1057,7 @@ fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> Reason<Light> {
             world_to_local,
             radiance: emission::radiance(e, g)?,
             map: None,
+            portals: Vec::new(),
         }));
     };
     if e.spd.is_some() {
@@ -985,6 +1103,7 @@ fn dome(l: &LightDesc, texture: Option<&std::path::Path>) -> Reason<Light> {
         world_to_local,
         radiance: Spectrum::Constant(scale),
         map: Some(map),
+        portals: Vec::new(),
     }))
 }
 
@@ -1088,7 +1207,10 @@ mod tests {
     fn a_clamped_colour_temperature_is_named_in_the_summary() {
         let bulb = |name: &str, k: f32| LightDesc {
             prim_path: name.into(),
-            kind: LightKind::Sphere { radius: 0.05 },
+            kind: LightKind::Sphere {
+                radius: 0.05,
+                point: false,
+            },
             to_world: Mat4::IDENTITY,
             emission: EmissionDesc {
                 intensity: 10.0,
@@ -1096,6 +1218,7 @@ mod tests {
                 ..Default::default()
             },
             shaping: None,
+            shadows: true,
         };
         let desc = SceneDescription {
             lights: vec![bulb("/Warm", 2700.0), bulb("/Blue", 20000.0)],

@@ -95,6 +95,9 @@ pub struct Scene {
     pub infinite_lights: Vec<u32>,
     /// Indices of lights that are analytic shapes.
     pub shape_lights: Vec<u32>,
+    /// Indices of lights with `inputs:shadow:enable = 0`: next-event shadow rays towards them
+    /// pass through occluders (`casts_shadows`).
+    pub shadowless: Vec<u32>,
     pub camera: Camera,
     pub center: Vec3,
     pub radius: f32,
@@ -117,6 +120,15 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// False for a light with `inputs:shadow:enable = 0`. The path integrator and the meters
+    /// then take its direct light from next event estimation alone, unoccluded and with
+    /// weight 1, and give BSDF-sampled rays that find it weight 0 (so the two strategies
+    /// still sum to one estimate: of the light's unshadowed direct illumination).
+    #[inline]
+    pub fn casts_shadows(&self, light: u32) -> bool {
+        !self.shadowless.contains(&light)
+    }
+
     /// Closest hit with t in (0, t_max).
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         super::ray_count::count();

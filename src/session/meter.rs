@@ -46,6 +46,7 @@
 //!     to_world: Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2),
 //!     emission: EmissionDesc { intensity: 1000.0, normalize: true, ..Default::default() },
 //!     shaping: None,
+//!     shadows: true,
 //! });
 //! let scene = build(&desc, Some((1, 1))).unwrap();
 //! let meter = Meter::illuminance(Vec3::ZERO, Vec3::Y).unwrap();

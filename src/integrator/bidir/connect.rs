@@ -137,7 +137,12 @@ pub fn origin_to_sensor(
     }
     let le = light.l(&o.hit(0.0), ss.wi, lambda);
     let pos_a = o.pmf * o.pdf_pos_a;
-    let cos = o.n.dot(ss.wi).abs();
+    // A point or line light carries an intensity: no cosine at y_0.
+    let cos = if o.delta_pos {
+        1.0
+    } else {
+        o.n.dot(ss.wi).abs()
+    };
     let value = le * (cos * ss.we_over_pdf / pos_a);
     let skip = Some(o.light);
     if value.is_black() || sensor_occluded(ctx, o.p, o.p_error, o.n, &ss, skip) {
@@ -156,6 +161,9 @@ pub fn origin_to_sensor(
 
 /// MIS weight of the light's point y_0 seen from sensor point `p_sensor` (eq. (37), n = 2).
 pub fn origin_weight(ctx: &BidirContext, o: &LightOrigin, p_sensor: Vec3, pdf_dir_w: f32) -> f32 {
+    if o.delta_pos {
+        return 1.0; // no camera ray finds a point or line light
+    }
     let d = p_sensor - o.p;
     let dist2 = d.length_squared();
     let cam_a = pdf_dir_w * o.n.dot(d).abs() / (dist2 * dist2.sqrt());
@@ -262,6 +270,12 @@ pub fn direct_weight(ctx: &BidirContext, z: &PathVertex, light: u32, ls: &LightL
             cos_cam: z.cos_geo(ls.wi),
             cos_light: if ls.infinite {
                 1.0
+            } else if lgt.is_delta_position() {
+                // A point or line light's next-event density is relative to its delta at y_0,
+                // which the emission density shares; the d² that turns it into a density per
+                // solid angle at z goes here (SmallVCM's point light returns d² as its
+                // `directPdfW` and 1 as `cosAtLight`).
+                (ls.p_light - z.p).length_squared()
             } else {
                 ls.n_light.dot(ls.wi).abs()
             },

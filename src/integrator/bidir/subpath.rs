@@ -229,7 +229,8 @@ impl Walk {
 }
 
 /// pmf · the light-sampling (next-event) density per solid angle at `ctx` of the point `hit` on
-/// light `light` seen along `wi`; pmf alone for a delta light (densities relative to the delta).
+/// light `light` seen along `wi`; for a delta light pmf · its density relative to the delta
+/// (`Light::delta_pdf`: 1, or 1/ℓ along a line light).
 #[inline]
 pub fn direct_pdf_w(
     scene: &Scene,
@@ -241,7 +242,7 @@ pub fn direct_pdf_w(
     let pmf = scene.light_sampler.pmf(light as usize);
     let l = &scene.lights[light as usize];
     if l.is_delta() {
-        pmf
+        pmf * l.delta_pdf()
     } else {
         pmf * l.pdf_li(ctx, wi, hit)
     }
@@ -332,6 +333,7 @@ impl LightOrigin {
             le: le.l,
             infinite: le.infinite,
             delta_dir: le.delta_dir,
+            delta_pos: le.delta_pos,
         })
     }
 }
@@ -356,7 +358,14 @@ impl Walk {
             t_max: f32::INFINITY,
             beta: le.l * (le.cos_light() / emit),
             rr_beta: SampledSpectrum::ONE,
-            mis: SubpathMis::light_start(&ctx.mis, emit, le.cos_light(), le.delta_dir),
+            // No camera ray finds a point or line light either: dVC = 0 as for a delta
+            // direction (SmallVCM's `IsDelta()` covers both).
+            mis: SubpathMis::light_start(
+                &ctx.mis,
+                emit,
+                le.cos_light(),
+                le.delta_dir || le.delta_pos,
+            ),
             depth: 0,
             prev: LightSampleContext { p: le.p, n: le.n },
             from_infinite: le.infinite,
@@ -372,7 +381,9 @@ pub fn first_hit_direct(ctx: &BidirContext, o: &LightOrigin, p: Vec3, ng: Vec3, 
     let rctx = LightSampleContext { p, n: ng };
     let dist2 = (o.p - p).length_squared();
     let direct = direct_pdf_w(ctx.scene, o.light, &rctx, -d, &o.hit(dist2.sqrt()));
-    if o.infinite {
+    // A point or line light's density is already relative to its delta at y_0: no conversion
+    // (SmallVCM's point light: `directPdfA` = 1).
+    if o.infinite || o.delta_pos {
         direct
     } else {
         direct * o.n.dot(d).abs() / dist2

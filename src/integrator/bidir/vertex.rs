@@ -109,6 +109,9 @@ pub struct LightOrigin {
     pub le: SampledSpectrum,
     pub infinite: bool,
     pub delta_dir: bool,
+    /// A point or line light: no surface at y_0, no ray can hit it, and the carried `le` is an
+    /// intensity (per unit length for a line) with no cosine at y_0.
+    pub delta_pos: bool,
 }
 
 impl LightOrigin {

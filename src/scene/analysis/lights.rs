@@ -108,6 +108,13 @@ fn info(light: &Light, prim: String, scene_radius: f32) -> LightInfo {
             false,
         ),
         Light::Dome(l) => ("dome", 1.0, false, l.map.is_some()),
+        Light::Point(l) => ("point", 0.0, l.sphere.shaping.is_some(), false),
+        Light::Line(l) => (
+            "line",
+            sphere_share(0.5 * l.length(), scene_radius),
+            l.cylinder.shaping.is_some(),
+            false,
+        ),
     };
     LightInfo {
         prim,

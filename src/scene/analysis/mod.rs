@@ -500,10 +500,14 @@ mod tests {
         desc.meshes.push(square("/Pane", pane_x, 0.3, 0.3, 1));
         desc.lights.push(LightDesc {
             prim_path: "/Bulb".into(),
-            kind: LightKind::Sphere { radius: r },
+            kind: LightKind::Sphere {
+                radius: r,
+                point: false,
+            },
             to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)),
             emission: EmissionDesc::default(),
             shaping: None,
+            shadows: true,
         });
         let half = 18f32.to_radians().tan();
         desc.cameras.push(CameraDesc {

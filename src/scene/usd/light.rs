@@ -25,7 +25,7 @@ use crate::desc::{
 use crate::error::Result;
 
 /// The concrete UsdLux light types that become a [`LightDesc`].
-const LIGHT_TYPES: [&str; 7] = [
+const LIGHT_TYPES: [&str; 8] = [
     "RectLight",
     "DiskLight",
     "SphereLight",
@@ -33,12 +33,12 @@ const LIGHT_TYPES: [&str; 7] = [
     "DistantLight",
     "DomeLight",
     "DomeLight_1",
+    "PortalLight",
 ];
 
 /// UsdLux types that are recognised but not supported.
-const UNSUPPORTED_LIGHT_TYPES: [&str; 5] = [
+const UNSUPPORTED_LIGHT_TYPES: [&str; 4] = [
     "GeometryLight",
-    "PortalLight",
     "PluginLight",
     "LightFilter",
     "PluginLightFilter",
@@ -78,14 +78,20 @@ pub(super) fn read_light(
             radius: size(ctx, prim, "radius", 0.5)?,
         },
         "SphereLight" => LightKind::Sphere {
-            radius: round_radius(ctx, prim, "treatAsPoint")?,
+            radius: round_radius(ctx, prim)?,
+            point: ctx.bool_or(prim, "treatAsPoint", false)?,
         },
         "CylinderLight" => LightKind::Cylinder {
-            radius: round_radius(ctx, prim, "treatAsLine")?,
+            radius: round_radius(ctx, prim)?,
             length: size(ctx, prim, "length", 1.0)?,
+            line: ctx.bool_or(prim, "treatAsLine", false)?,
         },
         "DistantLight" => LightKind::Distant {
             angle_deg: angle(ctx, prim)?,
+        },
+        "PortalLight" => LightKind::Portal {
+            width: size(ctx, prim, "width", 1.0)?,
+            height: size(ctx, prim, "height", 1.0)?,
         },
         _ => LightKind::Dome {
             texture: dome_texture(ctx, prim)?,
@@ -108,7 +114,22 @@ pub(super) fn read_light(
         to_world: to_world.as_mat4(),
         emission,
         shaping,
+        shadows: shadows(ctx, prim)?,
     })
+}
+
+/// `inputs:shadow:enable`: false makes this light's shadow rays pass through occluders, which
+/// is not physical, so the load summary says so.
+fn shadows(ctx: &mut Ctx, prim: &usd::Prim) -> Result<bool> {
+    let enabled = ctx.bool_or(prim, &input_name(ctx, prim, "shadow:enable")?, true)?;
+    if !enabled {
+        ctx.warn(
+            prim,
+            "inputs:shadow:enable = 0: its next-event shadow rays pass through occluders (not \
+             physical; honoured by --integrator path and meters only)",
+        );
+    }
+    Ok(enabled)
 }
 
 /// The schema fallback of `inputs:intensity`: 50000 for a DistantLight (sunlight in lux),
@@ -177,26 +198,21 @@ fn rect(ctx: &mut Ctx, prim: &usd::Prim) -> Result<LightKind> {
     })
 }
 
-/// The radius of a sphere or cylinder light (default 0.5). A zero radius or the
-/// `point_flag` (`treatAsPoint` / `treatAsLine`) gives a tiny radius of 0.1 mm, with a warning.
-fn round_radius(ctx: &mut Ctx, prim: &usd::Prim, point_flag: &str) -> Result<f32> {
+/// The radius of a sphere or cylinder light (default 0.5). A zero radius gives a tiny radius
+/// of 0.1 mm, with a warning (`treatAsPoint` / `treatAsLine` keep the radius: the point or
+/// line light emits the far field of the shape of that radius).
+fn round_radius(ctx: &mut Ctx, prim: &usd::Prim) -> Result<f32> {
     let radius = input_f32(ctx, prim, "radius", 0.5)?;
     if radius < 0.0 {
         return Err(ctx.err(prim, "inputs:radius is negative"));
     }
-    let flagged = ctx.bool_or(prim, point_flag, false)?;
-    if radius > 0.0 && !flagged {
+    if radius > 0.0 {
         return Ok(radius);
     }
-    let why = if flagged {
-        format!("{point_flag} = true")
-    } else {
-        "inputs:radius = 0".to_string()
-    };
     ctx.warn(
         prim,
         format!(
-            "{why}: modelled with a radius of {} mm",
+            "inputs:radius = 0: modelled with a radius of {} mm",
             POINT_RADIUS_M * 1e3
         ),
     );
@@ -281,6 +297,7 @@ fn type_inputs(type_name: &str) -> &'static [&'static str] {
         "SphereLight" => &["radius"],
         "CylinderLight" => &["radius", "length"],
         "DistantLight" => &["angle"],
+        "PortalLight" => &["width", "height"],
         "DomeLight" | "DomeLight_1" => &["texture:file", "texture:format", "guideRadius"],
         _ => &[],
     }
@@ -330,10 +347,17 @@ pub(super) fn warn_unsupported_inputs(ctx: &mut Ctx, prim: &usd::Prim) -> Result
             ),
         );
     }
-    if has("shadow:") {
+    let tint = [
+        "shadow:color",
+        "shadow:distance",
+        "shadow:falloff",
+        "shadow:falloffGamma",
+    ];
+    if tint.iter().any(|t| has(t)) {
         ctx.warn(
             prim,
-            "ShadowAPI inputs (shadow:*) are not physical; ignored",
+            "ShadowAPI shadow:color, shadow:distance, shadow:falloff and shadow:falloffGamma \
+             are not physical; ignored",
         );
     }
     for base in ["diffuse", "specular"] {

@@ -87,13 +87,17 @@ def DomeLight "Sky" {{
     assert_eq!(light(&desc, "/Disk").kind, LightKind::Disk { radius: 0.2 });
     assert_eq!(
         light(&desc, "/Sphere").kind,
-        LightKind::Sphere { radius: 0.25 }
+        LightKind::Sphere {
+            radius: 0.25,
+            point: false
+        }
     );
     assert_eq!(
         light(&desc, "/Cylinder").kind,
         LightKind::Cylinder {
             radius: 0.1,
-            length: 2.0
+            length: 2.0,
+            line: false
         }
     );
     assert_eq!(
@@ -131,13 +135,17 @@ def DomeLight "Sky" {}
     assert_eq!(light(&desc, "/Disk").kind, LightKind::Disk { radius: 0.5 });
     assert_eq!(
         light(&desc, "/Sphere").kind,
-        LightKind::Sphere { radius: 0.5 }
+        LightKind::Sphere {
+            radius: 0.5,
+            point: false
+        }
     );
     assert_eq!(
         light(&desc, "/Cylinder").kind,
         LightKind::Cylinder {
             radius: 0.5,
-            length: 1.0
+            length: 1.0,
+            line: false
         }
     );
     assert_eq!(
@@ -171,19 +179,28 @@ def SphereLight "Both" {
 "#,
     );
     let old = light(&desc, "/Old");
-    assert_eq!(old.kind, LightKind::Sphere { radius: 0.3 });
+    assert_eq!(
+        old.kind,
+        LightKind::Sphere {
+            radius: 0.3,
+            point: false
+        }
+    );
     assert_eq!(
         (old.emission.intensity, old.emission.color),
         (7.0, [0.5, 0.5, 1.0])
     );
     assert_eq!(
         light(&desc, "/Both").kind,
-        LightKind::Sphere { radius: 0.4 }
+        LightKind::Sphere {
+            radius: 0.4,
+            point: false
+        }
     );
 }
 
 #[test]
-fn point_like_lights_get_a_tiny_radius() {
+fn point_and_line_hints_and_zero_radii() {
     let desc = load_text(
         r#"#usda 1.0
 def SphereLight "P" {
@@ -192,13 +209,42 @@ def SphereLight "P" {
 def SphereLight "Z" {
     float inputs:radius = 0
 }
+def CylinderLight "L" {
+    bool treatAsLine = 1
+    float inputs:radius = 2
+}
 "#,
     );
-    // 0.1 mm in a centimetre stage is 0.01 units.
-    assert_eq!(light(&desc, "/P").kind, LightKind::Sphere { radius: 0.01 });
-    assert_eq!(light(&desc, "/Z").kind, LightKind::Sphere { radius: 0.01 });
-    assert_warned(&desc, &["/P", "treatAsPoint"]);
+    // treatAsPoint keeps the radius (the point light emits the sphere's far field) and warns
+    // of nothing; a zero radius is 0.1 mm (0.01 units in a centimetre stage), with a warning.
+    assert_eq!(
+        light(&desc, "/P").kind,
+        LightKind::Sphere {
+            radius: 0.5,
+            point: true
+        }
+    );
+    assert_eq!(
+        light(&desc, "/Z").kind,
+        LightKind::Sphere {
+            radius: 0.01,
+            point: false
+        }
+    );
+    assert_eq!(
+        light(&desc, "/L").kind,
+        LightKind::Cylinder {
+            radius: 2.0,
+            length: 1.0,
+            line: true
+        }
+    );
     assert_warned(&desc, &["/Z", "radius"]);
+    assert!(
+        !desc.warnings.iter().any(|w| w.contains("treatAs")),
+        "{:?}",
+        desc.warnings
+    );
 }
 
 #[test]

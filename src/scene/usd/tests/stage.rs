@@ -258,7 +258,7 @@ fn unsupported_prims_are_warned() {
         r#"def Capsule "Pill" {
     double radius = 2
 }
-def PortalLight "Portal" {}
+def GeometryLight "Portal" {}
 def "Typeless" {}
 def Xform "Group" {
     def Scope "S" {}
@@ -266,7 +266,7 @@ def Xform "Group" {
 "#,
     );
     assert_warned(&desc, &["/Pill", "unsupported prim type 'Capsule' ignored"]);
-    assert_warned(&desc, &["/Portal", "PortalLight"]);
+    assert_warned(&desc, &["/Portal", "GeometryLight"]);
     assert_eq!(desc.warnings.len(), 2, "{:?}", desc.warnings);
 }
 
