@@ -13,6 +13,7 @@ pub mod disk;
 pub mod distant;
 pub mod dome;
 pub mod emission;
+pub mod emission_layers;
 pub mod emit;
 pub mod ies;
 pub mod rect;

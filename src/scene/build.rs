@@ -140,7 +140,10 @@ pub fn build_with(
         stage_to_world: desc.stage_to_world,
         content_hash: desc.content_hash,
         features: SceneFeatures::default(),
+        light_groups: Vec::new(),
+        emission_layers: Default::default(),
     };
+    scene.light_groups = super::emission_layers::group_names(desc, &scene.lights);
     let material_paths: Vec<String> = desc.materials.iter().map(|m| m.prim_path.clone()).collect();
     scene.features = analysis::analyze(&scene, &material_paths);
     Ok(scene)

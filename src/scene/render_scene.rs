@@ -5,6 +5,7 @@ use super::analysis::SceneFeatures;
 use crate::accel::bvh::Bvh;
 use crate::geometry::triangle::hit_point_error;
 use crate::geometry::Ray;
+use crate::light::emission_layers::EmissionLayers;
 use crate::light::emit::SceneSphere;
 use crate::light::{Light, LightHit, LightSampler};
 use crate::material::normal_map::Tangents;
@@ -110,6 +111,12 @@ pub struct Scene {
     pub content_hash: u64,
     /// What the stage calls for (`scene::analysis`), found once when the scene is built.
     pub features: SceneFeatures,
+    /// Per light, its group's name (`spectral:lightGroup`, else the light's prim): the
+    /// layers of `--light-groups`.
+    pub light_groups: Vec<String>,
+    /// Extra layers weighting the paths by their own emission (`--illuminants`,
+    /// `--light-groups`: `light::emission_layers`, `scene::emission_layers`).
+    pub emission_layers: EmissionLayers,
 }
 
 impl Scene {
