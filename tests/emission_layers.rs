@@ -130,8 +130,9 @@ fn light_groups_sum_to_the_image() {
         .all(|l| l.xyz.iter().any(|p| p[1] > 0.0)));
 }
 
-/// The patches of `metamers.usda` (pixel rectangles at 80 × 40, inside the 0.12 m squares).
-const PATCHES: [(usize, usize, usize, usize); 2] = [(7, 10, 19, 30), (61, 10, 73, 30)];
+/// The patches of `metamers.usda`: pixel rectangles at 80 × 40 (0.005 m per pixel, x from
+/// −0.2 m, y from 0.1 m down), 0.015 m inside the 0.12 m squares.
+const PATCHES: [(usize, usize, usize, usize); 2] = [(17, 11, 35, 29), (45, 11, 63, 29)];
 
 /// Mean and standard error of the mean per channel over a patch rectangle at 80 × 40 (or a
 /// multiple of it).
