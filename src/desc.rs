@@ -375,6 +375,8 @@ pub struct EmissionDesc {
     pub luminous_flux: Option<f32>,
     /// `spectral:luminousIntensity` in cd (replaces intensity).
     pub luminous_intensity: Option<f32>,
+    /// `spectral:lightGroup`: the light group (`--light-groups`) the light belongs to.
+    pub light_group: Option<String>,
 }
 
 impl Default for EmissionDesc {
@@ -388,6 +390,7 @@ impl Default for EmissionDesc {
             spd: None,
             luminous_flux: None,
             luminous_intensity: None,
+            light_group: None,
         }
     }
 }

@@ -257,6 +257,12 @@ pub fn print_summary(scene: &Scene) {
     if let Some(note) = s.time.note() {
         eprintln!("note: {note}");
     }
+    if !scene.emission_layers.is_empty() {
+        eprintln!(
+            "emission layers: {}",
+            scene.emission_layers.names().join(", ")
+        );
+    }
 }
 
 /// Prints what `integrator` will not render in `scene` (`Integrator::warnings`).

@@ -24,7 +24,7 @@ pub fn write_window(
         c.cut(&color.rgb(out), out.width),
         c.cut(&out.xyz, out.width),
     );
-    let mut layers = crate::output::layers::exr_layers(&out.layers);
+    let mut layers = crate::output::layers::exr_layers(&out.layers, color.space);
     for (_, values) in &mut layers.channels {
         *values = c.cut(values, out.width);
     }

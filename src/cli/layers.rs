@@ -1,9 +1,12 @@
 //! The render command's layer flags: `--spectral` (`--spectral-bins`, `--spectral-range`),
-//! turned into `session::layers::LayerOptions`.
+//! `--aov`, turned into `session::layers::LayerOptions`; `--illuminants`, `--light-groups`
+//! and `--illuminant`, applied to the scene (`scene::emission_layers`).
 
 use super::common::at_least;
 use crate::error::{Error, Result};
 use crate::integrator::Integrator;
+use crate::light::emission_layers::illuminant_name;
+use crate::scene::Scene;
 use crate::sensor::spectral_film::{SpectralBins, DEFAULT_BINS};
 use crate::session::layers::LayerOptions;
 use crate::spectral::{LAMBDA_MAX, LAMBDA_MIN};
@@ -29,6 +32,25 @@ pub struct LayerArgs {
     #[arg(long = "aov", value_name = "LIST", value_delimiter = ',',
           value_parser = ["variance", "position", "normal", "depth"])]
     pub aov: Vec<String>,
+    /// One-pass renders under other illuminants (comma-separated names of
+    /// spectra/illuminants, e.g. D65,A,F11,LED-B3): per illuminant a layer <name>.R/G/B and
+    /// <name>.XYZ.X/Y/Z with every light's spectrum replaced by it at the same luminance
+    /// (path integrator; no textured emission).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_illuminant)]
+    pub illuminants: Vec<String>,
+    /// A layer per light group (spectral:lightGroup on a light, else one per light prim):
+    /// <group>.R/G/B and <group>.XYZ.X/Y/Z, which sum to the image (path integrator).
+    #[arg(long = "light-groups")]
+    pub light_groups: bool,
+    /// Replace every light's spectrum by this illuminant at the same luminance (the render
+    /// an --illuminants layer equals).
+    #[arg(long, value_name = "NAME", value_parser = parse_illuminant)]
+    pub illuminant: Option<String>,
+}
+
+/// An illuminant's full name (`A` → `CIE-A`).
+fn parse_illuminant(s: &str) -> std::result::Result<String, String> {
+    illuminant_name(s.trim()).map(str::to_string)
 }
 
 fn parse_range(s: &str) -> std::result::Result<(f32, f32), String> {
@@ -63,6 +85,7 @@ impl LayerArgs {
             first_hit: self.aov.iter().any(|a| a != "variance"),
         };
         layers.check(integrator)?;
+        self.check_emission(integrator)?;
         Ok(layers)
     }
 
@@ -70,12 +93,16 @@ impl LayerArgs {
     /// in the sample's own pixel (auto might choose an integrator that splats), said on
     /// stderr.
     pub fn integrator(&self, integrator: Integrator) -> Integrator {
-        let binned = self.spectral || self.spectral_bins.is_some() || self.spectral_range.is_some();
+        let binned = self.spectral
+            || self.spectral_bins.is_some()
+            || self.spectral_range.is_some()
+            || self.emission_layers();
         match integrator {
             Integrator::Auto { .. } if binned => {
                 eprintln!(
-                    "note: --spectral renders with --integrator path (auto could choose an \
-                     integrator that splats light paths, which are not binned)"
+                    "note: --spectral, --illuminants and --light-groups render with \
+                     --integrator path (auto could choose an integrator that splats light \
+                     paths, which these layers do not hold)"
                 );
                 Integrator::Path
             }
@@ -86,11 +113,48 @@ impl LayerArgs {
     /// Refuses layers with --part, --crop, --checkpoint and --resume: their raw state (`.part`,
     /// checkpoint files) carries the image's film only.
     pub fn check_state(&self, layers: &LayerOptions, part: bool, checkpoints: bool) -> Result<()> {
+        if self.emission_layers() && (part || checkpoints) {
+            return Err(Error::option(
+                "--illuminants and --light-groups do not go with --part, --crop, --checkpoint \
+                 or --resume: their saved state holds the image's film, not the layers' films",
+            ));
+        }
         if layers.spectral.is_some() && (part || checkpoints) {
             return Err(Error::option(
                 "--spectral does not go with --part, --crop, --checkpoint or --resume: their saved \
                  state holds the image's film, not the spectral bins",
             ));
+        }
+        Ok(())
+    }
+}
+
+impl LayerArgs {
+    /// Whether `--illuminants` or `--light-groups` asks for emission layers.
+    pub fn emission_layers(&self) -> bool {
+        !self.illuminants.is_empty() || self.light_groups
+    }
+
+    /// Checks the emission layers' integrator (path only) before the stage is read.
+    fn check_emission(&self, integrator: &Integrator) -> Result<()> {
+        if self.emission_layers() && *integrator != Integrator::Path {
+            return Err(Error::option(format!(
+                "--illuminants and --light-groups weight each camera path by the layers' \
+                 emission: integrator {} is not supported (use --integrator path)",
+                integrator.name()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Applies `--illuminant`, `--illuminants` and `--light-groups` to `scene`.
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        if let Some(name) = &self.illuminant {
+            scene.replace_emission(name)?;
+        }
+        scene.add_illuminant_layers(&self.illuminants)?;
+        if self.light_groups {
+            scene.add_light_group_layers()?;
         }
         Ok(())
     }

@@ -143,9 +143,12 @@ fn run(args: &RenderArgs) -> Result<()> {
         args.part.is_part(),
         args.checkpoint.is_some() || args.resume.is_some(),
     )?;
-    if args.part.crop.is_some() && (opts.layers.any() || opts.layers.variance) {
+    if args.part.crop.is_some()
+        && (opts.layers.any() || opts.layers.variance || args.layers.emission_layers())
+    {
         return Err(Error::option(
-            "--crop writes the window's image only: it does not go with --spectral or --aov",
+            "--crop writes the window's image only: it does not go with --spectral, --aov, \
+             --illuminants or --light-groups",
         ));
     }
     let color = args.color.resolve()?;
@@ -169,12 +172,13 @@ fn run(args: &RenderArgs) -> Result<()> {
     target::check(&targets(args, &path, args.color.preview.as_deref()))?;
     let resume = args.resume.as_deref().map(checkpoints::read).transpose()?;
     interrupt::install()?;
-    let scene = scene::load_at(
+    let mut scene = scene::load_at(
         &args.scene,
         args.resolution,
         args.machinery.machinery(),
         args.when.read_time(),
     )?;
+    args.layers.apply(&mut scene)?;
     print_summary(&scene);
     if let Some(signal) = interrupt::received() {
         eprintln!("interrupted by {signal} before rendering; nothing written");
@@ -218,7 +222,8 @@ fn run_sequence(
     let stage = scene::open(&args.scene)?;
     for (t, exr, preview) in &outputs {
         let desc = stage.read(args.when.at(Some(*t)))?;
-        let scene = scene::build_with(&desc, args.resolution, args.machinery.machinery())?;
+        let mut scene = scene::build_with(&desc, args.resolution, args.machinery.machinery())?;
+        args.layers.apply(&mut scene)?;
         eprintln!("frame {t}");
         print_summary(&scene);
         if let Some(signal) = interrupt::received() {
@@ -391,7 +396,7 @@ pub(super) fn write_image(
         out.height,
         &rgb,
         &out.xyz,
-        &output::layers::exr_layers(&out.layers),
+        &output::layers::exr_layers(&out.layers, color.space),
         white,
         &meta,
     )?;

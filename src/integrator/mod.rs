@@ -23,6 +23,7 @@ pub mod bdpt;
 pub mod bidir;
 pub mod cut;
 pub mod estimator;
+pub(crate) mod gathered;
 pub mod light_tracer;
 pub mod meter;
 pub mod path;

@@ -20,11 +20,13 @@
 
 use super::bidir::Contribution;
 use super::cut::{continuation, continuation_limit, CutSample};
+use super::gathered::Gathered;
 use super::meter::MeterIntegrator;
 use super::{Estimator, Settings, Workspace};
 use crate::bxdf::{Bsdf, TransportMode};
 use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
 use crate::geometry::Ray;
+use crate::light::emission_layers::LayerSource;
 use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
 use crate::material::Material;
 use crate::sampling::dimensions::{self, BSDF, LIGHT, ROULETTE};
@@ -131,13 +133,32 @@ impl PathIntegrator {
         sampler: &mut Sampler,
         cut: Option<&mut CutSample>,
     ) -> SampledSpectrum {
+        let mut g = Gathered::plain();
+        self.li_gather(scene, ray, t_max, prev, lambda_in, sampler, cut, &mut g);
+        g.l
+    }
+
+    /// [`li_from`](Self::li_from) gathering into `g`: the image's radiance in `g.l` and
+    /// each emission layer's in `g.sums` (`integrator::gathered`), all relative to
+    /// `lambda_in`.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn li_gather(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        prev: Option<Previous>,
+        lambda_in: &SampledWavelengths,
+        sampler: &mut Sampler,
+        cut: Option<&mut CutSample>,
+        g: &mut Gathered,
+    ) {
         let mut lambda = *lambda_in;
-        let mut l = SampledSpectrum::ZERO;
         let mut st = PathState::new(ray, t_max, prev);
         let capped = if scene.dispersive {
-            self.walk::<true>(scene, &mut st, self.max_depth, &mut lambda, sampler, &mut l)
+            self.walk::<true>(scene, &mut st, self.max_depth, &mut lambda, sampler, g)
         } else {
-            self.walk::<false>(scene, &mut st, self.max_depth, &mut lambda, sampler, &mut l)
+            self.walk::<false>(scene, &mut st, self.max_depth, &mut lambda, sampler, g)
         };
         if let (Some(si), Some(cut)) = (capped, cut) {
             cut.capped += 1;
@@ -146,7 +167,10 @@ impl PathIntegrator {
                 cut.add(lambda_in.rebase(c, &lambda), 1.0, limited);
             }
         }
-        lambda_in.rebase(l, &lambda)
+        g.l = lambda_in.rebase(g.l, &lambda);
+        for s in g.sums.iter_mut() {
+            *s = lambda_in.rebase(*s, &lambda);
+        }
     }
 
     /// The light a path capped at vertex `si` (its state `st`, its wavelengths `lambda`) would
@@ -161,21 +185,21 @@ impl PathIntegrator {
         ext: &mut Sampler,
     ) -> (SampledSpectrum, bool) {
         let mut st = *st;
-        let mut l = SampledSpectrum::ZERO;
+        let mut g = Gathered::plain();
         let mut lambda_ext = *lambda;
         let limit = continuation_limit(self.max_depth);
         let limited = if scene.dispersive {
-            self.scatter::<true>(scene, si, &mut st, &mut lambda_ext, ext, &mut l)
+            self.scatter::<true>(scene, si, &mut st, &mut lambda_ext, ext, &mut g)
                 && self
-                    .walk::<true>(scene, &mut st, limit, &mut lambda_ext, ext, &mut l)
+                    .walk::<true>(scene, &mut st, limit, &mut lambda_ext, ext, &mut g)
                     .is_some()
         } else {
-            self.scatter::<false>(scene, si, &mut st, &mut lambda_ext, ext, &mut l)
+            self.scatter::<false>(scene, si, &mut st, &mut lambda_ext, ext, &mut g)
                 && self
-                    .walk::<false>(scene, &mut st, limit, &mut lambda_ext, ext, &mut l)
+                    .walk::<false>(scene, &mut st, limit, &mut lambda_ext, ext, &mut g)
                     .is_some()
         };
-        (lambda.rebase(l, &lambda_ext), limited)
+        (lambda.rebase(g.l, &lambda_ext), limited)
     }
 
     /// The light beyond the cap of a path capped at vertex `si`, reached along `-wo` with
@@ -209,14 +233,14 @@ impl PathIntegrator {
         limit: u32,
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
-        l: &mut SampledSpectrum,
+        g: &mut Gathered,
     ) -> Option<SurfaceHit> {
         loop {
-            let si = self.next_vertex(scene, st, lambda, sampler, l)?;
+            let si = self.next_vertex(scene, st, lambda, sampler, g)?;
             if st.depth == limit {
                 return Some(si);
             }
-            if !self.scatter::<DISPERSION>(scene, &si, st, lambda, sampler, l) {
+            if !self.scatter::<DISPERSION>(scene, &si, st, lambda, sampler, g) {
                 return None;
             }
         }
@@ -232,16 +256,16 @@ impl PathIntegrator {
         st: &mut PathState,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
-        l: &mut SampledSpectrum,
+        g: &mut Gathered,
     ) -> Option<SurfaceHit> {
         loop {
             let Some(hit) = scene.intersect(&st.ray, st.t_max) else {
-                *l += st.beta * self.escaped(scene, st.ray.d, st.prev, lambda);
+                self.add_escaped(scene, st, lambda, g);
                 return None;
             };
             let si = match hit {
                 Hit::Light { light, hit } => {
-                    *l += st.beta * self.emitted(scene, light, &hit, -st.ray.d, st.prev, lambda);
+                    self.add_emitted(scene, light, &hit, st, lambda, g);
                     return None;
                 }
                 Hit::Surface(si) => si,
@@ -262,7 +286,7 @@ impl PathIntegrator {
                     n: si.ng,
                     t: si.t,
                 };
-                *l += st.beta * self.emitted(scene, light, &lh, -st.ray.d, st.prev, lambda);
+                self.add_emitted(scene, light, &lh, st, lambda, g);
             }
             return Some(si);
         }
@@ -278,7 +302,7 @@ impl PathIntegrator {
         st: &mut PathState,
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
-        l: &mut SampledSpectrum,
+        g: &mut Gathered,
     ) -> bool {
         // Each decision draws from its own dimensions of this bounce (`dimensions.rs`).
         let bounce = st.depth;
@@ -291,7 +315,7 @@ impl PathIntegrator {
         let bsdf = material.bsdf(scene.tex_coord(si, self.filter), si.ns, lambda);
         if !bsdf.is_specular() {
             sampler.set_dimension(dimensions::bounce(bounce, LIGHT));
-            *l += st.beta * self.sample_ld(scene, si, &bsdf, wo, lambda, sampler);
+            self.sample_ld(scene, si, &bsdf, wo, lambda, sampler, st.beta, g);
         }
         sampler.set_dimension(dimensions::bounce(bounce, BSDF));
         let (uc, u) = (sampler.get_1d(), sampler.get_2d());
@@ -313,17 +337,72 @@ impl PathIntegrator {
         russian_roulette(&mut st.beta, st.eta_scale, st.depth, sampler)
     }
 
-    /// Emission from an area light met by the path, MIS-weighted against light sampling.
+    /// The emission of area light `light` met at `hit` by the path in state `st`, into the
+    /// image and every layer (a replacing layer evaluates its own light there).
+    #[inline]
+    fn add_emitted(
+        &self,
+        scene: &Scene,
+        light: u32,
+        hit: &LightHit,
+        st: &PathState,
+        lambda: &SampledWavelengths,
+        g: &mut Gathered,
+    ) {
+        let (w, prev) = (-st.ray.d, st.prev);
+        let le = self.emitted(scene, &scene.lights, light, hit, w, prev, lambda);
+        g.l += st.beta * le;
+        for (layer, sum) in g.layers.iter().zip(g.sums.iter_mut()) {
+            match &layer.source {
+                LayerSource::Group(mask) if mask[light as usize] => *sum += st.beta * le,
+                LayerSource::Group(_) => {}
+                LayerSource::Replaced(lights) => {
+                    let le = self.emitted(scene, lights, light, hit, w, prev, lambda);
+                    *sum += st.beta * le;
+                }
+            }
+        }
+    }
+
+    /// The infinite lights' radiance along the escaped ray of the path in state `st`, into
+    /// the image and every layer.
+    #[inline]
+    fn add_escaped(
+        &self,
+        scene: &Scene,
+        st: &PathState,
+        lambda: &SampledWavelengths,
+        g: &mut Gathered,
+    ) {
+        let (d, prev) = (st.ray.d, st.prev);
+        g.l += st.beta * self.escaped(scene, &scene.lights, |_| true, d, prev, lambda);
+        for (layer, sum) in g.layers.iter().zip(g.sums.iter_mut()) {
+            let le = match &layer.source {
+                LayerSource::Group(mask) => {
+                    self.escaped(scene, &scene.lights, |i| mask[i], d, prev, lambda)
+                }
+                LayerSource::Replaced(lights) => {
+                    self.escaped(scene, lights, |_| true, d, prev, lambda)
+                }
+            };
+            *sum += st.beta * le;
+        }
+    }
+
+    /// Emission from area light `light` of `lights` (the scene's, or a layer's replacement
+    /// of them) met by the path, MIS-weighted against light sampling.
+    #[allow(clippy::too_many_arguments)]
     fn emitted(
         &self,
         scene: &Scene,
+        lights: &[Light],
         light: u32,
         hit: &LightHit,
         w: Vec3,
         prev: Option<Previous>,
         lambda: &SampledWavelengths,
     ) -> SampledSpectrum {
-        let lgt = &scene.lights[light as usize];
+        let lgt = &lights[light as usize];
         let le = lgt.l(hit, w, lambda);
         match prev {
             // Next event estimation took all of a shadowless light's direct light.
@@ -337,10 +416,13 @@ impl PathIntegrator {
         }
     }
 
-    /// Radiance from infinite lights along an escaped ray.
+    /// Radiance from the infinite lights of `lights` (the scene's or a layer's) with index
+    /// in `include` along an escaped ray.
     fn escaped(
         &self,
         scene: &Scene,
+        lights: &[Light],
+        include: impl Fn(usize) -> bool,
         d: Vec3,
         prev: Option<Previous>,
         lambda: &SampledWavelengths,
@@ -352,7 +434,10 @@ impl PathIntegrator {
         };
         let mut l = SampledSpectrum::ZERO;
         for &i in &scene.infinite_lights {
-            let lgt = &scene.lights[i as usize];
+            if !include(i as usize) {
+                continue;
+            }
+            let lgt = &lights[i as usize];
             let le = lgt.le(d, lambda);
             if le.is_black() {
                 continue;
@@ -371,7 +456,11 @@ impl PathIntegrator {
     }
 
     /// Next-event estimation: one light chosen by power, one point on it, MIS-weighted
-    /// against BSDF sampling (Veach 1997 eq. 9.13 with β = 2).
+    /// against BSDF sampling (Veach 1997 eq. 9.13 with β = 2), × `beta` into the image and
+    /// every layer. A replacing layer samples its own light with the same numbers (the same
+    /// point: only the spectrum differs) and shares the BSDF value, the shadow ray and the
+    /// MIS weight, computed once.
+    #[allow(clippy::too_many_arguments)]
     fn sample_ld(
         &self,
         scene: &Scene,
@@ -380,33 +469,89 @@ impl PathIntegrator {
         wo: Vec3,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
-    ) -> SampledSpectrum {
+        beta: SampledSpectrum,
+        g: &mut Gathered,
+    ) {
         let (ul, u) = (sampler.get_1d(), sampler.get_2d());
         let Some((light, pmf)) = scene.light_sampler.sample(ul) else {
-            return SampledSpectrum::ZERO;
+            return;
         };
         let ctx = LightSampleContext { p: si.p, n: si.ng };
-        let lgt = &scene.lights[light];
-        let Some(ls) = lgt.sample_li(&ctx, u, lambda) else {
-            return SampledSpectrum::ZERO;
+        let nee = Nee {
+            scene,
+            si,
+            bsdf,
+            wo,
+            light,
+            pmf,
         };
+        let mut shared = None;
+        let main = scene.lights[light]
+            .sample_li(&ctx, u, lambda)
+            .map_or(SampledSpectrum::ZERO, |ls| nee.term(&ls, &mut shared));
+        g.l += beta * main;
+        for (layer, sum) in g.layers.iter().zip(g.sums.iter_mut()) {
+            match &layer.source {
+                LayerSource::Group(mask) if mask[light] => *sum += beta * main,
+                LayerSource::Group(_) => {}
+                LayerSource::Replaced(lights) => {
+                    if let Some(ls) = lights[light].sample_li(&ctx, u, lambda) {
+                        *sum += beta * nee.term(&ls, &mut shared);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A next-event estimate's vertex and chosen light.
+struct Nee<'a> {
+    scene: &'a Scene,
+    si: &'a SurfaceHit,
+    bsdf: &'a Bsdf,
+    wo: Vec3,
+    light: usize,
+    pmf: f32,
+}
+
+/// What a light sample's estimate shares with the other layers' samples of the same point:
+/// the BSDF value × cos, the transmittance, the light pdf and the MIS weight.
+type Shared = (SampledSpectrum, f32, f32, f32);
+
+impl Nee<'_> {
+    /// The estimate f · L · tr · w / p of light sample `ls` (0 where it carries nothing).
+    #[inline]
+    fn term(&self, ls: &LightLiSample, shared: &mut Option<Shared>) -> SampledSpectrum {
         if ls.l.is_black() || ls.pdf_w == 0.0 {
             return SampledSpectrum::ZERO;
         }
-        let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(si.ns).abs();
-        if f.is_black() {
+        let (f, tr, pdf_light, w) = *shared.get_or_insert_with(|| self.shared(ls));
+        if f.is_black() || tr == 0.0 {
             return SampledSpectrum::ZERO;
         }
-        let tr = transmittance(scene, si.p, si.p_error, si.ng, &ls, light as u32);
-        if tr == 0.0 {
-            return SampledSpectrum::ZERO;
-        }
-        let pdf_light = pmf * ls.pdf_w;
-        if ls.delta || !scene.casts_shadows(light as u32) {
+        if ls.delta || !self.scene.casts_shadows(self.light as u32) {
             return f * ls.l * (tr / pdf_light);
         }
-        let w = power_heuristic(pdf_light, bsdf.pdf(wo, ls.wi, TransportMode::Radiance));
         f * ls.l * (tr * w / pdf_light)
+    }
+
+    fn shared(&self, ls: &LightLiSample) -> Shared {
+        let si = self.si;
+        let f = self.bsdf.f(self.wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(si.ns).abs();
+        if f.is_black() {
+            return (f, 0.0, 0.0, 0.0);
+        }
+        let tr = transmittance(self.scene, si.p, si.p_error, si.ng, ls, self.light as u32);
+        let pdf_light = self.pmf * ls.pdf_w;
+        // A shadowless light's direct light is all next event estimation's (its BSDF-sampled
+        // hits count nothing, `emitted`), so its weight is 1 as a delta light's.
+        let w = if ls.delta || tr == 0.0 || !self.scene.casts_shadows(self.light as u32) {
+            1.0
+        } else {
+            let pdf_bsdf = self.bsdf.pdf(self.wo, ls.wi, TransportMode::Radiance);
+            power_heuristic(pdf_light, pdf_bsdf)
+        };
+        (f, tr, pdf_light, w)
     }
 }
 
@@ -523,11 +668,18 @@ impl Estimator for PathEstimator<'_> {
         ws: &mut Workspace,
     ) {
         let (ray, t_max) = self.scene.camera.generate_ray(film, u_lens);
-        let cut = Some(&mut ws.record.cut);
-        let l = self
-            .pt
-            .li_from(self.scene, ray, t_max, None, lambda, sampler, cut);
-        ws.record.camera = Contribution::new(l, 1.0);
+        let rec = &mut ws.record;
+        let layers = &self.scene.emission_layers.layers;
+        rec.layers.resize(layers.len(), SampledSpectrum::ZERO);
+        let mut g = Gathered {
+            l: SampledSpectrum::ZERO,
+            layers,
+            sums: &mut rec.layers,
+        };
+        let cut = Some(&mut rec.cut);
+        self.pt
+            .li_gather(self.scene, ray, t_max, None, lambda, sampler, cut, &mut g);
+        rec.camera = Contribution::new(g.l, 1.0);
     }
 
     fn meter_sample(

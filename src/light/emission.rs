@@ -92,7 +92,7 @@ pub fn unit_shape(e: &EmissionDesc) -> Reason<Spectrum> {
 }
 
 /// A named, blackbody or sampled SPD scaled to a luminance of 1 cd/m².
-fn normalized_spd(spd: &SpdDesc) -> Reason<Spectrum> {
+pub fn normalized_spd(spd: &SpdDesc) -> Reason<Spectrum> {
     let dense = match spd {
         SpdDesc::Named(name) => data::illuminant(name).cloned().ok_or_else(|| {
             format!(

@@ -14,6 +14,7 @@ pub mod distant;
 pub mod dome;
 pub mod ellipsoid;
 pub mod emission;
+pub mod emission_layers;
 pub mod emit;
 pub mod ies;
 pub mod line;

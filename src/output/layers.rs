@@ -17,10 +17,17 @@
 //! its camera ray meets (pbrt-v4's GBufferFilm conventions): position and geometric normal in
 //! OpenEXR's camera space (`worldToCamera`: x right, y up, z along the view, metres), and the
 //! depth Z = P.z; 0 where no sample hit anything.
+//!
+//! **Emission layers** (`--illuminants`, `--light-groups`): per layer `<name>.R/G/B` in the
+//! EXR's working space (as `R`, `G`, `B`) and `<name>.XYZ.X/Y/Z`, absolute, × 2^exposure like
+//! the image's; with `--spectral`, its spectral radiance `<name>.S0.<λ>nm` in the bins of the
+//! image's own spectral channels.
 
 use super::exr::ExrLayers;
 use crate::sensor::spectral_film::SpectralImage;
+use crate::session::emission_layers::EmissionImage;
 use crate::session::layers::LayerImages;
+use crate::spectral::working_space::WorkingSpace;
 
 /// The layout version the spectral channels follow (Fichet et al. 2021).
 pub const SPECTRAL_LAYOUT_VERSION: &str = "1.0";
@@ -30,9 +37,12 @@ pub const EMISSIVE_UNITS: &str = "W.m^-2.sr^-1";
 pub const VARIANCE_CHANNEL: &str = "variance.Y";
 pub const SPECTRAL_BINS_ATTRIBUTE: &str = "spectralRender:spectralBins";
 
-/// The channels and attributes of `layers`.
-pub fn exr_layers(layers: &LayerImages) -> ExrLayers {
+/// The channels and attributes of `layers`, RGB in `space`.
+pub fn exr_layers(layers: &LayerImages, space: WorkingSpace) -> ExrLayers {
     let mut out = ExrLayers::default();
+    for e in &layers.emission {
+        emission(e, space, &mut out);
+    }
     if let Some(s) = &layers.spectral {
         spectral(s, &mut out);
     }
@@ -55,6 +65,32 @@ pub fn exr_layers(layers: &LayerImages) -> ExrLayers {
 /// The channel name of an emissive, unpolarised bin centred on `nm`.
 pub fn spectral_channel(nm: f64) -> String {
     format!("S0.{}nm", format!("{nm:.6}").replace('.', ","))
+}
+
+/// An emission layer's RGB (the image's own conversion in linear Rec.709), XYZ and bins.
+fn emission(e: &EmissionImage, space: WorkingSpace, out: &mut ExrLayers) {
+    let converted;
+    let rgb = match space {
+        WorkingSpace::LinRec709 => &e.rgb,
+        space => {
+            converted = space.convert(&e.xyz);
+            &converted
+        }
+    };
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let v = rgb.iter().map(|p| p[c]).collect();
+        out.channels.push((format!("{}.{name}", e.name), v));
+    }
+    for (c, name) in ["X", "Y", "Z"].iter().enumerate() {
+        let v = e.xyz.iter().map(|p| p[c]).collect();
+        out.channels.push((format!("{}.XYZ.{name}", e.name), v));
+    }
+    if let Some(s) = &e.spectral {
+        for (i, image) in s.images.iter().enumerate() {
+            let name = format!("{}.{}", e.name, spectral_channel(s.bins.centre(i)));
+            out.channels.push((name, image.clone()));
+        }
+    }
 }
 
 fn spectral(s: &SpectralImage, out: &mut ExrLayers) {

@@ -164,7 +164,10 @@ pub fn build_with(
         content_hash: desc.content_hash,
         features: SceneFeatures::default(),
         data_window: desc.render.data_window.clone(),
+        light_groups: Vec::new(),
+        emission_layers: Default::default(),
     };
+    scene.light_groups = super::emission_layers::group_names(desc, &scene.lights);
     let material_paths: Vec<String> = desc.materials.iter().map(|m| m.prim_path.clone()).collect();
     scene.features = analysis::analyze(&scene, &material_paths);
     Ok(scene)

@@ -9,6 +9,7 @@ pub mod analysis;
 pub mod build;
 #[cfg(not(feature = "testing"))]
 pub(crate) mod build;
+pub mod emission_layers;
 mod limits;
 pub mod machinery;
 pub mod ray_count;

@@ -6,6 +6,7 @@ use crate::accel::bvh::Bvh;
 use crate::desc::DataWindowDesc;
 use crate::geometry::triangle::hit_point_error;
 use crate::geometry::Ray;
+use crate::light::emission_layers::EmissionLayers;
 use crate::light::emit::SceneSphere;
 use crate::light::{Light, LightHit, LightSampler};
 use crate::material::normal_map::Tangents;
@@ -117,6 +118,12 @@ pub struct Scene {
     /// The RenderSettings' `dataWindowNDC`, when it is not the whole image: the part of the
     /// image a render renders (`session::crop`).
     pub data_window: Option<DataWindowDesc>,
+    /// Per light, its group's name (`spectral:lightGroup`, else the light's prim): the
+    /// layers of `--light-groups`.
+    pub light_groups: Vec<String>,
+    /// Extra layers weighting the paths by their own emission (`--illuminants`,
+    /// `--light-groups`: `light::emission_layers`, `scene::emission_layers`).
+    pub emission_layers: EmissionLayers,
 }
 
 impl Scene {

@@ -221,11 +221,19 @@ impl<'a> ImageSession<'a> {
             opts.max_memory,
         )?;
         opts.layers.check(&opts.integrator)?;
+        if !scene.emission_layers.is_empty() && opts.integrator != Integrator::Path {
+            return Err(crate::error::Error::option(format!(
+                "--illuminants and --light-groups weight each camera path by the layers' \
+                 emission: integrator {} is not supported (use --integrator path)",
+                opts.integrator.name()
+            )));
+        }
         let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h, Grid::for_scale(scene.camera.exposure_scale as f64));
         let to_camera = scene.camera.world_to_exr_camera();
-        let layers = LayerFilms::new(w, h, &opts.layers, film.grid(), to_camera);
+        let emission = scene.emission_layers.names();
+        let layers = LayerFilms::new((w, h), &opts.layers, &emission, film.grid(), to_camera);
         let settings = Settings {
             max_depth: cap,
             filter: texture_filter(opts),
@@ -319,6 +327,9 @@ impl<'a> ImageSession<'a> {
         if self.done > 0 || self.first > 0 {
             return Err("a session starts a part only before its first pass".into());
         }
+        if !self.layers.emission.films.is_empty() {
+            return Err(EMISSION_LAYERS_WHOLE.into());
+        }
         if self.opts.time_budget.is_some() && self.opts.spp.is_none() {
             return Err("a part needs a sample count, not a time budget".into());
         }
@@ -339,6 +350,9 @@ impl<'a> ImageSession<'a> {
     pub fn start_crop(&mut self, crop: Crop) -> Reason<()> {
         if self.done > self.first || self.crop.is_some() {
             return Err("a session is cropped only before its first pass".into());
+        }
+        if !self.layers.emission.films.is_empty() {
+            return Err(EMISSION_LAYERS_WHOLE.into());
         }
         let (w, h) = (self.film.width, self.film.height);
         if crop.x1 > w || crop.y1 > h {
@@ -650,6 +664,10 @@ pub(crate) fn sampler_kind(opts: &RenderOptions) -> SamplerKind {
     }
 }
 
+/// Why parts and crops refuse emission layers.
+const EMISSION_LAYERS_WHOLE: &str = "--illuminants and --light-groups render the whole image in \
+    one run: a part's or crop's saved state holds the image's film, not the layers' films";
+
 /// Linear Rec.709 RGB of an XYZ pixel.
 pub fn xyz_to_rgb(p: [f32; 3]) -> [f32; 3] {
     color::xyz_to_rgb(p.map(f64::from)).map(|c| c as f32)
@@ -708,7 +726,7 @@ fn render_tile<const HERO_ONLY: bool>(
                 }
                 let dropped = acc.dropped;
                 acc.add(k, &ws.record, &lambda, s);
-                layers.add(k, &ws.record, &lambda, acc.dropped != dropped);
+                layers.add(k, &ws.record, &lambda, (s, acc.dropped != dropped));
                 layers.add_first_hit(k, scene, film, u_lens);
                 // The sample's own value (0 when it was dropped), rounded to the grid.
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);

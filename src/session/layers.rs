@@ -4,6 +4,7 @@
 //! Every sum is on a fixed grid (`sensor::grid_sum`), so the layers, like the image, depend on
 //! the seed and the sample count only.
 
+use super::emission_layers::{EmissionFilms, EmissionImage, EmissionTile};
 use crate::error::{Error, Result};
 use crate::integrator::bidir::record::SampleRecord;
 use crate::integrator::Integrator;
@@ -63,6 +64,8 @@ pub struct LayerTile {
     to_camera: Option<Mat4>,
     /// Per tile pixel: P.x, P.y, P.z, N.x, N.y, N.z summed over the samples that hit.
     first_hit: Vec<FirstHitSums>,
+    /// The emission-weighted layers' sums (`session::emission_layers`).
+    emission: EmissionTile,
 }
 
 /// A pixel's first-hit sums on [`FIRST_HIT_GRID`] and the samples that hit something.
@@ -75,7 +78,10 @@ pub struct FirstHitSums {
 impl LayerTile {
     /// Empty sums for `tile` (nothing allocated when no layer is asked for).
     pub fn new(films: &LayerFilms, tile: &Tile) -> LayerTile {
-        let mut t = LayerTile::default();
+        let mut t = LayerTile {
+            emission: films.emission.tile(tile),
+            ..LayerTile::default()
+        };
         if let Some(f) = &films.spectral {
             t.binner = Some(f.binner());
             t.bins = f.bins().count;
@@ -115,16 +121,18 @@ impl LayerTile {
         px.hits += 1;
     }
 
-    /// Adds a finished sample of tile pixel `k` (its wavelengths final); `dropped`: the sample
-    /// was non-finite and dropped from the image, so from the layers too.
+    /// Adds the finished sample `s` of tile pixel `k` (its wavelengths final); `dropped`: the
+    /// sample was non-finite and dropped from the image, so from the spectral layer too (an
+    /// emission layer drops its own non-finite samples, as its own render would).
     #[inline]
     pub fn add(
         &mut self,
         k: usize,
         rec: &SampleRecord,
         lambda: &SampledWavelengths,
-        dropped: bool,
+        (s, dropped): (u64, bool),
     ) {
+        self.emission.add(k, rec, lambda, s);
         if dropped {
             return;
         }
@@ -141,6 +149,7 @@ pub struct LayerFilms {
     clamped: u64,
     pub spectral: Option<SpectralFilm>,
     pub first_hit: Option<FirstHitFilm>,
+    pub emission: EmissionFilms,
 }
 
 /// Per pixel, the first hits' sums (`LayerTile::add_first_hit`).
@@ -167,18 +176,22 @@ pub struct LayerImages {
     /// −1 where a pixel has fewer than 2 samples (no estimate).
     pub variance: Option<Vec<f32>>,
     pub first_hit: Option<FirstHitImages>,
+    /// The emission-weighted layers (`--illuminants`, `--light-groups`), in order.
+    pub emission: Vec<EmissionImage>,
 }
 
 impl LayerFilms {
+    /// The films of `opts`' layers and of the emission layers named `emission`.
     pub fn new(
-        width: usize,
-        height: usize,
+        (width, height): (usize, usize),
         opts: &LayerOptions,
+        emission: &[String],
         grid: Grid,
         to_camera: Mat4,
     ) -> LayerFilms {
         LayerFilms {
             clamped: 0,
+            emission: EmissionFilms::new(emission, (width, height), grid, opts.spectral),
             spectral: opts
                 .spectral
                 .map(|bins| SpectralFilm::new(width, height, bins, grid)),
@@ -205,16 +218,20 @@ impl LayerFilms {
             }
         }
         self.clamped += t.clamped;
+        self.emission.store_tile(tile, &t.emission, samples);
     }
 
     /// Terms clamped and sums saturated.
     pub fn clamped(&self) -> u64 {
-        self.clamped + self.spectral.as_ref().map_or(0, SpectralFilm::clamped)
+        self.clamped
+            + self.spectral.as_ref().map_or(0, SpectralFilm::clamped)
+            + self.emission.clamped()
     }
 
     /// The layers times `scale` (the camera exposure).
     pub fn images(&self, scale: f64) -> LayerImages {
         LayerImages {
+            emission: self.emission.images(scale, super::image::xyz_to_rgb),
             spectral: self.spectral.as_ref().map(|f| SpectralImage {
                 bins: f.bins(),
                 images: f.images(scale),

@@ -115,6 +115,16 @@ pub fn image(scene: &Scene, opts: &RenderOptions) -> MemoryEstimate {
             pixels.saturating_mul(6 * 16 + 8 + 6 * 4),
         );
     }
+    let layers = scene.emission_layers.len() as u64;
+    if layers > 0 {
+        // Per layer a film and its output (XYZ and RGB), and its spectral bins.
+        let bins = opts
+            .layers
+            .spectral
+            .map_or(0, |b| b.count as u64 * (16 + 4) + 8);
+        let per_pixel = layers.saturating_mul(FILM + OUTPUT + bins);
+        e.add("emission layers", pixels.saturating_mul(per_pixel));
+    }
     if opts.strategies {
         let n = strategies::count(cap.min(strategies::MAX_DEPTH)) as u64;
         e.add("strategy images", pixels.saturating_mul(n * STRATEGY));

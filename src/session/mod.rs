@@ -14,6 +14,7 @@ pub mod auto;
 pub mod checkpoint;
 pub mod crop;
 pub mod depth_cut;
+pub mod emission_layers;
 pub mod image;
 pub mod layers;
 pub mod memory;

@@ -38,6 +38,9 @@ pub struct SampleRecord {
     /// What the sample's continuations past the depth cap found (`integrator::cut`), over
     /// all the bins it reached.
     pub cut: CutSample,
+    /// Per emission layer (`light::emission_layers`), the sample's own-pixel radiance with
+    /// that layer's emission (path tracing only); empty without layers.
+    pub layers: Vec<SampledSpectrum>,
 }
 
 impl SampleRecord {
@@ -49,6 +52,7 @@ impl SampleRecord {
             splats: Vec::new(),
             strategies: vec![Contribution::default(); strategy_count],
             cut: CutSample::default(),
+            layers: Vec::new(),
         }
     }
 
@@ -58,6 +62,7 @@ impl SampleRecord {
         self.splats.clear();
         self.strategies.fill(Contribution::default());
         self.cut = CutSample::default();
+        self.layers.fill(SampledSpectrum::ZERO);
     }
 
     /// The weighted sum of everything the sample contributed, whatever the bin: a meter's

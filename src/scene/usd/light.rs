@@ -472,7 +472,25 @@ pub(super) fn read_emission(
         spd: spd(ctx, prim)?,
         luminous_flux,
         luminous_intensity,
+        light_group: light_group(ctx, prim)?,
     })
+}
+
+/// `spectral:lightGroup`: a name usable as an EXR layer (letters, digits, `_`, `-`).
+fn light_group(ctx: &Ctx, prim: &usd::Prim) -> Result<Option<String>> {
+    let Some(g) = ctx.token(prim, vocab::LIGHT_GROUP)? else {
+        return Ok(None);
+    };
+    let ok = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+    if g.is_empty() || !g.chars().all(ok) {
+        return Err(ctx.err(
+            prim,
+            format!(
+                "spectral:lightGroup '{g}' must be letters, digits, '_' or '-' (an EXR layer name)"
+            ),
+        ));
+    }
+    Ok(Some(g))
 }
 
 /// `inputs:colorTemperature` (default 6500 K) when `inputs:enableColorTemperature` is on.

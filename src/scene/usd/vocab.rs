@@ -18,13 +18,17 @@ pub(super) const LUMINOUS_FLUX: &str = "spectral:luminousFlux";
 /// `float spectral:luminousIntensity` (cd).
 pub(super) const LUMINOUS_INTENSITY: &str = "spectral:luminousIntensity";
 
+/// `token spectral:lightGroup`: the light group of `--light-groups`.
+pub(super) const LIGHT_GROUP: &str = "spectral:lightGroup";
+
 /// The `spectral:` attributes a light (UsdLux light or `MeshLightAPI` prim) may carry.
-const LIGHT_ATTRIBUTES: [&str; 5] = [
+const LIGHT_ATTRIBUTES: [&str; 6] = [
     EMISSION,
     EMISSION_SAMPLES,
     TEMPERATURE,
     LUMINOUS_FLUX,
     LUMINOUS_INTENSITY,
+    LIGHT_GROUP,
 ];
 
 /// `true` for a property name in the `spectral:` namespace (also `inputs:spectral:...`,
