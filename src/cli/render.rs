@@ -189,7 +189,9 @@ fn run(args: &RenderArgs) -> Result<()> {
 }
 
 /// `--frames`: every frame's outputs are checked first, the stage is opened once and read at
-/// each time code in turn; an interrupt ends the sequence after writing the frame under way.
+/// each time code in turn, each frame's scene built from the previous one's where the
+/// description did not change (`scene::Rebuilder`); an interrupt ends the sequence after
+/// writing the frame under way.
 fn run_sequence(
     args: &RenderArgs,
     opts: &RenderOptions,
@@ -216,10 +218,12 @@ fn run_sequence(
     target::check(&all_targets)?;
     interrupt::install()?;
     let stage = scene::open(&args.scene)?;
+    let mut builder = scene::Rebuilder::new(args.resolution, args.machinery.machinery());
+    let mut previous = None;
     for (t, exr, preview) in &outputs {
         let desc = stage.read(args.when.at(Some(*t)))?;
-        let scene = scene::build_with(&desc, args.resolution, args.machinery.machinery())?;
-        eprintln!("frame {t}");
+        let (scene, rebuilt) = builder.build(&desc, previous.take())?;
+        eprintln!("frame {t}: {}", rebuilt.line());
         print_summary(&scene);
         if let Some(signal) = interrupt::received() {
             eprintln!("interrupted by {signal} before frame {t}; the sequence stops");
@@ -234,6 +238,7 @@ fn run_sequence(
             eprintln!("the sequence stops after frame {t}");
             return Ok(());
         }
+        previous = Some(scene);
     }
     Ok(())
 }

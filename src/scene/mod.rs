@@ -12,6 +12,7 @@ pub(crate) mod build;
 mod limits;
 pub mod machinery;
 pub mod ray_count;
+mod rebuild;
 #[cfg(feature = "testing")]
 #[doc(hidden)]
 pub mod render_scene;
@@ -27,6 +28,7 @@ pub(crate) mod usd;
 pub use analysis::{Feature, SceneFeatures};
 pub use build::{build, build_with};
 pub use machinery::Machinery;
+pub use rebuild::{Rebuilder, Rebuilt};
 pub use render_scene::{Hit, Scene, SurfaceHit};
 
 use crate::error::Result;

@@ -1,7 +1,7 @@
 //! Opening a stage and reading its metadata (units, up axis, time).
 
 use glam::{DMat4, DVec3, DVec4};
-use openusd::{usd, usda};
+use openusd::{sdf, usd, usda};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -130,4 +130,19 @@ pub(super) fn read_time(stage: &usd::Stage) -> (usd::TimeCode, TimeOrigin) {
     } else {
         (usd::TimeCode::EARLIEST, TimeOrigin::Earliest)
     }
+}
+
+/// A number in the stage's metadata (`framesPerSecond`, `timeCodesPerSecond`) when it is
+/// authored as a finite number of any numeric type.
+pub(super) fn metadata_number(stage: &usd::Stage, field: &str) -> Option<f64> {
+    let v = match stage.stage_metadata(field).ok()?? {
+        sdf::Value::Double(v) => v,
+        sdf::Value::Float(v) => f64::from(v),
+        sdf::Value::Int(v) => f64::from(v),
+        sdf::Value::Int64(v) => v as f64,
+        sdf::Value::Uint(v) => f64::from(v),
+        sdf::Value::Uint64(v) => v as f64,
+        _ => return None,
+    };
+    v.is_finite().then_some(v)
 }
