@@ -95,13 +95,18 @@ pub(super) fn z_up(path: &Path, stage: &usd::Stage) -> Result<bool> {
     let value = stage
         .stage_metadata("upAxis")
         .map_err(|e| Error::usd(path, format!("reading upAxis: {e:#}")))?;
-    match value.as_ref().and_then(values::to_token).as_deref() {
+    let token = value.as_ref().and_then(values::to_token);
+    match token.as_deref() {
         None if value.is_none() => Ok(false),
         Some("Y") => Ok(false),
         Some("Z") => Ok(true),
-        _ => Err(Error::usd(
+        Some(other) => Err(Error::usd(
             path,
-            format!("upAxis must be \"Y\" or \"Z\", got {value:?}"),
+            format!("upAxis must be \"Y\" or \"Z\" (UsdGeom allows no other), got \"{other}\""),
+        )),
+        None => Err(Error::usd(
+            path,
+            format!("upAxis must be the token \"Y\" or \"Z\", got {value:?}"),
         )),
     }
 }
