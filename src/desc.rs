@@ -273,7 +273,8 @@ impl PreviewSurfaceDesc {
 pub struct TextureDesc {
     /// The texture shader's prim path (for messages).
     pub shader_path: String,
-    /// `inputs:file`, resolved to an absolute path.
+    /// `inputs:file`, resolved to an absolute path; empty when the node has none (the texture
+    /// is then its `fallback` everywhere).
     pub file: PathBuf,
     /// The `UsdPrimvarReader_float2` varname feeding `inputs:st` ("st" by default).
     pub st_primvar: String,

@@ -7,10 +7,7 @@ use std::path::{Path, PathBuf};
 
 /// Stages that must not load, with a piece of the one-line error each must give.
 const REFUSED: &[(&str, &str)] = &[
-    (
-        "payload/payload_invalid.usda",
-        "unresolved Payload layer @",
-    ),
+    ("payload/payload_invalid.usda", "unresolved Payload layer @"),
     (
         "references/reference_invalid.usda",
         "unresolved Reference layer @",
@@ -60,10 +57,18 @@ fn every_corpus_fixture_loads_or_is_refused_for_its_reason() {
     let mut refused = 0;
     for stage in &all {
         let name = stage.to_string_lossy();
-        let loaded = scene::load_at(stage, Some((8, 8)), Machinery::default(), ReadTime::default());
+        let loaded = scene::load_at(
+            stage,
+            Some((8, 8)),
+            Machinery::default(),
+            ReadTime::default(),
+        );
         match REFUSED.iter().find(|(s, _)| name.ends_with(s)) {
             Some((_, reason)) => {
-                let e = loaded.err().unwrap_or_else(|| panic!("{name} loaded")).to_string();
+                let e = loaded
+                    .err()
+                    .unwrap_or_else(|| panic!("{name} loaded"))
+                    .to_string();
                 assert!(e.contains(reason) && !e.contains('\n'), "{name}: {e}");
                 assert!(e.starts_with(&*name), "the error names the file: {e}");
                 refused += 1;
@@ -94,7 +99,10 @@ fn frame_rates_are_read_from_the_corpus_stages() {
     assert_eq!(t.time_codes_per_second, None);
     assert_eq!(t.code, Some(0.0), "startTimeCode 0");
     let t = time("framesPerSecond_timeCodesPerSecond_mixed/24_48.usda");
-    assert_eq!((t.frames_per_second, t.time_codes_per_second), (Some(24.0), Some(48.0)));
+    assert_eq!(
+        (t.frames_per_second, t.time_codes_per_second),
+        (Some(24.0), Some(48.0))
+    );
     let t = time("upAxis/upAxis_Y.usda");
     assert_eq!((t.frames_per_second, t.time_codes_per_second), (None, None));
 }

@@ -127,8 +127,10 @@ for name in "${NAMES[@]}"; do
                 error="$(grep -m1 '^error:' "$log" || true)"
                 [ -n "$error" ] || error="exit status $status: $(tail -n 1 "$log")" ;;
         esac
+        error="${error#error: }"
+        error="${error//"$dir"\//}"
         printf '| %s/%s | %s | %s | %.1f |\n' "$name" "$(cell "$rel")" "$state" \
-            "$(cell "${error#error: }")" "$seconds" >>"$table"
+            "$(cell "$error")" "$seconds" >>"$table"
     done < <(find "$dir" -type f \( -name '*.usd' -o -name '*.usda' -o -name '*.usdc' \
                 -o -name '*.usdz' \) -not -path '*/.git/*' -print0 | sort -z)
 done

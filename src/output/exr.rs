@@ -604,7 +604,10 @@ mod tests {
         let img = read(&path).unwrap();
         assert_eq!(img.attributes[TIME_CODE_ATTRIBUTE], "12.5");
         assert_eq!(img.types[TIME_CODE_ATTRIBUTE], "double");
-        assert_eq!(img.attributes[USD_FPS_ATTRIBUTE], (24000.0 / 1001.0).to_string());
+        assert_eq!(
+            img.attributes[USD_FPS_ATTRIBUTE],
+            (24000.0 / 1001.0).to_string()
+        );
         assert_eq!(img.attributes[TIME_CODES_PER_SECOND_ATTRIBUTE], "48");
         assert_eq!(img.attributes[FPS_ATTRIBUTE], "24000/1001");
         assert_eq!(img.types[FPS_ATTRIBUTE], "rational");

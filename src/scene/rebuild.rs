@@ -11,8 +11,8 @@
 use super::build::{assemble, geometry, light, Geometry};
 use super::machinery::Machinery;
 use super::render_scene::Scene;
-use crate::desc::{CameraDesc, LightDesc, MaterialDesc, MeshDesc, RenderSettingsDesc};
 use crate::desc::SceneDescription;
+use crate::desc::{CameraDesc, LightDesc, MaterialDesc, MeshDesc, RenderSettingsDesc};
 use crate::error::{Error, Result};
 use crate::light::{Light, LightSampler};
 
@@ -279,7 +279,10 @@ mod tests {
         // One light moves: it alone is built, with the light table; the geometry is kept.
         d.lights[1].to_world = Mat4::from_translation(Vec3::new(0.7, 1.2, 0.0));
         let (scene, r) = builder.build(&d, Some(scene)).unwrap();
-        assert_eq!((r.geometry, r.lights_built, r.light_table), (false, 1, true));
+        assert_eq!(
+            (r.geometry, r.lights_built, r.light_table),
+            (false, 1, true)
+        );
         assert_eq!(r.line(), "1 light changed; geometry reused");
         assert_eq!(fingerprint(&scene), fingerprint(&fresh(&d)));
         // The emissive panel's power changes: the geometry (and its triangle lights) again.
