@@ -28,7 +28,7 @@
 //! | `spectralRender:scene` | string | the scene file, UTF-8 |
 //! | `spectralRender:timeCode` | double | the USD time code the stage was read at (`--frame`, each frame of `--frames`, else the stage's `startTimeCode`); absent when the stage was read at each attribute's earliest sample (no time range authored, no `--frame`) |
 //! | `spectralRender:usdFramesPerSecond`, `spectralRender:timeCodesPerSecond` | double | the stage's `framesPerSecond` and `timeCodesPerSecond` metadata, when authored |
-//! | `framesPerSecond` | rational | OpenEXR's standard attribute: the stage's authored `framesPerSecond` when positive, as n/1 for whole rates, n/1001 for the NTSC rates (23.976, 29.97, …), else n/1000 |
+//! | `framesPerSecond` | rational | OpenEXR's standard attribute: the stage's authored `framesPerSecond` when positive, as n/1 for whole rates, k·1000/1001 for the NTSC rates (23.976, 29.97, …), else n/1000 |
 //!
 //! The time code is namespaced because OpenEXR's own `timeCode` attribute is a SMPTE time
 //! code (hours, minutes, seconds, frames), not a USD time code.
@@ -471,20 +471,24 @@ fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
     attributes
 }
 
-/// A frame rate as OpenEXR's rational: n/1 for whole rates, n/1001 for the NTSC family
-/// (24000/1001 ≈ 23.976, 30000/1001 ≈ 29.97, …, to 10⁻³), else to the nearest 1/1000; None
-/// for a rate that is not positive or does not fit.
+/// A frame rate as OpenEXR's rational: n/1 for whole rates, k·1000/1001 for the NTSC family
+/// (24000/1001 ≈ 23.976, 30000/1001 ≈ 29.97, …), each to 10⁻³, else to the nearest 1/1000;
+/// None for a rate that is not positive or does not fit.
 fn rational(fps: f64) -> Option<(i32, u32)> {
     if !(fps.is_finite() && fps > 0.0 && fps < 1e6) {
         return None;
     }
-    for d in [1u32, 1001, 1000] {
-        let n = (fps * f64::from(d)).round();
-        if d == 1000 || (n / f64::from(d) - fps).abs() < 1e-3 {
-            return (n >= 1.0).then_some((n as i32, d));
-        }
+    let whole = fps.round();
+    if (whole - fps).abs() < 1e-3 {
+        return (whole >= 1.0).then_some((whole as i32, 1));
     }
-    None
+    // The NTSC rates are k·1000/1001 for a whole k (SMPTE ST 12-1).
+    let k = (fps * 1.001).round();
+    if k >= 1.0 && (k * 1000.0 / 1001.0 - fps).abs() < 1e-3 {
+        return Some(((k * 1000.0) as i32, 1001));
+    }
+    let n = (fps * 1000.0).round();
+    (n >= 1.0).then_some((n as i32, 1000))
 }
 
 /// Encodes `image` into `file` through a buffer that is flushed explicitly, so that write
@@ -630,6 +634,8 @@ mod tests {
         assert_eq!(rational(23.976), Some((24000, 1001)));
         assert_eq!(rational(29.97), Some((30000, 1001)));
         assert_eq!(rational(12.5), Some((12500, 1000)));
+        assert_eq!(rational(59.94), Some((60000, 1001)));
+        assert_eq!(rational(23.5), Some((23500, 1000)));
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e9] {
             assert_eq!(rational(bad), None, "{bad}");
         }
