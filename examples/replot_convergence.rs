@@ -13,7 +13,11 @@ use std::path::PathBuf;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let Some(dir) = args.iter().find(|a| !a.starts_with("--")).map(PathBuf::from) else {
+    let Some(dir) = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .map(PathBuf::from)
+    else {
         eprintln!("usage: replot_convergence DIR [--meters]");
         std::process::exit(2);
     };
@@ -39,7 +43,12 @@ fn replot(dir: &std::path::Path, y_label: &str) -> spectral_render::error::Resul
         .trim()
         .to_string();
     let out = dir.join("convergence.png");
-    plot::write(&out, &format!("{stage}: error against time"), y_label, &rows)?;
+    plot::write(
+        &out,
+        &format!("{stage}: error against time"),
+        y_label,
+        &rows,
+    )?;
     eprintln!("wrote {} ({} rows)", out.display(), rows.len());
     Ok(())
 }

@@ -47,6 +47,9 @@ pub struct TimeDesc {
     pub animated: bool,
     /// Held interpolation between time samples (linear otherwise).
     pub held: bool,
+    /// The stage's `framesPerSecond` and `timeCodesPerSecond` metadata, when authored.
+    pub frames_per_second: Option<f64>,
+    pub time_codes_per_second: Option<f64>,
 }
 
 /// Where the time a stage was read at came from.
@@ -125,7 +128,7 @@ impl Drop for ExtractedAssets {
 }
 
 /// A triangulated mesh in world space (metres, Y up).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshDesc {
     pub prim_path: String,
     pub positions: Vec<Vec3>,
@@ -157,7 +160,7 @@ pub enum SpectrumDesc {
 }
 
 /// What a material prim resolved to.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MaterialDesc {
     pub prim_path: String,
     pub kind: MaterialKind,
@@ -192,7 +195,7 @@ impl MaterialDesc {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum MaterialKind {
     /// `spectral:diffuse`: Lambertian (roughness 0) or Oren–Nayar (σ in radians).
     Diffuse {
@@ -270,7 +273,8 @@ impl PreviewSurfaceDesc {
 pub struct TextureDesc {
     /// The texture shader's prim path (for messages).
     pub shader_path: String,
-    /// `inputs:file`, resolved to an absolute path.
+    /// `inputs:file`, resolved to an absolute path; empty when the node has none (the texture
+    /// is then its `fallback` everywhere).
     pub file: PathBuf,
     /// The `UsdPrimvarReader_float2` varname feeding `inputs:st` ("st" by default).
     pub st_primvar: String,
@@ -396,7 +400,7 @@ impl Default for EmissionDesc {
 }
 
 /// A UsdLux light (other than a mesh light, which lives on its `MeshDesc`).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LightDesc {
     pub prim_path: String,
     pub kind: LightKind,
@@ -478,7 +482,7 @@ pub enum LightKind {
 }
 
 /// A UsdGeomCamera.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CameraDesc {
     pub prim_path: String,
     /// Camera-to-world in metres, Y up; the camera looks along its local -Z with +Y up.
@@ -501,7 +505,7 @@ pub struct CameraDesc {
 }
 
 /// The RenderSettings prim, if any.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderSettingsDesc {
     pub resolution: Option<(u32, u32)>,
     /// Prim path of the camera the settings name.

@@ -178,3 +178,86 @@ fn meter_and_lights_take_a_frame() {
     };
     assert_ne!(meter("1"), meter("2"));
 }
+
+/// A static ground (two meshes), a light moving between frames 1 and 3, a still light and a
+/// camera rising: time range 1..3, 24 frames and 48 time codes per second.
+const MOVING_LIGHT: &str = r#"#usda 1.0
+(
+    startTimeCode = 1
+    endTimeCode = 3
+    framesPerSecond = 24
+    timeCodesPerSecond = 48
+    metersPerUnit = 1
+    upAxis = "Y"
+)
+def Xform "World" {
+    def Mesh "ground" {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(-2, 0, 2), (2, 0, 2), (2, 0, -2), (-2, 0, -2)]
+    }
+    def Mesh "wall" {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(-2, 0, -1), (2, 0, -1), (2, 2, -1), (-2, 2, -1)]
+    }
+    def SphereLight "moving" {
+        float inputs:radius = 0.1
+        float inputs:intensity = 50
+        double3 xformOp:translate.timeSamples = { 1: (-1, 1, 0), 3: (1, 1, 0) }
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def SphereLight "still" {
+        float inputs:radius = 0.2
+        float inputs:intensity = 5
+        double3 xformOp:translate = (0, 1.5, 1)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def Camera "camera" {
+        float focalLength = 20
+        float horizontalAperture = 36
+        float verticalAperture = 36
+        double3 xformOp:translate.timeSamples = { 1: (0, 1, 4), 3: (0, 1.5, 4) }
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+}
+"#;
+
+/// `--frames` keeps the geometry of a stage whose meshes do not move and rebuilds only the
+/// light that changed, saying so per frame; every frame equals its own `--frame` render bit
+/// for bit and carries its time code and the stage's rates in the EXR.
+#[test]
+fn a_sequence_rebuilds_only_what_changed_and_equals_single_frames() {
+    let dir = temp_dir("usd-rebuild");
+    write(&dir, "moving.usda", MOVING_LIGHT);
+    let e = render(&dir, "moving.usda", "seq.#.exr", &["--frames", "1..4"]);
+    for line in [
+        "frame 1: built",
+        "frame 2: camera, 1 light changed; geometry reused",
+        "frame 3: camera, 1 light changed; geometry reused",
+        "frame 4: nothing changed; geometry and light table reused",
+    ] {
+        assert!(e.contains(line), "no '{line}' in: {e}");
+    }
+    for frame in ["1", "2", "3", "4"] {
+        let single = format!("single{frame}.exr");
+        render(&dir, "moving.usda", &single, &["--frame", frame]);
+        let seq = dir.join(format!("seq.{frame}.exr"));
+        assert!(
+            pixels(&seq) == pixels(&dir.join(&single)),
+            "frame {frame} of the sequence differs from its --frame render"
+        );
+        let attributes = spectral_render::output::exr::read(&seq).unwrap().attributes;
+        assert_eq!(attributes["spectralRender:timeCode"], frame);
+        assert_eq!(attributes["spectralRender:usdFramesPerSecond"], "24");
+        assert_eq!(attributes["spectralRender:timeCodesPerSecond"], "48");
+        assert_eq!(attributes["framesPerSecond"], "24/1");
+    }
+    assert!(pixels(&dir.join("single1.exr")) != pixels(&dir.join("single2.exr")));
+    // Without --frame: the stage's startTimeCode.
+    render(&dir, "moving.usda", "default.exr", &[]);
+    let attributes = spectral_render::output::exr::read(&dir.join("default.exr"))
+        .unwrap()
+        .attributes;
+    assert_eq!(attributes["spectralRender:timeCode"], "1");
+}

@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::integrator::cut;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
-use crate::output::exr::ExrMetadata;
+use crate::output::exr::{ExrMetadata, TimeMetadata};
 use crate::sampling::SamplerKind;
 use crate::scene::{Machinery, Scene};
 use crate::session::{AutoReport, DepthCut};
@@ -423,7 +423,17 @@ impl Made<'_> {
             world_to_camera: Some(camera.world_to_exr_camera().to_cols_array()),
             world_to_ndc: Some(camera.world_to_ndc().to_cols_array()),
             working_space: Default::default(),
+            time: time_metadata(&self.scene.summary.time),
         }
+    }
+}
+
+/// The EXR's time attributes from the time the stage was read at.
+fn time_metadata(t: &crate::desc::TimeDesc) -> TimeMetadata {
+    TimeMetadata {
+        time_code: t.code,
+        frames_per_second: t.frames_per_second,
+        time_codes_per_second: t.time_codes_per_second,
     }
 }
 

@@ -193,7 +193,9 @@ fn run(args: &RenderArgs) -> Result<()> {
 }
 
 /// `--frames`: every frame's outputs are checked first, the stage is opened once and read at
-/// each time code in turn; an interrupt ends the sequence after writing the frame under way.
+/// each time code in turn, each frame's scene built from the previous one's where the
+/// description did not change (`scene::Rebuilder`); an interrupt ends the sequence after
+/// writing the frame under way.
 fn run_sequence(
     args: &RenderArgs,
     opts: &RenderOptions,
@@ -220,11 +222,13 @@ fn run_sequence(
     target::check(&all_targets)?;
     interrupt::install()?;
     let stage = scene::open(&args.scene)?;
+    let mut builder = scene::Rebuilder::new(args.resolution, args.machinery.machinery());
+    let mut previous = None;
     for (t, exr, preview) in &outputs {
         let desc = stage.read(args.when.at(Some(*t)))?;
-        let mut scene = scene::build_with(&desc, args.resolution, args.machinery.machinery())?;
+        let (mut scene, rebuilt) = builder.build(&desc, previous.take())?;
         args.layers.apply(&mut scene)?;
-        eprintln!("frame {t}");
+        eprintln!("frame {t}: {}", rebuilt.line());
         print_summary(&scene);
         if let Some(signal) = interrupt::received() {
             eprintln!("interrupted by {signal} before frame {t}; the sequence stops");
@@ -239,6 +243,7 @@ fn run_sequence(
             eprintln!("the sequence stops after frame {t}");
             return Ok(());
         }
+        previous = Some(scene);
     }
     Ok(())
 }

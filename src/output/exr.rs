@@ -26,6 +26,12 @@
 //! | `spectralRender:wallTime` | double | render wall-clock time in seconds |
 //! | `spectralRender:version` | string | renderer version |
 //! | `spectralRender:scene` | string | the scene file, UTF-8 |
+//! | `spectralRender:timeCode` | double | the USD time code the stage was read at (`--frame`, each frame of `--frames`, else the stage's `startTimeCode`); absent when the stage was read at each attribute's earliest sample (no time range authored, no `--frame`) |
+//! | `spectralRender:usdFramesPerSecond`, `spectralRender:timeCodesPerSecond` | double | the stage's `framesPerSecond` and `timeCodesPerSecond` metadata, when authored |
+//! | `framesPerSecond` | rational | OpenEXR's standard attribute: the stage's authored `framesPerSecond` when positive, as n/1 for whole rates, k·1000/1001 for the NTSC rates (23.976, 29.97, …), else n/1000 |
+//!
+//! The time code is namespaced because OpenEXR's own `timeCode` attribute is a SMPTE time
+//! code (hours, minutes, seconds, frames), not a USD time code.
 //!
 //! Matrices are stored as OpenEXR's `M44f` is (Imath's row-vector convention, p' = p·M, the
 //! translation in the last row), which is the column-vector matrix's columns in order.
@@ -70,6 +76,11 @@ pub const SCENE_ATTRIBUTE: &str = "spectralRender:scene";
 pub const MAX_DEPTH_ATTRIBUTE: &str = "spectralRender:maxDepth";
 pub const EXPOSURE_ATTRIBUTE: &str = "spectralRender:exposure";
 pub const MIS_ATTRIBUTE: &str = "spectralRender:mis";
+pub const TIME_CODE_ATTRIBUTE: &str = "spectralRender:timeCode";
+pub const USD_FPS_ATTRIBUTE: &str = "spectralRender:usdFramesPerSecond";
+pub const TIME_CODES_PER_SECOND_ATTRIBUTE: &str = "spectralRender:timeCodesPerSecond";
+/// OpenEXR's standard frame-rate attribute (rational).
+pub const FPS_ATTRIBUTE: &str = "framesPerSecond";
 /// The OCIO name of the RGB channels' colour space (the attribute OCIO-aware readers use).
 pub const COLORSPACE_ATTRIBUTE: &str = "colorspace";
 
@@ -98,6 +109,16 @@ pub struct ExrMetadata {
     /// The space of the R, G, B channels (`--colorspace`): the `chromaticities` and
     /// `colorspace` attributes.
     pub working_space: WorkingSpace,
+    /// The USD time the stage was read at, when it was one time code.
+    pub time: TimeMetadata,
+}
+
+/// The USD time code of the image and the stage's rates (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TimeMetadata {
+    pub time_code: Option<f64>,
+    pub frames_per_second: Option<f64>,
+    pub time_codes_per_second: Option<f64>,
 }
 
 /// An EXR file as read back: every channel by name (row-major, rows top to bottom) and every
@@ -287,6 +308,7 @@ fn type_name(value: &AttributeValue) -> String {
         AttributeValue::F64(_) => "double".into(),
         AttributeValue::Text(_) => "string".into(),
         AttributeValue::Matrix4x4(_) => "m44f".into(),
+        AttributeValue::Rational(_) => "rational".into(),
         other => format!("{other:?}")
             .split(['(', ' ', '{'])
             .next()
@@ -446,10 +468,41 @@ fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
     if let Some(mis) = &meta.mis {
         typed.push((MIS_ATTRIBUTE, string(mis)));
     }
+    let time = &meta.time;
+    for (name, v) in [
+        (TIME_CODE_ATTRIBUTE, time.time_code),
+        (USD_FPS_ATTRIBUTE, time.frames_per_second),
+        (TIME_CODES_PER_SECOND_ATTRIBUTE, time.time_codes_per_second),
+    ] {
+        if let Some(v) = v.filter(|v| v.is_finite()) {
+            typed.push((name, AttributeValue::F64(v)));
+        }
+    }
+    attributes.frames_per_second = time.frames_per_second.and_then(rational);
     for (name, value) in typed {
         attributes.other.insert(text(name), value);
     }
     attributes
+}
+
+/// A frame rate as OpenEXR's rational: n/1 for whole rates, k·1000/1001 for the NTSC family
+/// (24000/1001 ≈ 23.976, 30000/1001 ≈ 29.97, …), each to 10⁻³, else to the nearest 1/1000;
+/// None for a rate that is not positive or does not fit.
+fn rational(fps: f64) -> Option<(i32, u32)> {
+    if !(fps.is_finite() && fps > 0.0 && fps < 1e6) {
+        return None;
+    }
+    let whole = fps.round();
+    if (whole - fps).abs() < 1e-3 {
+        return (whole >= 1.0).then_some((whole as i32, 1));
+    }
+    // The NTSC rates are k·1000/1001 for a whole k (SMPTE ST 12-1).
+    let k = (fps * 1.001).round();
+    if k >= 1.0 && (k * 1000.0 / 1001.0 - fps).abs() < 1e-3 {
+        return Some(((k * 1000.0) as i32, 1001));
+    }
+    let n = (fps * 1000.0).round();
+    (n >= 1.0).then_some((n as i32, 1000))
 }
 
 /// Encodes `image` into `file` through a buffer that is flushed explicitly, so that write
@@ -478,6 +531,7 @@ fn attribute_to_string(value: &AttributeValue) -> String {
         AttributeValue::F32(v) => v.to_string(),
         AttributeValue::F64(v) => v.to_string(),
         AttributeValue::I32(v) => v.to_string(),
+        AttributeValue::Rational((n, d)) => format!("{n}/{d}"),
         AttributeValue::Chromaticities(c) => [c.red, c.green, c.blue, c.white]
             .iter()
             .flat_map(|v| [v.x(), v.y()])
@@ -550,6 +604,54 @@ mod tests {
             world_to_camera: Some(std::array::from_fn(|i| i as f32)),
             world_to_ndc: Some(std::array::from_fn(|i| -(i as f32) / 4.0)),
             working_space: WorkingSpace::LinRec709,
+            time: TimeMetadata {
+                time_code: Some(12.5),
+                frames_per_second: Some(24000.0 / 1001.0),
+                time_codes_per_second: Some(48.0),
+            },
+        }
+    }
+
+    #[test]
+    fn time_codes_and_rates_are_read_back() {
+        let dir = std::env::temp_dir().join(format!("exr-time-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.exr");
+        let (rgb, xyz) = test_image();
+        write(&path, 3, 2, &rgb, &xyz, D65_XY, &test_meta()).unwrap();
+        let img = read(&path).unwrap();
+        assert_eq!(img.attributes[TIME_CODE_ATTRIBUTE], "12.5");
+        assert_eq!(img.types[TIME_CODE_ATTRIBUTE], "double");
+        assert_eq!(
+            img.attributes[USD_FPS_ATTRIBUTE],
+            (24000.0 / 1001.0).to_string()
+        );
+        assert_eq!(img.attributes[TIME_CODES_PER_SECOND_ATTRIBUTE], "48");
+        assert_eq!(img.attributes[FPS_ATTRIBUTE], "24000/1001");
+        assert_eq!(img.types[FPS_ATTRIBUTE], "rational");
+        // Without a time, none of them.
+        let meta = ExrMetadata {
+            time: TimeMetadata::default(),
+            ..test_meta()
+        };
+        write(&path, 3, 2, &rgb, &xyz, D65_XY, &meta).unwrap();
+        let img = read(&path).unwrap();
+        for name in [TIME_CODE_ATTRIBUTE, USD_FPS_ATTRIBUTE, FPS_ATTRIBUTE] {
+            assert!(!img.attributes.contains_key(name), "{name}");
+        }
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn frame_rates_become_rationals() {
+        assert_eq!(rational(24.0), Some((24, 1)));
+        assert_eq!(rational(23.976), Some((24000, 1001)));
+        assert_eq!(rational(29.97), Some((30000, 1001)));
+        assert_eq!(rational(12.5), Some((12500, 1000)));
+        assert_eq!(rational(59.94), Some((60000, 1001)));
+        assert_eq!(rational(23.5), Some((23500, 1000)));
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e9] {
+            assert_eq!(rational(bad), None, "{bad}");
         }
     }
 

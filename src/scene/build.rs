@@ -51,9 +51,35 @@ pub fn build_with(
     resolution: Option<(u32, u32)>,
     machinery: Machinery,
 ) -> Result<Scene> {
+    let geometry = geometry(desc, machinery)?;
+    let lights = desc
+        .lights
+        .iter()
+        .filter(|l| !is_portal(l))
+        .map(|l| light(l).map_err(|r| Error::prim(&desc.source, &l.prim_path, r)))
+        .collect::<Result<Vec<_>>>()?;
+    assemble(desc, geometry, lights, None, resolution, machinery)
+}
+
+/// The parts of a scene made from its meshes and materials: what `scene::rebuild` keeps
+/// across frames whose meshes and materials did not change.
+pub(super) struct Geometry {
+    pub materials: Vec<Material>,
+    pub meshes: Vec<Mesh>,
+    pub tri_refs: Vec<TriRef>,
+    pub bvh: Bvh,
+    pub center: Vec3,
+    pub radius: f32,
+    /// The triangle lights of emissive meshes (the scene's first lights).
+    pub mesh_lights: Vec<Light>,
+    /// What building the materials had to say.
+    pub warnings: Vec<String>,
+}
+
+/// Materials (with their textures), meshes, their triangle lights and the BVH of `desc`.
+pub(super) fn geometry(desc: &SceneDescription, machinery: Machinery) -> Result<Geometry> {
     let file = &desc.source;
-    let mut warnings = desc.warnings.clone();
-    warn_clamped_temperatures(desc, &mut warnings);
+    let mut warnings = Vec::new();
     let mut textures = TextureCache::default();
     let mut materials = desc
         .materials
@@ -76,7 +102,7 @@ pub fn build_with(
         reflectance: ColorInput::Constant(Spectrum::Constant(0.18)),
     });
 
-    let mut lights = Vec::new();
+    let mut mesh_lights = Vec::new();
     let mut meshes = Vec::new();
     for m in &desc.meshes {
         meshes.push(
@@ -86,7 +112,7 @@ pub fn build_with(
                 &materials,
                 &emissive,
                 default_material,
-                &mut lights,
+                &mut mesh_lights,
             )
             .map_err(|r| Error::prim(file, &m.prim_path, r))?,
         );
@@ -94,24 +120,45 @@ pub fn build_with(
     let (tri_refs, triangles) = flatten_triangles(&meshes);
     let bvh = Bvh::build(&triangles);
     let (center, radius) = bounding_sphere(&bvh);
-    let mut portals = Vec::new();
-    for l in &desc.lights {
-        let at = |r| Error::prim(file, &l.prim_path, r);
-        match l.kind {
-            LightKind::Portal { width, height } => {
-                portals.push(portal(l, width, height).map_err(at)?)
-            }
-            _ => lights.push(light(l).map_err(at)?),
-        }
-    }
-    for l in &mut lights {
-        if let Light::Dome(d) = l {
-            d.portals.clone_from(&portals);
-        }
-    }
-    if !portals.is_empty() && !lights.iter().any(|l| matches!(l, Light::Dome(_))) {
-        warnings.push("the stage's PortalLights guide no DomeLight: they change nothing".into());
-    }
+    Ok(Geometry {
+        materials,
+        meshes,
+        tri_refs,
+        bvh,
+        center,
+        radius,
+        mesh_lights,
+        warnings,
+    })
+}
+
+/// The scene of `desc` from its geometry, its UsdLux lights (built, in `desc.lights`'
+/// order) and, when given, a light sampler already made for exactly these lights.
+pub(super) fn assemble(
+    desc: &SceneDescription,
+    geometry: Geometry,
+    usd_lights: Vec<Light>,
+    light_sampler: Option<LightSampler>,
+    resolution: Option<(u32, u32)>,
+    machinery: Machinery,
+) -> Result<Scene> {
+    let file = &desc.source;
+    let mut warnings = desc.warnings.clone();
+    warn_clamped_temperatures(desc, &mut warnings);
+    warnings.extend(geometry.warnings.iter().cloned());
+    let Geometry {
+        materials,
+        meshes,
+        tri_refs,
+        bvh,
+        center,
+        radius,
+        mesh_lights: mut lights,
+        ..
+    } = geometry;
+    let triangles = tri_refs.len();
+    lights.extend(usd_lights);
+    attach_portals(desc, &mut lights, &mut warnings)?;
     if lights.is_empty() {
         warnings.push(
             "the stage has no lights (UsdLux lights, MeshLightAPI prims or emissive \
@@ -120,11 +167,13 @@ pub fn build_with(
         );
     }
     let camera = camera(desc, resolution, center, radius)?;
-    let light_sampler = if machinery.light_table {
-        LightSampler::table(&lights, radius)
-    } else {
-        LightSampler::new(&lights, radius)
-    };
+    let light_sampler = light_sampler.unwrap_or_else(|| {
+        if machinery.light_table {
+            LightSampler::table(&lights, radius)
+        } else {
+            LightSampler::new(&lights, radius)
+        }
+    });
     let infinite_lights = indices_where(&lights, Light::is_infinite);
     let shape_lights = indices_where(&lights, Light::is_analytic_shape);
     let shadowless = indices_where(&lights, |l| {
@@ -134,7 +183,7 @@ pub fn build_with(
     });
     let summary = Summary {
         meshes: meshes.len(),
-        triangles: triangles.len(),
+        triangles,
         materials: desc.materials.len(),
         lights: desc.lights.len() + desc.meshes.iter().filter(|m| m.light.is_some()).count(),
         camera: camera.prim_path.clone(),
@@ -711,8 +760,39 @@ fn round_scale(m: &Mat4, axes: &[usize], what: &str) -> Reason<f32> {
         .powf(1.0 / axes.len() as f32))
 }
 
+/// The stage's PortalLights given to every DomeLight (built anew each time: a kept dome of an
+/// earlier frame gets this frame's portals); a warning when no dome takes them.
+fn attach_portals(
+    desc: &SceneDescription,
+    lights: &mut [Light],
+    warnings: &mut Vec<String>,
+) -> Result<()> {
+    let mut portals = Vec::new();
+    for l in &desc.lights {
+        if let LightKind::Portal { width, height } = l.kind {
+            let p =
+                portal(l, width, height).map_err(|r| Error::prim(&desc.source, &l.prim_path, r))?;
+            portals.push(p);
+        }
+    }
+    for l in lights.iter_mut() {
+        if let Light::Dome(d) = l {
+            d.portals.clone_from(&portals);
+        }
+    }
+    if !portals.is_empty() && !lights.iter().any(|l| matches!(l, Light::Dome(_))) {
+        warnings.push("the stage's PortalLights guide no DomeLight: they change nothing".into());
+    }
+    Ok(())
+}
+
+/// Whether `l` is a PortalLight (not a light: `attach_portals` gives it to the domes).
+pub(super) fn is_portal(l: &LightDesc) -> bool {
+    matches!(l.kind, LightKind::Portal { .. })
+}
+
 /// A UsdLux light in absolute units, with its shaping, within the bounds of `limits.rs`.
-fn light(l: &LightDesc) -> Reason<Light> {
+pub(super) fn light(l: &LightDesc) -> Reason<Light> {
     let size = match &l.kind {
         LightKind::Rect { width, height, .. } => width.max(*height),
         LightKind::Disk { radius } | LightKind::Sphere { radius, .. } => *radius,

@@ -13,6 +13,7 @@ pub mod emission_layers;
 mod limits;
 pub mod machinery;
 pub mod ray_count;
+mod rebuild;
 #[cfg(feature = "testing")]
 #[doc(hidden)]
 pub mod render_scene;
@@ -28,6 +29,7 @@ pub(crate) mod usd;
 pub use analysis::{Feature, SceneFeatures};
 pub use build::{build, build_with};
 pub use machinery::Machinery;
+pub use rebuild::{Rebuilder, Rebuilt};
 pub use render_scene::{Hit, Scene, SurfaceHit};
 
 use crate::error::Result;

@@ -272,6 +272,9 @@ pub struct TextureCache {
 impl TextureCache {
     /// The [`TextureInput`] of `desc`, loading its image on first use.
     pub fn input(&mut self, desc: &TextureDesc) -> Reason<TextureInput> {
+        if desc.file.as_os_str().is_empty() {
+            return Ok(Self::constant(desc));
+        }
         let key = (desc.file.clone(), desc.color_space);
         let image = match self.images.get(&key) {
             Some(image) => image.clone(),
@@ -290,6 +293,21 @@ impl TextureCache {
             channel: desc.channel,
             transform: desc.st_transform,
         })
+    }
+
+    /// A texture node without a file: its fallback everywhere (one texel, scale 1, bias 0).
+    fn constant(desc: &TextureDesc) -> TextureInput {
+        let texel = desc.fallback.map(|v| if v.is_finite() { v } else { 0.0 });
+        let image = ImageTexture::from_texels(1, 1, vec![texel]).expect("one finite texel");
+        TextureInput {
+            image: Arc::new(image),
+            wrap: [desc.wrap_s, desc.wrap_t],
+            scale: [1.0; 4],
+            bias: [0.0; 4],
+            fallback: texel,
+            channel: desc.channel,
+            transform: None,
+        }
     }
 
     /// How many distinct images are loaded.

@@ -11,6 +11,7 @@ use crate::desc::{
 };
 use crate::error::{Error, Result};
 use glam::{Affine2, Vec2};
+use std::path::PathBuf;
 
 /// How many connection hops (through NodeGraph / Material interfaces) are followed.
 const MAX_CONNECTION_DEPTH: usize = 32;
@@ -646,8 +647,17 @@ fn texture_input(ctx: &mut Ctx, shader: &usd::Prim, name: &str) -> Result<Option
 /// Reads a `UsdUVTexture` node whose output `output` is used.
 fn uv_texture(ctx: &mut Ctx, prim: &usd::Prim, output: &str) -> Result<TextureDesc> {
     vocab::warn_unknown_inputs(ctx, prim, &UV_TEXTURE_INPUTS, "UsdUVTexture")?;
-    let Some(file) = ctx.asset(prim, "inputs:file")? else {
-        return Err(ctx.err(prim, "UsdUVTexture has no inputs:file"));
+    let fallback = vec4(ctx, prim, "inputs:fallback", [0.0, 0.0, 0.0, 1.0])?;
+    let file = match ctx.asset(prim, "inputs:file")? {
+        Some(file) => file,
+        None => {
+            // UsdPreviewSurface spec, UsdUVTexture `inputs:fallback`: "Fallback value to be
+            // used when no texture is connected"; an empty path is a constant texture of it.
+            let warning =
+                format!("UsdUVTexture has no inputs:file; its fallback {fallback:?} is used");
+            ctx.warn(prim, warning);
+            PathBuf::new()
+        }
     };
     let channel = match output {
         "outputs:rgb" => TextureChannel::Rgb,
@@ -671,7 +681,7 @@ fn uv_texture(ctx: &mut Ctx, prim: &usd::Prim, output: &str) -> Result<TextureDe
         color_space: color_space(ctx, prim)?,
         scale: vec4(ctx, prim, "inputs:scale", [1.0; 4])?,
         bias: vec4(ctx, prim, "inputs:bias", [0.0; 4])?,
-        fallback: vec4(ctx, prim, "inputs:fallback", [0.0, 0.0, 0.0, 1.0])?,
+        fallback,
         channel,
     })
 }

@@ -153,6 +153,8 @@ impl OpenStage {
             origin,
             animated,
             held: time.held,
+            frames_per_second: stage::metadata_number(stage, "framesPerSecond"),
+            time_codes_per_second: stage::metadata_number(stage, "timeCodesPerSecond"),
         };
         desc.content_hash = self.content_hash;
         if time != ReadTime::default() {

@@ -1,7 +1,7 @@
 //! Opening a stage and reading its metadata (units, up axis, time).
 
 use glam::{DMat4, DVec3, DVec4};
-use openusd::{usd, usda};
+use openusd::{sdf, usd, usda};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -95,13 +95,18 @@ pub(super) fn z_up(path: &Path, stage: &usd::Stage) -> Result<bool> {
     let value = stage
         .stage_metadata("upAxis")
         .map_err(|e| Error::usd(path, format!("reading upAxis: {e:#}")))?;
-    match value.as_ref().and_then(values::to_token).as_deref() {
+    let token = value.as_ref().and_then(values::to_token);
+    match token.as_deref() {
         None if value.is_none() => Ok(false),
         Some("Y") => Ok(false),
         Some("Z") => Ok(true),
-        _ => Err(Error::usd(
+        Some(other) => Err(Error::usd(
             path,
-            format!("upAxis must be \"Y\" or \"Z\", got {value:?}"),
+            format!("upAxis must be \"Y\" or \"Z\" (UsdGeom allows no other), got \"{other}\""),
+        )),
+        None => Err(Error::usd(
+            path,
+            format!("upAxis must be the token \"Y\" or \"Z\", got {value:?}"),
         )),
     }
 }
@@ -130,4 +135,19 @@ pub(super) fn read_time(stage: &usd::Stage) -> (usd::TimeCode, TimeOrigin) {
     } else {
         (usd::TimeCode::EARLIEST, TimeOrigin::Earliest)
     }
+}
+
+/// A number in the stage's metadata (`framesPerSecond`, `timeCodesPerSecond`) when it is
+/// authored as a finite number of any numeric type.
+pub(super) fn metadata_number(stage: &usd::Stage, field: &str) -> Option<f64> {
+    let v = match stage.stage_metadata(field).ok()?? {
+        sdf::Value::Double(v) => v,
+        sdf::Value::Float(v) => f64::from(v),
+        sdf::Value::Int(v) => f64::from(v),
+        sdf::Value::Int64(v) => v as f64,
+        sdf::Value::Uint(v) => f64::from(v),
+        sdf::Value::Uint64(v) => v as f64,
+        _ => return None,
+    };
+    v.is_finite().then_some(v)
 }

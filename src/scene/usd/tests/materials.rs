@@ -235,6 +235,35 @@ fn texture_inputs_are_read_and_interface_inputs_resolve() {
     );
 }
 
+/// A UsdUVTexture without `inputs:file` (the usd-wg shader ball authors the file only in
+/// variants) outputs its fallback, with a warning naming the node; scale and bias do not
+/// apply to it.
+#[test]
+fn a_texture_node_without_a_file_is_its_fallback() {
+    let body = WOOD.replace(
+        "asset inputs:file = @wood.png@",
+        "float4 inputs:fallback = (0.25, 0.5, 0.75, 0.4)",
+    );
+    let path = temp_dir().join("no_file.usda");
+    std::fs::write(&path, format!("{METRES_Y_UP}{body}")).unwrap();
+    let desc = super::super::load(&path).expect("loads");
+    let MaterialKind::PreviewSurface(p) = &material_of(&desc, "Wood").kind else {
+        panic!("preview surface")
+    };
+    let tex = p.texture("diffuseColor").expect("the node is kept");
+    assert!(tex.file.as_os_str().is_empty());
+    assert!(
+        desc.warnings.iter().any(|w| w.contains("/Looks/Wood/Tex")
+            && w.contains("no inputs:file; its fallback [0.25, 0.5, 0.75, 0.4]")),
+        "{:?}",
+        desc.warnings
+    );
+    let input = crate::texture::TextureCache::default().input(tex).unwrap();
+    let uv = glam::Vec2::new(0.3, 0.8).into();
+    assert_eq!(input.rgba(uv), [0.25, 0.5, 0.75, 0.4]);
+    crate::scene::build(&desc, Some((4, 4))).expect("builds");
+}
+
 #[test]
 fn an_unknown_wrap_token_is_an_error() {
     let dir = temp_dir();
