@@ -68,6 +68,78 @@ pub fn text_size(text: &str, px: f64) -> (u32, u32) {
     (FONT, px).into_font().box_size(text).unwrap_or((0, 0))
 }
 
+/// A linear-axes line plot of `series` (label, points, dashed) into `path` (PNG), e.g. a
+/// pixel's spectrum beside the CIE curves (`examples/spectral_pixel.rs`).
+pub fn lines(
+    path: &Path,
+    title: &str,
+    (x_label, y_label): (&str, &str),
+    series: &[(String, Vec<(f64, f64)>, bool)],
+) -> Result<()> {
+    let (w, h) = SIZE;
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    draw_lines(&mut buf, title, (x_label, y_label), series)
+        .map_err(|e| Error::io(path, format!("cannot draw the plot: {e}")))?;
+    write_atomically(path, |f| imageio::encode_png_rgb8(f, &buf, w, h))
+        .map_err(|e| Error::io(path, format!("cannot write: {e}")))
+}
+
+fn draw_lines(
+    buf: &mut [u8],
+    title: &str,
+    (x_label, y_label): (&str, &str),
+    series: &[(String, Vec<(f64, f64)>, bool)],
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    register();
+    let root = BitMapBackend::with_buffer(buf, SIZE).into_drawing_area();
+    root.fill(&WHITE)?;
+    let all = || series.iter().flat_map(|s| s.1.iter());
+    let (x0, x1) = all().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+        (a.min(p.0), b.max(p.0))
+    });
+    let y1 = all().fold(0.0f64, |m, p| m.max(p.1)) * 1.05;
+    if !(x0 < x1 && y1 > 0.0) {
+        return Err("nothing to plot".into());
+    }
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, (FONT, 20))
+        .margin(12)
+        .x_label_area_size(42)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x0..x1, 0.0..y1)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 15))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()?;
+    for (i, (label, points, dashed)) in series.iter().enumerate() {
+        let colour = PALETTE[i % PALETTE.len()];
+        let style = colour.stroke_width(if *dashed { 2 } else { 3 });
+        let pts = points.iter().copied();
+        if *dashed {
+            chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?;
+        } else {
+            chart.draw_series(LineSeries::new(pts, style))?;
+        }
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+            .label(label.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 22, y)], style));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(180, 180, 180))
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
 /// One line of the plot.
 struct Series {
     label: String,
