@@ -1,6 +1,6 @@
 //! Unidirectional path tracing with next-event estimation, multiple importance sampling
 //! (power heuristic, Veach 1997 §9.2) between light and BSDF sampling, and Russian roulette
-//! (PBR 4ed §13.4, the PathIntegrator).
+//! from the fifth bounce on (Mitsuba 3's rule; PBR 4ed §13.4.1 for the estimator).
 //!
 //! Depth counts scattering events as pbrt's `maxdepth`: depth 0 sees emitters directly,
 //! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8). Without a cap from the
@@ -469,8 +469,18 @@ pub(crate) fn transmittance(
     0.0
 }
 
-/// Russian roulette after the second bounce when the throughput has dropped below 1
-/// (PBR 4ed §13.4.1, q = max(0, 1 − max β η_scale)); returns false when the path is terminated.
+/// The first scattering event after which Russian roulette may end a path (Mitsuba 3's
+/// `path` integrator, `rr_depth` = 5; docs/design.md §9 "Russian roulette" has the measured
+/// variance against pbrt-v4's start after the second).
+const ROULETTE_START: u32 = 5;
+/// The largest probability of continuing: every path past the start ends with at least 5 %
+/// per bounce (Mitsuba 3 `path.cpp`: min(max β η², 0.95)).
+const ROULETTE_MAX_CONTINUE: f32 = 0.95;
+
+/// Russian roulette from the fifth scattering event on (`depth` counts them): the path
+/// continues with probability p = min(max β · η_scale, 0.95) and β is divided by p (the
+/// unbiased estimator of PBR 4ed §2.2.4 and §13.4.1, with Mitsuba 3's start and cap); returns
+/// false when the path is terminated.
 #[inline]
 fn russian_roulette(
     beta: &mut SampledSpectrum,
@@ -478,14 +488,16 @@ fn russian_roulette(
     depth: u32,
     sampler: &mut Sampler,
 ) -> bool {
-    let m = beta.max_value() * eta_scale;
-    if m < 1.0 && depth > 1 {
-        let q = (1.0 - m).max(0.0);
-        if sampler.get_1d() < q {
-            return false;
-        }
-        *beta = *beta / (1.0 - q);
+    if depth < ROULETTE_START {
+        return true;
     }
+    let p = (beta.max_value() * eta_scale).min(ROULETTE_MAX_CONTINUE);
+    // p = 0 (a black throughput) or NaN ends the path.
+    let continues = sampler.get_1d() < p;
+    if !continues {
+        return false;
+    }
+    *beta = *beta / p;
     true
 }
 /// The path tracer as an [`Estimator`]: camera rays for images, the meter estimators of
