@@ -1,6 +1,6 @@
 //! Unidirectional path tracing with next-event estimation, multiple importance sampling
 //! (power heuristic, Veach 1997 §9.2) between light and BSDF sampling, and Russian roulette
-//! from the fifth bounce on (Mitsuba 3's rule; PBR 4ed §13.4.1 for the estimator).
+//! from the fifth bounce on (Mitsuba 3's start; PBR 4ed §13.4.1 for the estimator).
 //!
 //! Depth counts scattering events as pbrt's `maxdepth`: depth 0 sees emitters directly,
 //! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8). Without a cap from the
@@ -470,17 +470,16 @@ pub(crate) fn transmittance(
 }
 
 /// The first scattering event after which Russian roulette may end a path (Mitsuba 3's
-/// `path` integrator, `rr_depth` = 5; docs/design.md §9 "Russian roulette" has the measured
-/// variance against pbrt-v4's start after the second).
+/// `path` integrator, `rr_depth` = 5; docs/design.md §8 "Variance per sample" has the
+/// measured variance against pbrt-v4's start after the second).
 const ROULETTE_START: u32 = 5;
-/// The largest probability of continuing: every path past the start ends with at least 5 %
-/// per bounce (Mitsuba 3 `path.cpp`: min(max β η², 0.95)).
-const ROULETTE_MAX_CONTINUE: f32 = 0.95;
 
 /// Russian roulette from the fifth scattering event on (`depth` counts them): the path
-/// continues with probability p = min(max β · η_scale, 0.95) and β is divided by p (the
-/// unbiased estimator of PBR 4ed §2.2.4 and §13.4.1, with Mitsuba 3's start and cap); returns
-/// false when the path is terminated.
+/// continues with probability p = min(max β · η_scale, 1) and β is divided by p (the unbiased
+/// estimator of PBR 4ed §13.4.1, with Mitsuba 3's start). Mitsuba also caps p at 0.95; we do
+/// not, so that where nothing absorbs (reflectance 1) the safety cap still stands behind the
+/// roulette and reports what it cuts (`cut.rs`), as before. Returns false when the path is
+/// terminated.
 #[inline]
 fn russian_roulette(
     beta: &mut SampledSpectrum,
@@ -491,7 +490,7 @@ fn russian_roulette(
     if depth < ROULETTE_START {
         return true;
     }
-    let p = (beta.max_value() * eta_scale).min(ROULETTE_MAX_CONTINUE);
+    let p = (beta.max_value() * eta_scale).min(1.0);
     // p = 0 (a black throughput) or NaN ends the path.
     let continues = sampler.get_1d() < p;
     if !continues {
