@@ -160,7 +160,6 @@ fn run(args: &ConvergeArgs, command: String) -> Result<()> {
         max_depth: args.max_depth,
         filter_textures: !args.no_texture_filtering,
         sampler: args.sampler,
-        ..RunOptions::default()
     };
     let mut report = Report {
         command,
