@@ -1,6 +1,6 @@
 //! Unidirectional path tracing with next-event estimation, multiple importance sampling
 //! (power heuristic, Veach 1997 §9.2) between light and BSDF sampling, and Russian roulette
-//! from the fifth bounce on (Mitsuba 3's start; PBR 4ed §13.4.1 for the estimator).
+//! (PBR 4ed §13.4, the PathIntegrator).
 //!
 //! Depth counts scattering events as pbrt's `maxdepth`: depth 0 sees emitters directly,
 //! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8). Without a cap from the
@@ -469,17 +469,8 @@ pub(crate) fn transmittance(
     0.0
 }
 
-/// The first scattering event after which Russian roulette may end a path (Mitsuba 3's
-/// `path` integrator, `rr_depth` = 5; docs/design.md §8 "Variance per sample" has the
-/// measured variance against pbrt-v4's start after the second).
-const ROULETTE_START: u32 = 5;
-
-/// Russian roulette from the fifth scattering event on (`depth` counts them): the path
-/// continues with probability p = min(max β · η_scale, 1) and β is divided by p (the unbiased
-/// estimator of PBR 4ed §13.4.1, with Mitsuba 3's start). Mitsuba also caps p at 0.95; we do
-/// not, so that where nothing absorbs (reflectance 1) the safety cap still stands behind the
-/// roulette and reports what it cuts (`cut.rs`), as before. Returns false when the path is
-/// terminated.
+/// Russian roulette after the second bounce when the throughput has dropped below 1
+/// (PBR 4ed §13.4.1, q = max(0, 1 − max β η_scale)); returns false when the path is terminated.
 #[inline]
 fn russian_roulette(
     beta: &mut SampledSpectrum,
@@ -487,16 +478,14 @@ fn russian_roulette(
     depth: u32,
     sampler: &mut Sampler,
 ) -> bool {
-    if depth < ROULETTE_START {
-        return true;
+    let m = beta.max_value() * eta_scale;
+    if m < 1.0 && depth > 1 {
+        let q = (1.0 - m).max(0.0);
+        if sampler.get_1d() < q {
+            return false;
+        }
+        *beta = *beta / (1.0 - q);
     }
-    let p = (beta.max_value() * eta_scale).min(1.0);
-    // p = 0 (a black throughput) or NaN ends the path.
-    let continues = sampler.get_1d() < p;
-    if !continues {
-        return false;
-    }
-    *beta = *beta / p;
     true
 }
 /// The path tracer as an [`Estimator`]: camera rays for images, the meter estimators of
