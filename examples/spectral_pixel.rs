@@ -40,7 +40,10 @@ fn wavelength(name: &str) -> Option<f64> {
 fn run(input: &Path, (x, y): (usize, usize), out: &Path) -> Result<(), String> {
     let img = exr::read(input).map_err(|e| e.to_string())?;
     if x >= img.width || y >= img.height {
-        return Err(format!("({x}, {y}) is outside the {}×{} image", img.width, img.height));
+        return Err(format!(
+            "({x}, {y}) is outside the {}×{} image",
+            img.width, img.height
+        ));
     }
     let i = y * img.width + x;
     let mut bins: Vec<(f64, f64)> = img
@@ -49,10 +52,17 @@ fn run(input: &Path, (x, y): (usize, usize), out: &Path) -> Result<(), String> {
         .filter_map(|(k, v)| wavelength(k).map(|nm| (nm, f64::from(v[i]))))
         .collect();
     if bins.is_empty() {
-        return Err(format!("{} has no S0.<λ>nm channels (render with --spectral)", input.display()));
+        return Err(format!(
+            "{} has no S0.<λ>nm channels (render with --spectral)",
+            input.display()
+        ));
     }
     bins.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let width = if bins.len() > 1 { bins[1].0 - bins[0].0 } else { 1.0 };
+    let width = if bins.len() > 1 {
+        bins[1].0 - bins[0].0
+    } else {
+        1.0
+    };
     let cmf = data::cie_xyz();
     // XYZ = 683 ∫ L x̄ dλ over the bins (the EXR's XYZ is in cd/m² for Y, §2 of the design).
     let xyz: Vec<f64> = (0..3)
@@ -70,18 +80,34 @@ fn run(input: &Path, (x, y): (usize, usize), out: &Path) -> Result<(), String> {
         .collect();
     println!("pixel ({x}, {y}): XYZ from the bins {xyz:.4?}, the EXR's {stored:.4?}");
     let peak = bins.iter().fold(0.0f64, |m, b| m.max(b.1));
-    let mut series = vec![(format!("pixel ({x}, {y}), W/(m² sr nm)"), bins.clone(), false)];
+    let mut series = vec![(
+        format!("pixel ({x}, {y}), W/(m² sr nm)"),
+        bins.clone(),
+        false,
+    )];
     for (c, name) in ["x-bar", "y-bar", "z-bar"].iter().enumerate() {
-        let top = (360..=830).map(|nm| cmf[c].eval(nm as f32)).fold(0.0f32, f32::max);
+        let top = (360..=830)
+            .map(|nm| cmf[c].eval(nm as f32))
+            .fold(0.0f32, f32::max);
         let pts = (360..=830)
             .step_by(2)
-            .map(|nm| (f64::from(nm), f64::from(cmf[c].eval(nm as f32) / top) * peak))
+            .map(|nm| {
+                (
+                    f64::from(nm),
+                    f64::from(cmf[c].eval(nm as f32) / top) * peak,
+                )
+            })
             .collect();
         series.push((format!("CIE 1931 {name} (scaled)"), pts, true));
     }
     let title = format!("{}: one pixel's spectral radiance", input.display());
-    plot::lines(out, &title, ("wavelength (nm)", "spectral radiance"), &series)
-        .map_err(|e| e.to_string())?;
+    plot::lines(
+        out,
+        &title,
+        ("wavelength (nm)", "spectral radiance"),
+        &series,
+    )
+    .map_err(|e| e.to_string())?;
     println!("wrote {}", out.display());
     Ok(())
 }

@@ -11,6 +11,7 @@ use common::*;
 use spectral_render::converge::meters::{run_meters, ReferenceValue};
 use spectral_render::converge::metrics::{image_errors, Reference, ReferenceVariance};
 use spectral_render::converge::{fit, mask, run_image, Config, Row, RunOptions};
+use spectral_render::output::exr;
 use spectral_render::session::{ImageSession, RenderOptions};
 use spectral_render::spectral::difference::{delta_e2000, xyz_to_lab};
 use spectral_render::spectral::{data, xyz, DenseSpectrum};
@@ -529,6 +530,63 @@ fn the_command_writes_a_reproducible_report() {
 }
 
 #[test]
+fn the_sampler_flag_reaches_the_path_tracer_and_the_exr_names_it() {
+    let dir = temp_dir("converge-sampler");
+    let cbox = cbox_path();
+    let run = |name: &str, sampler: Option<&str>| {
+        let out = dir.join(name);
+        let mut a = vec![
+            "converge".to_string(),
+            cbox.display().to_string(),
+            "-o".into(),
+            out.display().to_string(),
+            "--resolution".into(),
+            "12x12".into(),
+            "--integrators".into(),
+            "path,light".into(),
+            "--time".into(),
+            "100".into(),
+            "--max-spp".into(),
+            "4".into(),
+            "--reference-time".into(),
+            "0.2".into(),
+            "--reference-integrator".into(),
+            "path".into(),
+            "--keep-images".into(),
+        ];
+        if let Some(s) = sampler {
+            a.extend(["--sampler".into(), s.into()]);
+        }
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        let o = spectral_render(&refs, &dir);
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let attr = |f: &Path| exr::read(f).unwrap().attributes[exr::SAMPLER_ATTRIBUTE].clone();
+    let pixels = |f: &Path| exr::read(f).unwrap().channels["XYZ.Y"].clone();
+    let zsobol = run("zsobol", None);
+    let independent = run("independent", Some("independent"));
+    let snapshot = "images/path_000004.exr";
+    assert_eq!(attr(&zsobol.join(snapshot)), "zsobol");
+    assert_eq!(attr(&independent.join(snapshot)), "independent");
+    // The path tracer's reference draws from the same sampler.
+    assert_eq!(attr(&independent.join("reference.exr")), "independent");
+    // Light tracing ignores it.
+    for out in [&zsobol, &independent] {
+        assert_eq!(attr(&out.join("images/light_000004.exr")), "independent");
+    }
+    // The flag changes the path tracer's numbers, not the light tracer's.
+    assert_ne!(
+        pixels(&zsobol.join(snapshot)),
+        pixels(&independent.join(snapshot))
+    );
+    assert_eq!(
+        pixels(&zsobol.join("images/light_000004.exr")),
+        pixels(&independent.join("images/light_000004.exr"))
+    );
+}
+
+#[test]
 fn the_command_refuses_bad_options_in_one_line() {
     let dir = temp_dir("converge-errors");
     let cbox = cbox_path();
@@ -536,6 +594,7 @@ fn the_command_refuses_bad_options_in_one_line() {
     for (extra, says) in [
         (vec!["--integrators", "pathx"], "unknown integrator 'pathx'"),
         (vec!["--wavelengths", "2"], "--wavelengths 2"),
+        (vec!["--sampler", "sobolx"], "sobolx"),
         (vec!["--time", "0"], "--time must be"),
         (
             vec!["--reference", "missing.exr", "--reference-time", "3"],

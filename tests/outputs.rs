@@ -205,6 +205,13 @@ fn the_exr_says_how_it_was_made_in_typed_attributes() {
         "{integrator}"
     );
     assert_eq!(img.attributes[exr::MIS_ATTRIBUTE], "power");
+    // The path tracer draws from the default zsobol, bdpt from independent numbers.
+    let sampler = if integrator == "auto→path" {
+        "zsobol"
+    } else {
+        "independent"
+    };
+    assert_eq!(img.attributes[exr::SAMPLER_ATTRIBUTE], sampler);
     for (name, ty) in [
         ("whiteLuminance", "float"),
         (exr::EXPOSURE_ATTRIBUTE, "float"),
@@ -216,6 +223,49 @@ fn the_exr_says_how_it_was_made_in_typed_attributes() {
         ("worldToNDC", "m44f"),
     ] {
         assert_eq!(img.types[name], ty, "{name}");
+    }
+}
+
+#[test]
+fn the_exr_names_the_sampler_its_samples_drew_from() {
+    let dir = temp_dir("sampler-attribute");
+    let stage = stage();
+    // (integrator, --sampler or none, the sampler named): --sampler steers the path tracer;
+    // light tracing and BDPT draw independent numbers whatever it says.
+    for (k, (integrator, asked, named)) in [
+        ("path", None, "zsobol"),
+        ("path", Some("independent"), "independent"),
+        ("path", Some("zsobol"), "zsobol"),
+        ("light", Some("zsobol"), "independent"),
+        ("bdpt", None, "independent"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = format!("s{k}.exr");
+        let mut args = vec![
+            stage.as_str(),
+            "--resolution",
+            "8x8",
+            "--spp",
+            "1",
+            "--integrator",
+            integrator,
+            "-o",
+            &out,
+        ];
+        if let Some(s) = asked {
+            args.extend(["--sampler", s]);
+        }
+        let o = spectral_render(&args, &dir);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        let img = exr::read(&dir.join(&out)).unwrap();
+        assert_eq!(
+            img.attributes[exr::SAMPLER_ATTRIBUTE],
+            named,
+            "{integrator} {asked:?}"
+        );
+        assert_eq!(img.types[exr::SAMPLER_ATTRIBUTE], "string");
     }
 }
 

@@ -92,6 +92,7 @@ fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
         exr::SPP_ATTRIBUTE,
         exr::INTEGRATOR_ATTRIBUTE,
         exr::MIS_ATTRIBUTE,
+        exr::SAMPLER_ATTRIBUTE,
         exr::SEED_ATTRIBUTE,
         exr::MAX_DEPTH_ATTRIBUTE,
         exr::SCENE_ATTRIBUTE,
@@ -100,6 +101,13 @@ fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
     ] {
         assert_eq!(s.attributes.get(key), m.attributes.get(key), "{key}");
     }
+    // The merge names the sampler from the parts' identity, as the single render does.
+    let sampler = if integrator == "path" {
+        "zsobol"
+    } else {
+        "independent"
+    };
+    assert_eq!(m.attributes[exr::SAMPLER_ATTRIBUTE], sampler);
     assert!(dir.join("merged.png").is_file());
 }
 

@@ -10,8 +10,8 @@
 # DRJIT_LIBLLVM_PATH for the llvm variant. The reference is Mitsuba llvm_ad_spectral at
 # REF_SPP samples per pixel (default 16384), kept outside the repository in PEERS_OUT
 # (default ~/peers/out); it is rendered once, by ../shared/peers/mitsuba_reference.py, when
-# missing (about 5 min on an idle 2-core machine at 16384 spp). Its noise, from the passes'
-# spread, is subtracted (equal_error.py).
+# missing (about 5 min on an idle 2-core machine at 16384 spp). Its noise over the masked
+# pixels, from its checkpoint at a quarter of REF_SPP, is subtracted (equal_error.py).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV="${PEERS_VENV:-$HOME/peers/venv}"

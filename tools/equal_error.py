@@ -14,13 +14,16 @@ relRMSE = RMS over the pixels away from the visible light (compare_mitsuba.py's 
 reference) and the RGB channels of (image − reference), over the reference's mean there.
 Time to relRMSE 5 %: seconds per sample per pixel × spp × (relRMSE / 0.05)², from the
 256-spp renders (error ∝ 1/√spp; the low-discrepancy sampler converges a little faster,
-so its figure is conservative). The reference's own noise (mitsuba_reference.py's
-`est_rmse_of_ref` from its passes' spread, over all pixels) is subtracted from the squared
-error when its log is found.
+so its figure is conservative). The reference's own noise over the masked pixels is
+subtracted from the squared error: mitsuba_reference.py writes a checkpoint at a quarter of
+the reference's samples, whose passes are the reference's first quarter, so the two differ
+with variance 3σ²/N per pixel (σ²/N the reference's own) — `ref_noise2` below. (Its log's
+`est_rmse_of_ref` is over all pixels, where the light's edges dominate: 3× the masked figure
+on the Cornell box, which over-subtracted.)
 """
-import json
 import argparse
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -59,6 +62,20 @@ def mitsuba(variant, spp, res, seed, scenes):
     return time.perf_counter() - t0, img[..., :3]
 
 
+def ref_noise2_masked(path, ref, mask):
+    """The reference's own variance per pixel, averaged over `mask`: mean((q − ref)²)/3 with q
+    its checkpoint at a quarter of its samples (same passes, so Var(q − ref) = 3σ²/N); 0 with a
+    warning when that checkpoint is missing."""
+    m = re.search(r"_(\d+)spp", os.path.basename(path))
+    quarter = m and path.replace(m.group(0), f"_{int(m.group(1)) // 4}spp")
+    if not quarter or not os.path.exists(quarter):
+        print("warning: no quarter-spp checkpoint of the reference; its noise is not subtracted",
+              file=sys.stderr)
+        return 0.0
+    q = common.read_exr(quarter)[..., :3].astype(np.float64)
+    return float(np.mean((q - ref)[mask] ** 2) / 3.0)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--reference", required=True)
@@ -70,12 +87,7 @@ def main():
     ref = common.read_exr(a.reference)[..., :3].astype(np.float64)
     mask = emitter_mask(ref)
     ref_mean = ref[mask].mean()
-    ref_noise2 = 0.0
-    log = os.path.join(os.path.dirname(a.reference), "ref_mitsuba_llvm_ad_spectral.json")
-    if os.path.exists(log):
-        for c in json.load(open(log))["checkpoints"]:
-            if c["file"] == os.path.basename(a.reference):
-                ref_noise2 = (c["est_rmse_of_ref"] / ref_mean) ** 2
+    ref_noise2 = ref_noise2_masked(a.reference, ref, mask) / ref_mean ** 2
     configs = [("ours path zsobol", lambda spp, s, tmp: ours("zsobol", spp, a.res, s, tmp)),
                ("ours path independent",
                 lambda spp, s, tmp: ours("independent", spp, a.res, s, tmp))]

@@ -405,6 +405,8 @@ pub struct Made<'a> {
     pub max_depth: Option<u32>,
     pub spp: u64,
     pub wall_time_s: f64,
+    /// The sampler the samples drew from (`RenderOutput::sampler`), when known.
+    pub sampler: Option<SamplerKind>,
 }
 
 impl Made<'_> {
@@ -414,6 +416,7 @@ impl Made<'_> {
             spp: self.spp,
             integrator: self.integrator.name().into(),
             mis: mis_name(self.integrator),
+            sampler: self.sampler.map(|s| s.name().into()),
             seed: self.seed,
             max_depth: self.max_depth,
             exposure: camera.exposure,

@@ -9,6 +9,7 @@
 //!     [--wavelengths 1,4] [--peers FILE.csv] [--keep-images] [--max-spp N]
 //!     [--at X,Y,Z --normal NX,NY,NZ | --luminance --at X,Y,Z --dir DX,DY,DZ]
 //!     [--reference-value V,…] [--seed N] [--threads N] [--resolution WxH] [--max-depth N]
+//!     [--sampler zsobol|independent]
 //! ```
 
 use super::common::{clap_message, named, print_summary, Made};
@@ -21,6 +22,7 @@ use crate::error::{Error, Result};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::report::{self, Report};
 use crate::output::{exr, plot, reference as reference_file};
+use crate::sampling::SamplerKind;
 use crate::scene::{self, Scene};
 use crate::sensor::meter::{Meter, MeterKind};
 use crate::session::image::WAVELENGTH_COUNTS;
@@ -98,6 +100,11 @@ struct ConvergeArgs {
     /// Maximum number of scattering events (default: unlimited, as for rendering).
     #[arg(long = "max-depth")]
     max_depth: Option<u32>,
+    /// Sampler of the path tracer's configurations and of its reference: zsobol
+    /// (Owen-scrambled Sobol' in Morton order) or independent; the others always draw
+    /// independent numbers.
+    #[arg(long, default_value = "zsobol", value_parser = named::<SamplerKind>("sampler"))]
+    sampler: SamplerKind,
     /// MIS heuristic of bdpt and vcm.
     #[arg(long, default_value = "power", value_parser = named::<MisHeuristic>("MIS heuristic"))]
     mis: MisHeuristic,
@@ -158,7 +165,7 @@ fn run(args: &ConvergeArgs, command: String) -> Result<()> {
         threads: args.threads,
         max_depth: args.max_depth,
         filter_textures: !args.no_texture_filtering,
-        ..RunOptions::default()
+        sampler: args.sampler,
     };
     let mut report = Report {
         command,
@@ -421,6 +428,7 @@ fn image_reference(
         max_depth: opts.max_depth,
         spp: 2 * info.spp_per_half,
         wall_time_s: info.time_s,
+        sampler: info.sampler,
     }
     .metadata();
     reference_file::write(&path, &r, &meta)?;
@@ -469,6 +477,7 @@ fn write_snapshot(
         max_depth: args.max_depth,
         spp: out.spp,
         wall_time_s: out.wall_time_s,
+        sampler: out.sampler,
     }
     .metadata();
     let white = spectral::color::white_xy().map(|c| c as f32);

@@ -11,6 +11,7 @@ use super::parts;
 use super::render::write_image;
 use crate::error::{Error, Result};
 use crate::output::target::{self, Format, Target};
+use crate::sampling::SamplerKind;
 use crate::scene::{self, Machinery};
 use crate::session::checkpoint::Checkpoint;
 use crate::session::image::xyz_to_rgb;
@@ -184,5 +185,6 @@ fn output(scene: &scene::Scene, m: &part::Merged) -> Result<RenderOutput> {
         clamped: m.film.clamped(),
         crop: m.window,
         layers: Default::default(),
+        sampler: part::value(&m.identity, "sampler").and_then(SamplerKind::from_name),
     })
 }

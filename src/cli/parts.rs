@@ -209,5 +209,6 @@ pub fn made<'a>(
         max_depth,
         spp: out.spp,
         wall_time_s: out.wall_time_s,
+        sampler: out.sampler,
     })
 }

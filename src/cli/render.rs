@@ -373,6 +373,7 @@ fn made<'a>(
         max_depth: opts.max_depth,
         spp: out.spp,
         wall_time_s: out.wall_time_s,
+        sampler: out.sampler,
     }
 }
 

@@ -17,6 +17,7 @@ use super::metrics::{Reference, ReferenceVariance};
 use super::{Clock, RunOptions};
 use crate::error::Result;
 use crate::integrator::Integrator;
+use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use crate::session::{ImageSession, Progressive, RenderOptions, RenderOutput};
 
@@ -32,6 +33,8 @@ pub struct ReferenceInfo {
     pub spp_per_half: u64,
     /// Measured wall time of both halves, seconds.
     pub time_s: f64,
+    /// The sampler both halves drew from.
+    pub sampler: Option<SamplerKind>,
 }
 
 /// The integrator of a reference of `scene`'s image when none is named (module docs).
@@ -60,6 +63,7 @@ pub fn render(
         max_depth: opts.max_depth,
         integrator,
         filter_textures: opts.filter_textures,
+        sampler: opts.sampler,
         ..RenderOptions::default()
     };
     let mut a = clock.time(|| ImageSession::new(scene, &ro(SEED_A)))?;
@@ -72,6 +76,7 @@ pub fn render(
         integrator,
         spp_per_half: a.spp,
         time_s: clock.seconds(),
+        sampler: a.sampler,
     };
     Ok((from_halves(&a, &b), info))
 }

@@ -23,6 +23,7 @@
 //! | `spectralRender:exposure` | float | the camera's exposure in stops |
 //! | `spectralRender:integrator` | string | integrator name |
 //! | `spectralRender:mis` | string | the MIS heuristic (`power`, `balance`), for integrators that combine techniques |
+//! | `spectralRender:sampler` | string | the sampler the samples drew from (`zsobol`, `independent`; `--sampler` applies to the path tracer, the others draw independent numbers), when known |
 //! | `spectralRender:wallTime` | double | render wall-clock time in seconds |
 //! | `spectralRender:version` | string | renderer version |
 //! | `spectralRender:scene` | string | the scene file, UTF-8 |
@@ -81,6 +82,7 @@ pub const USD_FPS_ATTRIBUTE: &str = "spectralRender:usdFramesPerSecond";
 pub const TIME_CODES_PER_SECOND_ATTRIBUTE: &str = "spectralRender:timeCodesPerSecond";
 /// OpenEXR's standard frame-rate attribute (rational).
 pub const FPS_ATTRIBUTE: &str = "framesPerSecond";
+pub const SAMPLER_ATTRIBUTE: &str = "spectralRender:sampler";
 /// The OCIO name of the RGB channels' colour space (the attribute OCIO-aware readers use).
 pub const COLORSPACE_ATTRIBUTE: &str = "colorspace";
 
@@ -94,6 +96,8 @@ pub struct ExrMetadata {
     pub integrator: String,
     /// The MIS heuristic, for integrators that combine techniques.
     pub mis: Option<String>,
+    /// The sampler's name (`SamplerKind::name`), when known.
+    pub sampler: Option<String>,
     pub seed: u64,
     /// The depth cap; None: unlimited (written as −1).
     pub max_depth: Option<u32>,
@@ -479,6 +483,9 @@ fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
         }
     }
     attributes.frames_per_second = time.frames_per_second.and_then(rational);
+    if let Some(sampler) = &meta.sampler {
+        typed.push((SAMPLER_ATTRIBUTE, string(sampler)));
+    }
     for (name, value) in typed {
         attributes.other.insert(text(name), value);
     }
@@ -595,6 +602,7 @@ mod tests {
             spp: 1 << 20,
             integrator: "vcm".into(),
             mis: Some("balance".into()),
+            sampler: Some("zsobol".into()),
             seed: u64::MAX,
             max_depth: Some(12),
             exposure: -8.0,
@@ -702,6 +710,7 @@ mod tests {
         assert_eq!(attributes[SPP_ATTRIBUTE], "1048576");
         assert_eq!(attributes[INTEGRATOR_ATTRIBUTE], "vcm");
         assert_eq!(attributes[MIS_ATTRIBUTE], "balance");
+        assert_eq!(attributes[SAMPLER_ATTRIBUTE], "zsobol");
         assert_eq!(attributes[SEED_ATTRIBUTE], "18446744073709551615");
         assert_eq!(attributes[MAX_DEPTH_ATTRIBUTE], "12");
         assert_eq!(attributes[EXPOSURE_ATTRIBUTE], "-8");

@@ -154,6 +154,10 @@ pub struct RenderOutput {
     pub crop: Option<Crop>,
     /// The extra layers asked for (`RenderOptions::layers`).
     pub layers: LayerImages,
+    /// The sampler the samples drew from (`RenderOptions::sampler` where the integrator keeps
+    /// the dimension layout, else independent); None when not known (a merge of parts that
+    /// do not name it).
+    pub sampler: Option<SamplerKind>,
 }
 
 /// Renders `scene` to the end (sample count or time budget) without an observer.
@@ -461,6 +465,7 @@ impl<'a> ImageSession<'a> {
             ),
             clamped: self.film.clamped() + self.layers.clamped(),
             crop: self.crop,
+            sampler: Some(sampler_kind(&self.opts)),
             layers: LayerImages {
                 variance: self.opts.layers.variance.then(|| {
                     let v = self.film.variance_y(exposure);
