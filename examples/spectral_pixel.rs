@@ -8,7 +8,8 @@
 //! cargo run --release --example spectral_pixel -- cc.exr 20 14 docs/images/spectral-pixel.png
 //! ```
 
-use spectral_render::output::{exr, plot};
+use spectral_render::output::exr;
+use spectral_render::output::plot::{self, Curve};
 use spectral_render::spectral::data;
 use std::path::Path;
 
@@ -80,11 +81,11 @@ fn run(input: &Path, (x, y): (usize, usize), out: &Path) -> Result<(), String> {
         .collect();
     println!("pixel ({x}, {y}): XYZ from the bins {xyz:.4?}, the EXR's {stored:.4?}");
     let peak = bins.iter().fold(0.0f64, |m, b| m.max(b.1));
-    let mut series = vec![(
-        format!("pixel ({x}, {y}), W/(m² sr nm)"),
-        bins.clone(),
-        false,
-    )];
+    let mut series = vec![Curve {
+        label: format!("pixel ({x}, {y}), W/(m² sr nm)"),
+        points: bins.clone(),
+        dashed: false,
+    }];
     for (c, name) in ["x-bar", "y-bar", "z-bar"].iter().enumerate() {
         let top = (360..=830)
             .map(|nm| cmf[c].eval(nm as f32))
@@ -98,7 +99,11 @@ fn run(input: &Path, (x, y): (usize, usize), out: &Path) -> Result<(), String> {
                 )
             })
             .collect();
-        series.push((format!("CIE 1931 {name} (scaled)"), pts, true));
+        series.push(Curve {
+            label: format!("CIE 1931 {name} (scaled)"),
+            points: pts,
+            dashed: true,
+        });
     }
     let title = format!("{}: one pixel's spectral radiance", input.display());
     plot::lines(

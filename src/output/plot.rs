@@ -68,13 +68,20 @@ pub fn text_size(text: &str, px: f64) -> (u32, u32) {
     (FONT, px).into_font().box_size(text).unwrap_or((0, 0))
 }
 
-/// A linear-axes line plot of `series` (label, points, dashed) into `path` (PNG), e.g. a
-/// pixel's spectrum beside the CIE curves (`examples/spectral_pixel.rs`).
+/// One curve of [`lines`]: its legend label, its points and whether it is dashed.
+pub struct Curve {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+    pub dashed: bool,
+}
+
+/// A linear-axes line plot of `series` into `path` (PNG), e.g. a pixel's spectrum beside the
+/// CIE curves (`examples/spectral_pixel.rs`).
 pub fn lines(
     path: &Path,
     title: &str,
     (x_label, y_label): (&str, &str),
-    series: &[(String, Vec<(f64, f64)>, bool)],
+    series: &[Curve],
 ) -> Result<()> {
     let (w, h) = SIZE;
     let mut buf = vec![255u8; (w * h * 3) as usize];
@@ -88,12 +95,12 @@ fn draw_lines(
     buf: &mut [u8],
     title: &str,
     (x_label, y_label): (&str, &str),
-    series: &[(String, Vec<(f64, f64)>, bool)],
+    series: &[Curve],
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     register();
     let root = BitMapBackend::with_buffer(buf, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
-    let all = || series.iter().flat_map(|s| s.1.iter());
+    let all = || series.iter().flat_map(|s| s.points.iter());
     let (x0, x1) = all().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
         (a.min(p.0), b.max(p.0))
     });
@@ -115,18 +122,18 @@ fn draw_lines(
         .axis_desc_style((FONT, 15))
         .light_line_style(RGBColor(235, 235, 235))
         .draw()?;
-    for (i, (label, points, dashed)) in series.iter().enumerate() {
+    for (i, c) in series.iter().enumerate() {
         let colour = PALETTE[i % PALETTE.len()];
-        let style = colour.stroke_width(if *dashed { 2 } else { 3 });
-        let pts = points.iter().copied();
-        if *dashed {
+        let style = colour.stroke_width(if c.dashed { 2 } else { 3 });
+        let pts = c.points.iter().copied();
+        if c.dashed {
             chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?;
         } else {
             chart.draw_series(LineSeries::new(pts, style))?;
         }
         chart
             .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-            .label(label.clone())
+            .label(c.label.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 22, y)], style));
     }
     chart

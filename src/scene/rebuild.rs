@@ -242,13 +242,17 @@ mod tests {
         for (i, x) in [-0.5f32, 0.5].iter().enumerate() {
             desc.lights.push(LightDesc {
                 prim_path: format!("/Bulb{i}"),
-                kind: LightKind::Sphere { radius: 0.05 },
+                kind: LightKind::Sphere {
+                    radius: 0.05,
+                    point: false,
+                },
                 to_world: Mat4::from_translation(Vec3::new(*x, 1.0, 0.0)),
                 emission: EmissionDesc {
                     intensity: 100.0,
                     ..Default::default()
                 },
                 shaping: None,
+                shadows: true,
             });
         }
         desc
