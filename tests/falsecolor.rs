@@ -132,7 +132,7 @@ fn contours_and_bad_options() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
     // Default scale: the maximum, 1000, is already round.
-    assert!(stderr(&o).contains("0 to 1000 cd/m2"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("0 to 1000 cd/m²"), "{}", stderr(&o));
     for bad in [
         &["--scale", "0"][..],
         &["--log", "-1"],
