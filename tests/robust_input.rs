@@ -454,7 +454,7 @@ fn silent_defaults_are_named() {
         &format!("{FLOOR}{BULB}{CAMERA}{settings}"),
         &[
             "/R: pixelAspectRatio is not supported",
-            "/R: dataWindowNDC is not supported",
+            "data window 2,0,8,8 (6×8 pixels) from </R>'s dataWindowNDC",
         ],
     );
 }
