@@ -63,7 +63,18 @@ impl DomeLight {
         if !(pdf_w > 0.0 && pdf_w.is_finite()) {
             return None;
         }
-        Some(LightLiSample {
+        Some(self.sample_towards(ctx, wi, pdf_w, lambda))
+    }
+
+    /// The light sample of direction `wi` drawn with density `pdf_w`.
+    fn sample_towards(
+        &self,
+        ctx: &LightSampleContext,
+        wi: Vec3,
+        pdf_w: f32,
+        lambda: &SampledWavelengths,
+    ) -> LightLiSample {
+        LightLiSample {
             l: self.le(wi, lambda),
             wi,
             pdf_w,
@@ -71,7 +82,7 @@ impl DomeLight {
             n_light: Vec3::ZERO,
             delta: false,
             infinite: true,
-        })
+        }
     }
 
     /// The dome's own distribution (uniform, or the map's).
@@ -93,16 +104,7 @@ impl DomeLight {
                 (self.to_world(d_local), pdf_uv / (2.0 * PI * PI * sin_theta))
             }
         };
-        let l = self.le(wi, lambda);
-        Some(LightLiSample {
-            l,
-            wi,
-            pdf_w,
-            p_light: ctx.p + 2.0e7 * wi,
-            n_light: Vec3::ZERO,
-            delta: false,
-            infinite: true,
-        })
+        Some(self.sample_towards(ctx, wi, pdf_w, lambda))
     }
 
     /// The density of `sample_li` from `p` towards `wi`.
