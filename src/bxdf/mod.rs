@@ -16,7 +16,8 @@
 //!
 //! Shared pieces: `fresnel.rs` (dielectric, complex and Schlick Fresnel, Snell),
 //! `microfacet.rs` (Trowbridge–Reitz with visible-normal sampling), `coat.rs` (a specular
-//! coat and its directional albedo, for the layered models).
+//! coat and its directional albedo, for the layered models), `rho.rs` (a BSDF's
+//! directional-hemispherical reflectance, pbrt-v4's fixed-sample estimate: the albedo AOV).
 //!
 //! Delta lobes follow pbrt: `f` and `pdf` leave them out, `sample_f` returns them with
 //! `specular: true`, f = reflectance/|cos θi| and pdf = the probability of choosing them.
@@ -31,6 +32,7 @@ pub mod microfacet;
 pub mod oren_nayar;
 pub mod plastic;
 pub mod preview;
+mod rho;
 pub mod thin_dielectric;
 
 use crate::math::Frame;

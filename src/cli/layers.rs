@@ -28,9 +28,10 @@ pub struct LayerArgs {
     pub spectral_range: Option<(f32, f32)>,
     /// Extra layers (comma-separated): variance (variance.Y, of the pixel's mean luminance);
     /// position, normal, depth (P.X/Y/Z, N.X/Y/Z, Z of the first hit in camera space; any
-    /// one writes the three).
+    /// one writes the three); albedo (albedo.R/G/B: the first hit's directional-hemispherical
+    /// reflectance, pbrt-v4's GBufferFilm albedo).
     #[arg(long = "aov", value_name = "LIST", value_delimiter = ',',
-          value_parser = ["variance", "position", "normal", "depth"])]
+          value_parser = ["variance", "position", "normal", "depth", "albedo"])]
     pub aov: Vec<String>,
     /// One-pass renders under other illuminants (comma-separated names of
     /// spectra/illuminants, e.g. D65,A,F11,LED-B3): per illuminant a layer <name>.R/G/B and
@@ -82,7 +83,11 @@ impl LayerArgs {
         let layers = LayerOptions {
             spectral: bins,
             variance: self.aov.iter().any(|a| a == "variance"),
-            first_hit: self.aov.iter().any(|a| a != "variance"),
+            first_hit: self
+                .aov
+                .iter()
+                .any(|a| ["position", "normal", "depth"].contains(&a.as_str())),
+            albedo: self.aov.iter().any(|a| a == "albedo"),
         };
         layers.check(integrator)?;
         self.check_emission(integrator)?;

@@ -16,7 +16,12 @@
 //! `depth`: the three come together): the mean over the pixel's samples of the first surface
 //! its camera ray meets (pbrt-v4's GBufferFilm conventions): position and geometric normal in
 //! OpenEXR's camera space (`worldToCamera`: x right, y up, z along the view, metres), and the
-//! depth Z = P.z; 0 where no sample hit anything.
+//! depth Z = P.z; 0 where no sample hit anything. `albedo.R/G/B` (`--aov albedo`): pbrt-v4's
+//! GBufferFilm albedo, the mean over the pixel's samples of the directional-hemispherical
+//! reflectance ρ_hd(ωo) of the BSDF at the first hit, whatever its lobes (0 for samples that
+//! escaped or met a light's shape), converted to RGB with each sample's wavelengths as the
+//! reflectance under the working space's white at Y = 1 (a white Lambertian is (1, 1, 1); not
+//! scaled by the exposure).
 //!
 //! **Emission layers** (`--illuminants`, `--light-groups`): per layer `<name>.R/G/B` in the
 //! EXR's working space (as `R`, `G`, `B`) and `<name>.XYZ.X/Y/Z`, absolute, × 2^exposure like
@@ -36,6 +41,8 @@ pub const EMISSIVE_UNITS: &str = "W.m^-2.sr^-1";
 /// The variance of the pixel's mean luminance (`--aov variance`).
 pub const VARIANCE_CHANNEL: &str = "variance.Y";
 pub const SPECTRAL_BINS_ATTRIBUTE: &str = "spectralRender:spectralBins";
+/// The first hit's albedo (`--aov albedo`), RGB in the EXR's working space.
+pub const ALBEDO_CHANNELS: [&str; 3] = ["albedo.R", "albedo.G", "albedo.B"];
 
 /// The channels and attributes of `layers`, RGB in `space`.
 pub fn exr_layers(layers: &LayerImages, space: WorkingSpace) -> ExrLayers {
@@ -58,6 +65,13 @@ pub fn exr_layers(layers: &LayerImages, space: WorkingSpace) -> ExrLayers {
         }
         out.channels
             .push(("Z".into(), f.position.iter().map(|v| v[2]).collect()));
+    }
+    if let Some(a) = &layers.albedo {
+        let rgb = space.convert(a);
+        for (c, name) in ALBEDO_CHANNELS.iter().enumerate() {
+            out.channels
+                .push((name.to_string(), rgb.iter().map(|p| p[c]).collect()));
+        }
     }
     out
 }

@@ -31,7 +31,7 @@
 use super::auto::AutoReport;
 use super::checkpoint::{self, Checkpoint};
 use super::crop::Crop;
-use super::layers::{LayerFilms, LayerImages, LayerOptions, LayerTile};
+use super::layers::{FirstHitSetup, LayerFilms, LayerImages, LayerOptions, LayerTile};
 use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
@@ -235,9 +235,12 @@ impl<'a> ImageSession<'a> {
         let cap = depth_cap(opts.max_depth);
         let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
         let film = Film::new(w, h, Grid::for_scale(scene.camera.exposure_scale as f64));
-        let to_camera = scene.camera.world_to_exr_camera();
+        let first_hit = FirstHitSetup {
+            to_camera: scene.camera.world_to_exr_camera(),
+            albedo: Some(texture_filter(opts)),
+        };
         let emission = scene.emission_layers.names();
-        let layers = LayerFilms::new((w, h), &opts.layers, &emission, film.grid(), to_camera);
+        let layers = LayerFilms::new((w, h), &opts.layers, &emission, film.grid(), first_hit);
         let settings = Settings {
             max_depth: cap,
             filter: texture_filter(opts),
@@ -732,7 +735,7 @@ fn render_tile<const HERO_ONLY: bool>(
                 let dropped = acc.dropped;
                 acc.add(k, &ws.record, &lambda, s);
                 layers.add(k, &ws.record, &lambda, (s, acc.dropped != dropped));
-                layers.add_first_hit(k, scene, film, u_lens);
+                layers.add_first_hit(k, scene, (film, u_lens), &lambda);
                 // The sample's own value (0 when it was dropped), rounded to the grid.
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
                 let (t, c) = task.grid.triple(own);

@@ -1,6 +1,8 @@
 //! The image's extra layers beside RGB and XYZ (`--spectral`, `--aov`): what a render is asked
 //! for ([`LayerOptions`]), what a tile collects per sample ([`LayerTile`], allocated once per
 //! tile and segment, never per sample) and the films that hold the sums ([`LayerFilms`]).
+//! The first-hit layers (position, normal, depth, albedo) follow pbrt-v4's GBufferFilm: each
+//! sample's camera ray is traced again to the first surface it meets.
 //! Every sum is on a fixed grid (`sensor::grid_sum`), so the layers, like the image, depend on
 //! the seed and the sample count only.
 
@@ -8,15 +10,17 @@ use super::emission_layers::{EmissionFilms, EmissionImage, EmissionTile};
 use crate::error::{Error, Result};
 use crate::integrator::bidir::record::SampleRecord;
 use crate::integrator::Integrator;
-use crate::scene::{Hit, Scene};
+use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::film::Tile;
 use crate::sensor::grid_sum::Grid;
 use crate::sensor::spectral_film::{Binner, SpectralBins, SpectralFilm, SpectralImage};
-use crate::spectral::SampledWavelengths;
-use glam::Mat4;
+use crate::spectral::{xyz, SampledWavelengths};
+use crate::texture::TextureFilter;
+use glam::{Mat4, Vec3};
 
 /// Grid of the first-hit sums (`sensor::grid_sum`): 2^−40 m ≈ 1e−12 m for positions, and
-/// normals to 1e−12; a term is clamped at 2^100 units, sums of 2^27 samples of 2^60 m fit.
+/// normals and albedos to 1e−12; a term is clamped at 2^100 units, sums of 2^27 samples of
+/// 2^60 m fit.
 const FIRST_HIT_GRID: Grid = Grid { exponent: 40 };
 
 /// The extra layers a render writes.
@@ -29,12 +33,14 @@ pub struct LayerOptions {
     pub variance: bool,
     /// The first hit's position, normal and depth (`--aov position,normal,depth`).
     pub first_hit: bool,
+    /// The first hit's directional-hemispherical reflectance (`--aov albedo`).
+    pub albedo: bool,
 }
 
 impl LayerOptions {
     /// Whether any layer needs per-sample work.
     pub fn any(&self) -> bool {
-        self.spectral.is_some() || self.first_hit
+        self.spectral.is_some() || self.first_hit || self.albedo
     }
 
     /// Refuses layers the integrator cannot fill: the spectral film bins the sample's own
@@ -59,20 +65,30 @@ pub struct LayerTile {
     /// `spectral[k * bins + b]`, k the tile pixel.
     spectral: Vec<i128>,
     clamped: u64,
-    /// World to camera space (OpenEXR's, as pbrt-v4's GBufferFilm writes), when first hits
-    /// are recorded.
-    to_camera: Option<Mat4>,
-    /// Per tile pixel: P.x, P.y, P.z, N.x, N.y, N.z summed over the samples that hit.
+    /// What the first hits record, when they are traced.
+    first_hit_setup: Option<FirstHitSetup>,
+    /// Per tile pixel: the first hits' sums.
     first_hit: Vec<FirstHitSums>,
     /// The emission-weighted layers' sums (`session::emission_layers`).
     emission: EmissionTile,
 }
 
-/// A pixel's first-hit sums on [`FIRST_HIT_GRID`] and the samples that hit something.
+/// A pixel's first-hit sums on [`FIRST_HIT_GRID`]: P.x, P.y, P.z, N.x, N.y, N.z over the
+/// samples that hit something (`hits`), and the albedo's XYZ over all `samples`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FirstHitSums {
     pub sums: [i128; 6],
     pub hits: u64,
+    pub albedo: [i128; 3],
+    pub samples: u64,
+}
+
+/// What the first-hit layers need per sample: OpenEXR's world-to-camera matrix (as pbrt-v4's
+/// GBufferFilm writes) and, for the albedo, the render's texture filter (`None`: no albedo).
+#[derive(Clone, Copy, Debug)]
+pub struct FirstHitSetup {
+    pub to_camera: Mat4,
+    pub albedo: Option<TextureFilter>,
 }
 
 impl LayerTile {
@@ -88,26 +104,43 @@ impl LayerTile {
             t.spectral = vec![0; tile.pixel_count() * f.bins().count];
         }
         if let Some(fh) = &films.first_hit {
-            t.to_camera = Some(fh.to_camera);
+            t.first_hit_setup = Some(fh.setup);
             t.first_hit = vec![FirstHitSums::default(); tile.pixel_count()];
         }
         t
     }
 
     /// Traces the sample's camera ray (`film`, `u_lens` as the estimator had them) to its first
-    /// hit and adds its camera-space position and geometric normal (pbrt-v4's GBufferFilm
-    /// conventions: the surface the camera ray meets first, camera space).
+    /// hit and adds its camera-space position and geometric normal and, when asked, its
+    /// albedo with the sample's final wavelengths `lambda` (pbrt-v4's GBufferFilm conventions:
+    /// the surface the camera ray meets first, camera space; an escaped ray adds nothing, an
+    /// albedo of 0).
     #[inline]
-    pub fn add_first_hit(&mut self, k: usize, scene: &Scene, film: [f32; 2], u_lens: [f32; 2]) {
-        let Some(m) = self.to_camera else {
+    pub fn add_first_hit(
+        &mut self,
+        k: usize,
+        scene: &Scene,
+        (film, u_lens): ([f32; 2], [f32; 2]),
+        lambda: &SampledWavelengths,
+    ) {
+        let Some(setup) = self.first_hit_setup else {
             return;
         };
+        self.first_hit[k].samples += 1;
         let (ray, t_max) = scene.camera.generate_ray(film, u_lens);
         let (p, n) = match scene.intersect(&ray, t_max) {
-            Some(Hit::Surface(si)) => (si.p, si.ng),
+            Some(Hit::Surface(si)) => {
+                if let Some(filter) = setup.albedo {
+                    let a = first_hit_albedo(scene, &si, -ray.d, filter, lambda);
+                    self.add_albedo(k, a);
+                }
+                (si.p, si.ng)
+            }
+            // An analytic light's shape only emits: it reflects nothing.
             Some(Hit::Light { hit, .. }) => (hit.p, hit.n),
             None => return,
         };
+        let m = setup.to_camera;
         let (pc, nc) = (
             m.transform_point3(p),
             m.transform_vector3(n).normalize_or_zero(),
@@ -119,6 +152,17 @@ impl LayerTile {
             self.clamped += u64::from(clamped);
         }
         px.hits += 1;
+    }
+
+    /// Adds an albedo's XYZ to tile pixel `k`.
+    #[inline]
+    fn add_albedo(&mut self, k: usize, a: [f32; 3]) {
+        let px = &mut self.first_hit[k];
+        for (c, v) in a.into_iter().enumerate() {
+            let (t, clamped) = FIRST_HIT_GRID.term(f64::from(v));
+            px.albedo[c] = px.albedo[c].saturating_add(t);
+            self.clamped += u64::from(clamped);
+        }
     }
 
     /// Adds the finished sample `s` of tile pixel `k` (its wavelengths final); `dropped`: the
@@ -143,6 +187,23 @@ impl LayerTile {
     }
 }
 
+/// The albedo of the surface `si` seen from `wo`, as XYZ with the sample's wavelengths:
+/// pbrt-v4's `VisibleSurface` albedo, ρ_hd(ωo) of the BSDF at the first hit whatever its lobes
+/// (`Bsdf::rho`, PBR 4ed §4.3.1 Eq. 4.12), converted like its GBufferFilm (the reflectance
+/// under the working white at Y = 1: `xyz::reflectance_to_xyz`).
+#[inline]
+fn first_hit_albedo(
+    scene: &Scene,
+    si: &SurfaceHit,
+    wo: Vec3,
+    filter: TextureFilter,
+    lambda: &SampledWavelengths,
+) -> [f32; 3] {
+    let material = &scene.materials[si.material as usize];
+    let bsdf = material.bsdf(scene.tex_coord(si, filter), si.ns, lambda);
+    xyz::reflectance_to_xyz(bsdf.rho(wo), lambda)
+}
+
 /// The films of the layers asked for.
 #[derive(Clone, Debug, Default)]
 pub struct LayerFilms {
@@ -155,7 +216,9 @@ pub struct LayerFilms {
 /// Per pixel, the first hits' sums (`LayerTile::add_first_hit`).
 #[derive(Clone, Debug)]
 pub struct FirstHitFilm {
-    to_camera: Mat4,
+    setup: FirstHitSetup,
+    /// Whether P, N and Z are written (`--aov position,normal,depth`).
+    geometry: bool,
     pixels: Vec<FirstHitSums>,
     width: usize,
 }
@@ -176,18 +239,22 @@ pub struct LayerImages {
     /// −1 where a pixel has fewer than 2 samples (no estimate).
     pub variance: Option<Vec<f32>>,
     pub first_hit: Option<FirstHitImages>,
+    /// Per pixel, the mean albedo over the pixel's samples (0 for those that escaped), as XYZ
+    /// of the reflectance under the working white at Y = 1 (`--aov albedo`).
+    pub albedo: Option<Vec<[f32; 3]>>,
     /// The emission-weighted layers (`--illuminants`, `--light-groups`), in order.
     pub emission: Vec<EmissionImage>,
 }
 
 impl LayerFilms {
-    /// The films of `opts`' layers and of the emission layers named `emission`.
+    /// The films of `opts`' layers and of the emission layers named `emission`; `setup` for
+    /// the first-hit layers (its albedo filter ignored unless `opts.albedo`).
     pub fn new(
         (width, height): (usize, usize),
         opts: &LayerOptions,
         emission: &[String],
         grid: Grid,
-        to_camera: Mat4,
+        setup: FirstHitSetup,
     ) -> LayerFilms {
         LayerFilms {
             clamped: 0,
@@ -195,8 +262,12 @@ impl LayerFilms {
             spectral: opts
                 .spectral
                 .map(|bins| SpectralFilm::new(width, height, bins, grid)),
-            first_hit: opts.first_hit.then(|| FirstHitFilm {
-                to_camera,
+            first_hit: (opts.first_hit || opts.albedo).then(|| FirstHitFilm {
+                setup: FirstHitSetup {
+                    albedo: setup.albedo.filter(|_| opts.albedo),
+                    ..setup
+                },
+                geometry: opts.first_hit,
                 pixels: vec![FirstHitSums::default(); width * height],
                 width,
             }),
@@ -214,7 +285,11 @@ impl LayerFilms {
                 for c in 0..6 {
                     acc.sums[c] = acc.sums[c].saturating_add(add.sums[c]);
                 }
+                for c in 0..3 {
+                    acc.albedo[c] = acc.albedo[c].saturating_add(add.albedo[c]);
+                }
                 acc.hits += add.hits;
+                acc.samples += add.samples;
             }
         }
         self.clamped += t.clamped;
@@ -237,18 +312,31 @@ impl LayerFilms {
                 images: f.images(scale),
             }),
             variance: None,
-            first_hit: self.first_hit.as_ref().map(|f| {
+            first_hit: self.first_hit.as_ref().filter(|f| f.geometry).map(|f| {
                 let mean = |p: &FirstHitSums, c0: usize| -> [f32; 3] {
-                    std::array::from_fn(|c| match p.hits {
-                        0 => 0.0,
-                        n => (FIRST_HIT_GRID.value(p.sums[c0 + c]) / n as f64) as f32,
-                    })
+                    std::array::from_fn(|c| mean_of(p.sums[c0 + c], p.hits))
                 };
                 FirstHitImages {
                     position: f.pixels.iter().map(|p| mean(p, 0)).collect(),
                     normal: f.pixels.iter().map(|p| mean(p, 3)).collect(),
                 }
             }),
+            albedo: self
+                .first_hit
+                .as_ref()
+                .filter(|f| f.setup.albedo.is_some())
+                .map(|f| {
+                    let mean = |p: &FirstHitSums| p.albedo.map(|s| mean_of(s, p.samples));
+                    f.pixels.iter().map(mean).collect()
+                }),
         }
+    }
+}
+
+/// The mean of `n` terms summing to `sum` on [`FIRST_HIT_GRID`], 0 for none.
+fn mean_of(sum: i128, n: u64) -> f32 {
+    match n {
+        0 => 0.0,
+        n => (FIRST_HIT_GRID.value(sum) / n as f64) as f32,
     }
 }

@@ -108,11 +108,11 @@ pub fn image(scene: &Scene, opts: &RenderOptions) -> MemoryEstimate {
         let per_pixel = bins.count as u64 * (16 + 4) + 8;
         e.add("spectral bins", pixels.saturating_mul(per_pixel));
     }
-    if opts.layers.first_hit {
-        // Six i128 sums and a count per pixel, and six f32 images on output.
+    if opts.layers.first_hit || opts.layers.albedo {
+        // Nine i128 sums and two counts per pixel, and nine f32 images on output.
         e.add(
             "first-hit layers",
-            pixels.saturating_mul(6 * 16 + 8 + 6 * 4),
+            pixels.saturating_mul(9 * 16 + 16 + 9 * 4),
         );
     }
     let layers = scene.emission_layers.len() as u64;

@@ -3,6 +3,7 @@
 use super::data;
 use super::dense::DenseSpectrum;
 use super::{SampledSpectrum, SampledWavelengths, K_M, N_LAMBDA};
+use std::sync::OnceLock;
 
 /// Monte Carlo estimate of K_m ∫ L(λ) {x̄,ȳ,z̄}(λ) dλ from one set of hero wavelengths:
 /// the mean over lanes of L(λᵢ) x̄(λᵢ) / p(λᵢ) (lanes with pdf 0 contribute nothing).
@@ -21,6 +22,24 @@ pub fn sampled_to_xyz(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
         xyz[2] += v * zb.eval(lambda);
     }
     xyz.map(|c| c * K_M / N_LAMBDA as f32)
+}
+
+/// XYZ of a reflectance `r` lit by D65 scaled to luminance 1, from one set of hero
+/// wavelengths ([`sampled_to_xyz`]): a white reflectance gives the white point at Y = 1, so
+/// in an RGB space with a D65 white it is (1, 1, 1). This is pbrt-v4's conversion of an
+/// albedo (`GBufferFilm::AddSample`: albedo × the colour space's illuminant, normalised to
+/// Y = 1, to RGB with the sample's wavelengths).
+#[inline]
+pub fn reflectance_to_xyz(r: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
+    static D65: OnceLock<DenseSpectrum> = OnceLock::new();
+    let d65 = D65.get_or_init(|| {
+        let d = data::illuminant("CIE-D65").expect("CIE-D65 is embedded");
+        d.scaled((1.0 / luminance(d)) as f32)
+    });
+    sampled_to_xyz(
+        SampledSpectrum::from_fn(|i| r[i] * d65.eval(w.lambda[i])),
+        w,
+    )
 }
 
 /// K_m ∫ s(λ) {x̄,ȳ,z̄}(λ) dλ on the 1 nm grid.
@@ -57,5 +76,22 @@ mod tests {
         }
         let expected = K_M as f64 * 106.856_895;
         assert!((y / n as f64 / expected - 1.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_white_reflectance_is_the_d65_white_at_luminance_one() {
+        // Stratified wavelengths: the mean converges to K_m ∫ D65 {x̄,ȳ,z̄} / L(D65), whose
+        // Rec.709 RGB is (1, 1, 1) (our XYZ is referred to this D65, `color.rs`).
+        let n = 20_000;
+        let mut xyz = [0.0f64; 3];
+        for i in 0..n {
+            let w = SampledWavelengths::sample_visible((i as f32 + 0.5) / n as f32);
+            let v = reflectance_to_xyz(SampledSpectrum::ONE, &w);
+            (0..3).for_each(|c| xyz[c] += f64::from(v[c]) / f64::from(n));
+        }
+        let rgb = super::super::color::xyz_to_rgb(xyz);
+        for c in rgb {
+            assert!((c - 1.0).abs() < 2e-3, "{rgb:?}");
+        }
     }
 }
