@@ -278,3 +278,111 @@ fn light_group_tokens_gather_lights() {
     let names = scene.emission_layers.names();
     assert_eq!(names, ["panels", "Downlight"]);
 }
+
+/// `--illuminants` refuses a light whose emission is textured with one error line naming the
+/// stage and the light's prim (its colour varies over the light: no illuminant replaces it).
+#[test]
+fn a_textured_emission_is_refused_naming_the_light() {
+    let dir = temp_dir("textured-emission");
+    let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/textures/sky.exr");
+    std::fs::copy(sky, dir.join("sky.exr")).unwrap();
+    let text = std::fs::read_to_string(scene_path("metamers.usda")).unwrap();
+    let textured = text.replace(
+        "token spectral:emission = \"CIE-D65\"",
+        "asset inputs:texture:file = @sky.exr@",
+    );
+    assert_ne!(textured, text);
+    let stage = write(&dir, "textured.usda", &textured);
+    let exr_path = dir.join("t.exr");
+    for layers in [&["--illuminants", "A"][..], &["--illuminant", "F11"]] {
+        let mut args = vec![stage.to_str().unwrap(), "--resolution", "8x4", "--spp", "1"];
+        args.extend_from_slice(layers);
+        args.extend_from_slice(&["-o", exr_path.to_str().unwrap()]);
+        let o = spectral_render(&args, &dir);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{layers:?}: {err}");
+        let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("note:")).collect();
+        assert_eq!(lines.len(), 1, "{layers:?}: {err}");
+        assert!(
+            lines[0].contains("textured.usda")
+                && lines[0].contains("/World/Dome")
+                && lines[0].contains("emission is textured"),
+            "{err}"
+        );
+        assert!(!exr_path.exists());
+    }
+}
+
+/// A stage's RenderSettings `dataWindowNDC` renders only its window, and the illuminant and
+/// light-group layers are cut to it like the image: every channel of the windowed EXR is the
+/// whole render's, bit for bit (same seed; the sampler is keyed by the pixel).
+#[test]
+fn emission_layers_are_cut_to_a_stage_data_window_like_the_image() {
+    let dir = temp_dir("emission-layers-window");
+    let text = std::fs::read_to_string(scene_path("metamers.usda")).unwrap();
+    // NDC (0.25, 0.25)–(0.75, 0.75), y up: on 16 × 8, columns 4..12 and rows 2..6.
+    let windowed = text.replace(
+        "uniform int2 resolution = (160, 80)",
+        "uniform int2 resolution = (160, 80)\n        float4 dataWindowNDC = (0.25, 0.25, 0.75, 0.75)",
+    );
+    assert_ne!(windowed, text);
+    let stages = [
+        ("whole", scene_path("metamers.usda")),
+        ("window", write(&dir, "windowed.usda", &windowed)),
+    ];
+    let mut images = Vec::new();
+    for (name, stage) in &stages {
+        let out = dir.join(format!("{name}.exr"));
+        let args = [
+            stage.to_str().unwrap(),
+            "--resolution",
+            "16x8",
+            "--spp",
+            "3",
+            "--seed",
+            "9",
+            "--integrator",
+            "path",
+            "--illuminants",
+            "A,F11",
+            "--light-groups",
+            "--spectral-bins",
+            "2",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let o = spectral_render(&args, &dir);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        images.push(exr::read(&out).unwrap());
+    }
+    let (whole, window) = (&images[0], &images[1]);
+    assert_eq!((whole.width, whole.height), (16, 8));
+    assert_eq!((window.width, window.height), (8, 4));
+    assert_eq!(
+        whole.channels.keys().collect::<Vec<_>>(),
+        window.channels.keys().collect::<Vec<_>>()
+    );
+    for layer in [
+        "CIE-A.XYZ.Y",
+        "CIE-F11.R",
+        "Dome.B",
+        "XYZ.Y",
+        "CIE-A.S0.477,500000nm",
+    ] {
+        assert!(window.channels.contains_key(layer), "no {layer}");
+    }
+    for (name, c) in &window.channels {
+        let w = &whole.channels[name];
+        for row in 0..4 {
+            for col in 0..8 {
+                let v = w[(row + 2) * 16 + col + 4];
+                assert_eq!(
+                    c[row * 8 + col].to_bits(),
+                    v.to_bits(),
+                    "{name} ({col}, {row})"
+                );
+            }
+        }
+        assert!(c.iter().any(|v| *v > 0.0), "{name} is black");
+    }
+}

@@ -358,9 +358,6 @@ impl<'a> ImageSession<'a> {
         if self.done > self.first || self.crop.is_some() {
             return Err("a session is cropped only before its first pass".into());
         }
-        if !self.layers.emission.films.is_empty() {
-            return Err(EMISSION_LAYERS_WHOLE.into());
-        }
         let (w, h) = (self.film.width, self.film.height);
         if crop.x1 > w || crop.y1 > h {
             return Err(format!(
@@ -672,9 +669,10 @@ pub(crate) fn sampler_kind(opts: &RenderOptions) -> SamplerKind {
     }
 }
 
-/// Why parts and crops refuse emission layers.
-const EMISSION_LAYERS_WHOLE: &str = "--illuminants and --light-groups render the whole image in \
-    one run: a part's or crop's saved state holds the image's film, not the layers' films";
+/// Why parts refuse emission layers (a window without a part, a stage's `dataWindowNDC`,
+/// keeps them: they are cut to it like the image).
+const EMISSION_LAYERS_WHOLE: &str = "--illuminants and --light-groups render all the samples in \
+    one run: a part's saved state holds the image's film, not the layers' films";
 
 /// Linear Rec.709 RGB of an XYZ pixel.
 pub fn xyz_to_rgb(p: [f32; 3]) -> [f32; 3] {
