@@ -11,7 +11,9 @@
 //!
 //! eps = 1e-4 × the scene's bounding-box diagonal. Rays are generated before timing; closest
 //! hits (`Bvh::intersect`) for primary and diffuse rays, any hit (`Bvh::occluded`) for shadow
-//! rays, on one thread (median of 5 runs) and on all rayon threads.
+//! rays, on one thread (median of 5 runs; also per CPU-second of that thread, which stays
+//! comparable with Embree's Mrays/s ÷ cpu% when other processes share the cores) and on all
+//! rayon threads. The header gives the build time and the BVH's memory (nodes, triangles).
 //!
 //! `cargo bench --bench limit_rays [-- SCENE.obj [SPP]]`; default `../shared/limit/scenes/cbox.obj`
 //! at 4 spp (256×256 from the camera line: 262,144 primary rays).
@@ -136,20 +138,46 @@ fn secondary_rays(
     (diffuse, shadow)
 }
 
-/// Mrays/s on one thread (median of 5 runs) and on all rayon threads, and the hit fraction.
-fn throughput<T: Sync>(rays: &[T], f: impl Fn(&T) -> bool + Sync) -> (f64, f64, f64) {
-    let mut single: Vec<f64> = (0..5)
+/// Seconds this thread has run on a CPU (Linux `/proc/thread-self/schedstat`, nanoseconds);
+/// None elsewhere.
+fn thread_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = stat.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
+}
+
+/// One class's figures: Mrays/s on one thread (median of 5 runs), the same per CPU-second of
+/// that thread (what the figure would be on an idle core; NaN without schedstat), on all rayon
+/// threads, and the hit fraction.
+struct Throughput {
+    one: f64,
+    one_cpu: f64,
+    all: f64,
+    hit: f64,
+}
+
+fn throughput<T: Sync>(rays: &[T], f: impl Fn(&T) -> bool + Sync) -> Throughput {
+    let (mut wall, mut cpu): (Vec<f64>, Vec<f64>) = (0..5)
         .map(|_| {
-            let start = Instant::now();
+            let (start, cpu_start) = (Instant::now(), thread_cpu_seconds());
             std::hint::black_box(rays.iter().filter(|r| f(r)).count());
-            rays.len() as f64 / start.elapsed().as_secs_f64() / 1e6
+            let cpu = thread_cpu_seconds()
+                .zip(cpu_start)
+                .map_or(f64::NAN, |(b, a)| b - a);
+            let mrays = rays.len() as f64 / 1e6;
+            (mrays / start.elapsed().as_secs_f64(), mrays / cpu)
         })
-        .collect();
-    single.sort_by(f64::total_cmp);
+        .unzip();
+    wall.sort_by(f64::total_cmp);
+    cpu.sort_by(f64::total_cmp);
     let start = Instant::now();
     let hits = rays.par_iter().filter(|r| f(r)).count();
-    let parallel = rays.len() as f64 / start.elapsed().as_secs_f64() / 1e6;
-    (single[2], parallel, hits as f64 / rays.len() as f64)
+    Throughput {
+        one: wall[2],
+        one_cpu: cpu[2],
+        all: rays.len() as f64 / start.elapsed().as_secs_f64() / 1e6,
+        hit: hits as f64 / rays.len() as f64,
+    }
 }
 
 fn main() {
@@ -176,13 +204,18 @@ fn main() {
     let mut rng = Sampler::new(7, 0, 0);
     let primary = primary_rays(&scene, spp, &mut rng);
     let (diffuse, shadow) = secondary_rays(&scene, &bvh, &primary, &mut rng);
+    let (nodes, triangles) = bvh.memory_bytes();
+    let mib = |bytes: usize| bytes as f64 / (1024.0 * 1024.0);
     println!(
-        "{path}: {} triangles, build {build:.3} s",
-        scene.triangles.len()
+        "{path}: {} triangles, build {build:.3} s, memory {:.3} MiB (nodes {:.3}, triangles {:.3})",
+        scene.triangles.len(),
+        mib(nodes + triangles),
+        mib(nodes),
+        mib(triangles)
     );
     println!(
-        "{:>8} {:>9} {:>7} {:>14} {:>14}",
-        "class", "rays", "hit %", "Mrays/s 1 thr", "all threads"
+        "{:>8} {:>9} {:>7} {:>14} {:>14} {:>14}",
+        "class", "rays", "hit %", "Mrays/s 1 thr", "per CPU-s", "all threads"
     );
     let closest = |r: &Ray| bvh.intersect(r, f32::INFINITY).is_some();
     let any = |(r, t): &(Ray, f32)| bvh.occluded(r, *t);
@@ -191,10 +224,13 @@ fn main() {
         ("diffuse", diffuse.len(), throughput(&diffuse, closest)),
         ("shadow", shadow.len(), throughput(&shadow, any)),
     ];
-    for (class, n, (one, all, hit)) in rows {
+    for (class, n, t) in rows {
         println!(
-            "{class:>8} {n:>9} {:>7.1} {one:>14.2} {all:>14.2}",
-            100.0 * hit
+            "{class:>8} {n:>9} {:>7.1} {:>14.2} {:>14.2} {:>14.2}",
+            100.0 * t.hit,
+            t.one,
+            t.one_cpu,
+            t.all
         );
     }
 }
