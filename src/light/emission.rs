@@ -71,7 +71,8 @@ fn luminance_nits(e: &EmissionDesc, g: Photometric) -> Reason<f32> {
     Ok(l)
 }
 
-/// The spectral shape with a luminance of 1 cd/m² for white (or the named SPD).
+/// The spectral shape with a luminance of 1 cd/m² for white (or the named SPD); an RGB colour
+/// as an RGB illuminant tabulated at 1 nm for rendering (`Spectrum::tabulated`).
 pub fn unit_shape(e: &EmissionDesc) -> Reason<Spectrum> {
     match &e.spd {
         Some(spd) => normalized_spd(spd),
@@ -86,7 +87,7 @@ pub fn unit_shape(e: &EmissionDesc) -> Reason<Spectrum> {
                     "inputs:color {rgb:?} must be finite and non-negative"
                 ));
             }
-            Ok(Spectrum::RgbIlluminant(RgbIlluminantSpectrum::new(rgb)))
+            Ok(Spectrum::RgbIlluminant(RgbIlluminantSpectrum::new(rgb)).tabulated())
         }
     }
 }

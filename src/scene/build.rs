@@ -254,14 +254,15 @@ fn indices_where(lights: &[Light], f: impl Fn(&Light) -> bool) -> Vec<u32> {
         .collect()
 }
 
-/// A reflectance spectrum from its description, validated to lie in [0, 1].
+/// A reflectance spectrum from its description, validated to lie in [0, 1]; an RGB one uplifted
+/// and tabulated at 1 nm for rendering (`Spectrum::tabulated`).
 pub fn reflectance(s: &SpectrumDesc) -> Reason<Spectrum> {
     let dense = match s {
         SpectrumDesc::Rgb(rgb) => {
             if rgb.iter().any(|c| !c.is_finite()) {
                 return Err(format!("reflectance {rgb:?} is not finite"));
             }
-            return Ok(Spectrum::Sigmoid(uplift::reflectance(*rgb)));
+            return Ok(Spectrum::Sigmoid(uplift::reflectance(*rgb)).tabulated());
         }
         SpectrumDesc::Named(token) => data::named(token)
             .cloned()

@@ -80,14 +80,35 @@ impl Grid {
 }
 
 /// x · 2^k, exactly (two steps, so that no intermediate factor overflows).
+#[inline]
 fn scale_by_power_of_two(x: f64, k: i32) -> f64 {
     let half = k / 2;
-    x * 2f64.powi(half) * 2f64.powi(k - half)
+    x * power_of_two(half) * power_of_two(k - half)
+}
+
+/// 2^k, the value `2f64.powi(k)` gives: for a normal result (−1022 ≤ k ≤ 1023, which covers
+/// every exponent `for_scale` makes) built from its IEEE 754 exponent field (biased by 1023,
+/// mantissa 0, IEEE 754-2019 §3.4) without `powi`'s per-call loop of multiplications
+/// (`__powidf2`, twice per film term).
+#[inline]
+fn power_of_two(k: i32) -> f64 {
+    if (-1022..=1023).contains(&k) {
+        f64::from_bits(((k + 1023) as u64) << 52)
+    } else {
+        2f64.powi(k)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn powers_of_two_are_exact() {
+        for k in -1100..=1100 {
+            assert_eq!(power_of_two(k).to_bits(), 2f64.powi(k).to_bits(), "{k}");
+        }
+    }
 
     #[test]
     fn sums_do_not_depend_on_grouping() {

@@ -38,14 +38,41 @@ impl Spectrum {
         }
     }
 
+    /// The spectrum at the path's wavelengths: the representation is matched once for the
+    /// four lanes, not per lane (the same values as [`Spectrum::eval`] per lane).
     #[inline]
     pub fn sample(&self, w: &SampledWavelengths) -> SampledSpectrum {
-        SampledSpectrum::from_fn(|i| self.eval(w.lambda[i]))
+        match self {
+            Spectrum::Constant(c) => SampledSpectrum::splat(*c),
+            Spectrum::Dense { data, scale } => {
+                SampledSpectrum::from_fn(|i| data.eval(w.lambda[i]) * scale)
+            }
+            _ => SampledSpectrum::from_fn(|i| self.eval(w.lambda[i])),
+        }
     }
 
     /// The spectrum on the 1 nm grid (for integrals such as luminance and power).
     pub fn to_dense(&self) -> DenseSpectrum {
         DenseSpectrum::from_fn(|l| self.eval(l))
+    }
+
+    /// The spectrum as the scene stores it for rendering: the closed forms that cost more per
+    /// evaluation than a table lookup — the sigmoid polynomial (two fused multiply-adds, in
+    /// software without the `fma` target feature, a square root and a division) and the RGB
+    /// illuminant (the same and a D65 lookup) — tabulated on the 1 nm grid and linearly
+    /// interpolated ([`DenseSpectrum`], docs/design.md §8 "Hot path"); the others unchanged.
+    /// Equal at every integer nm, so integrals on that grid (luminance, power) do not change;
+    /// in between the table differs by the interpolation error, at most h²/8 · max |s''| with
+    /// h = 1 nm (below 10⁻³ of the peak for the uplift's most saturated colours, tested; 7·10⁻⁵ for the
+    /// Cornell box's red wall).
+    pub fn tabulated(self) -> Spectrum {
+        match self {
+            Spectrum::Sigmoid(_) | Spectrum::RgbIlluminant(_) => Spectrum::Dense {
+                data: Arc::new(self.to_dense()),
+                scale: 1.0,
+            },
+            other => other,
+        }
     }
 
     /// This spectrum times a constant.
@@ -66,5 +93,65 @@ impl Spectrum {
                 scale: s,
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectral::uplift::{reflectance, RgbIlluminantSpectrum};
+    use crate::spectral::{LAMBDA_MAX, LAMBDA_MIN};
+
+    /// The largest |table − closed form| over a 0.01 nm grid, relative to the peak.
+    fn max_relative_error(s: &Spectrum) -> f32 {
+        let t = s.clone().tabulated();
+        let n = ((LAMBDA_MAX - LAMBDA_MIN) * 100.0) as usize;
+        let (mut err, mut peak) = (0.0f32, 0.0f32);
+        for k in 0..=n {
+            let l = LAMBDA_MIN + k as f32 * 0.01;
+            err = err.max((t.eval(l) - s.eval(l)).abs());
+            peak = peak.max(s.eval(l).abs());
+        }
+        if peak > 0.0 {
+            err / peak
+        } else {
+            err
+        }
+    }
+
+    /// Every reflectance and illuminant the uplift makes of a grid of colours (primaries,
+    /// saturated mixes and greys included) is tabulated within its interpolation bound, and
+    /// exactly at integer nm.
+    #[test]
+    fn tables_match_the_closed_forms() {
+        let levels = [0.0, 0.02, 0.1, 0.3, 0.5, 0.7, 0.9, 0.98, 1.0];
+        let mut worst = 0.0f32;
+        for r in levels {
+            for g in levels {
+                for b in levels {
+                    let sig = Spectrum::Sigmoid(reflectance([r, g, b]));
+                    let ill = Spectrum::RgbIlluminant(RgbIlluminantSpectrum::new([r, g, b]));
+                    for s in [sig, ill] {
+                        worst = worst.max(max_relative_error(&s));
+                        let t = s.clone().tabulated();
+                        for l in [LAMBDA_MIN, 517.0, LAMBDA_MAX] {
+                            assert_eq!(t.eval(l), s.eval(l), "{r} {g} {b} at {l} nm");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(worst < 1e-3, "{worst}");
+    }
+
+    #[test]
+    fn other_representations_are_kept() {
+        let c = Spectrum::Constant(0.5);
+        assert_eq!(c.clone().tabulated(), c);
+        let d = Spectrum::Dense {
+            data: Arc::new(DenseSpectrum::constant(0.25)),
+            scale: 2.0,
+        };
+        assert_eq!(d.clone().tabulated(), d);
     }
 }
