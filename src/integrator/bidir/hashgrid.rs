@@ -10,9 +10,10 @@
 //! collision detection of deformable objects", with their three primes); points are sorted by
 //! slot with a counting sort, so a slot's points are contiguous. Hash collisions only add
 //! candidates: every candidate is tested against the radius, by the grid itself on a copy of
-//! the positions in slot order (a query reads 16 contiguous bytes per candidate, not the
-//! caller's record; about 5 candidates of the 2 × 2 × 2 block lie outside the ball for each
-//! inside it on a surface, (4r)² / π r²). The buffers are kept and reused by the next build.
+//! the positions in slot order (a query reads a candidate's index, key and position from
+//! three contiguous arrays, not the caller's record; on a surface the 2 × 2 × 2 block holds
+//! about 5 candidates for each inside the ball, (4r)² / π r²). The buffers are kept and
+//! reused by the next build.
 
 use glam::Vec3;
 
