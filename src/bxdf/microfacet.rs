@@ -135,10 +135,6 @@ impl TrowbridgeReitz {
     }
 }
 
-/// Microfacet reflection shared by the conductor and the coats (PBR 4ed §9.6.5): the half
-/// vector ωm = (ωo + ωi)/|ωo + ωi| (eq. 9.32), f = D(ωm) G(ωo, ωi) F / (4 |cos θo| |cos θi|)
-/// (eq. 9.33), and the pdf of ωi = reflect(ωo, ωm) with ωm from the visible normals,
-/// D_ωo(ωm) / (4 |ωo·ωm|) (eq. 9.28). Every function accepts ωo on either side.
 /// A reflection pair (ωo, ωi) evaluated at once: [`TrowbridgeReitz::reflection_eval_pair`].
 #[derive(Clone, Copy, Debug)]
 pub struct ReflectionPair {
@@ -150,6 +146,10 @@ pub struct ReflectionPair {
     pub pdf_rev: f32,
 }
 
+/// Microfacet reflection shared by the conductor and the coats (PBR 4ed §9.6.5): the half
+/// vector ωm = (ωo + ωi)/|ωo + ωi| (eq. 9.32), f = D(ωm) G(ωo, ωi) F / (4 |cos θo| |cos θi|)
+/// (eq. 9.33), and the pdf of ωi = reflect(ωo, ωm) with ωm from the visible normals,
+/// D_ωo(ωm) / (4 |ωo·ωm|) (eq. 9.28). Every function accepts ωo on either side.
 impl TrowbridgeReitz {
     /// (ωm, D G / (4 |cos θo| |cos θi|)), or `None` when ωi is not a reflection of ωo.
     #[inline]
