@@ -1589,7 +1589,8 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
     }
     if merge {
         let (z, y) = (camera_vertex.unwrap(), light_vertex.unwrap());
-        return merge_weight(&ctx.mis, &z, &z.mis, &MergeVertex::new(&y, 0, false));
+        let e = z.bsdf.eval(z.wo, y.wo, TransportMode::Radiance);
+        return merge_weight(&ctx.mis, &z.mis, &MergeVertex::new(&y, 0, false), &e);
     }
     let pdf_dir = |p: Vec3| ctx.sensor.ray_pdf_dir_w((p - sensor_p).normalize());
     match (s, t) {

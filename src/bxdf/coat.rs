@@ -207,6 +207,19 @@ impl SpecularCoat {
         self.distrib.reflection_pdf(wo, wi)
     }
 
+    /// (f, pdf of ωi from ωo, pdf of ωo from ωi): bit for bit `f(wo, wi)`, `pdf(wo, wi)` and
+    /// `pdf(wi, wo)`, sharing the microfacet terms.
+    #[inline]
+    pub fn eval_pair(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32, f32) {
+        if self.is_delta() {
+            return (SampledSpectrum::ZERO, 0.0, 0.0);
+        }
+        match self.distrib.reflection_eval_pair(wo, wi) {
+            Some(r) => (self.fresnel.eval(wo.dot(r.wm)) * r.dg, r.pdf_fwd, r.pdf_rev),
+            None => (SampledSpectrum::ZERO, 0.0, 0.0),
+        }
+    }
+
     /// A glossy direction ωi; `None` for a sample below the horizon.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: [f32; 2]) -> Option<Vec3> {

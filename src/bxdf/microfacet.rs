@@ -135,6 +135,17 @@ impl TrowbridgeReitz {
     }
 }
 
+/// A reflection pair (ωo, ωi) evaluated at once: [`TrowbridgeReitz::reflection_eval_pair`].
+#[derive(Clone, Copy, Debug)]
+pub struct ReflectionPair {
+    /// The half vector (ωo + ωi) / |ωo + ωi| and D G / (4 |cos θo| |cos θi|).
+    pub wm: Vec3,
+    pub dg: f32,
+    /// The reflection pdfs of ωi from ωo and of ωo from ωi.
+    pub pdf_fwd: f32,
+    pub pdf_rev: f32,
+}
+
 /// Microfacet reflection shared by the conductor and the coats (PBR 4ed §9.6.5): the half
 /// vector ωm = (ωo + ωi)/|ωo + ωi| (eq. 9.32), f = D(ωm) G(ωo, ωi) F / (4 |cos θo| |cos θi|)
 /// (eq. 9.33), and the pdf of ωi = reflect(ωo, ωm) with ωm from the visible normals,
@@ -149,6 +160,37 @@ impl TrowbridgeReitz {
         }
         let wm = (wo + wi).try_normalize()?;
         Some((wm, self.d(wm) * self.g(wo, wi) / (4.0 * cos_o * cos_i)))
+    }
+
+    /// [`Self::reflection_eval`] of (ωo, ωi) with [`Self::reflection_pdf`] of (ωo, ωi) and of
+    /// (ωi, ωo), bit for bit, sharing D(ωm) and Λ(ωo), Λ(ωi) (what a vertex merge needs,
+    /// `BsdfEval`); `None` where `reflection_eval` has none (both pdfs are then 0).
+    #[inline]
+    pub fn reflection_eval_pair(&self, wo: Vec3, wi: Vec3) -> Option<ReflectionPair> {
+        if wo.z * wi.z <= 0.0 {
+            return None;
+        }
+        let wm = (wo + wi).try_normalize()?;
+        let (cos_o, cos_i) = (wo.z.abs(), wi.z.abs());
+        let d = self.d(wm);
+        let (lambda_o, lambda_i) = (self.lambda(wo), self.lambda(wi));
+        let dg = d * (1.0 / (1.0 + lambda_o + lambda_i)) / (4.0 * cos_o * cos_i);
+        // The pdfs take the normal on ωo's side, as `reflection_pdf` does.
+        let (wm_p, d_p) = if wm.z < 0.0 {
+            (-wm, self.d(-wm))
+        } else {
+            (wm, d)
+        };
+        let pdf = |w: Vec3, lambda: f32| {
+            let dot = w.dot(wm_p).abs();
+            (1.0 / (1.0 + lambda)) / w.z.abs() * d_p * dot / (4.0 * dot)
+        };
+        Some(ReflectionPair {
+            wm,
+            dg,
+            pdf_fwd: pdf(wo, lambda_o),
+            pdf_rev: pdf(wi, lambda_i),
+        })
     }
 
     /// pdf per unit solid angle of ωi for [`Self::sample_reflection`].

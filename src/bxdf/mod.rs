@@ -103,6 +103,29 @@ impl BsdfSample {
     }
 }
 
+/// f(ωo, ωi) with both densities of the pair: of sampling ωi from ωo (in the evaluated mode)
+/// and of sampling ωo from ωi (in the other mode). A vertex merge needs all three at once
+/// (Georgiev et al. 2012 tech. rep. (38), (39); SmallVCM's `BSDF::Evaluate` returns them
+/// together): evaluated in one place, the models' shared terms (the local frame, the half
+/// vector, D and Λ of a microfacet lobe, a coat's albedos) are computed once.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfEval {
+    pub f: SampledSpectrum,
+    pub pdf_fwd: f32,
+    pub pdf_rev: f32,
+}
+
+impl TransportMode {
+    /// The mode of the other subpath.
+    #[inline]
+    pub fn other(self) -> TransportMode {
+        match self {
+            TransportMode::Radiance => TransportMode::Importance,
+            TransportMode::Importance => TransportMode::Radiance,
+        }
+    }
+}
+
 /// The closed set of reflection models.
 #[derive(Clone, Copy, Debug)]
 pub enum Bxdf {
@@ -150,6 +173,21 @@ impl Bxdf {
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> f32 {
         dispatch!(self, b => b.pdf(wo, wi, mode))
+    }
+
+    /// [`BsdfEval`] in the local frame: the same values, bit for bit, as `f(wo, wi, mode)`,
+    /// `pdf(wo, wi, mode)` and `pdf(wi, wo, mode.other())`; the plastic (the Cornell box's
+    /// UsdPreviewSurface) shares its terms, the other models evaluate the three.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
+        match self {
+            Bxdf::Plastic(b) => b.eval(wo, wi, mode),
+            _ => dispatch!(self, b => BsdfEval {
+                f: b.f(wo, wi, mode),
+                pdf_fwd: b.pdf(wo, wi, mode),
+                pdf_rev: b.pdf(wi, wo, mode.other()),
+            }),
+        }
     }
 
     /// True when every lobe is a delta (no point in light sampling).
@@ -233,6 +271,23 @@ impl Bsdf {
         self.bxdf.pdf(wo, wi, mode)
     }
 
+    /// [`BsdfEval`] of the pair: bit for bit `f(wo, wi, mode)`, `pdf(wo, wi, mode)` and
+    /// `pdf(wi, wo, mode.other())`, at the cost of about one evaluation.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> BsdfEval {
+        let (wo, wi) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        let e = self.bxdf.eval(wo, wi, mode);
+        BsdfEval {
+            f: if wo.z == 0.0 {
+                SampledSpectrum::ZERO
+            } else {
+                e.f
+            },
+            pdf_fwd: if wo.z == 0.0 { 0.0 } else { e.pdf_fwd },
+            pdf_rev: if wi.z == 0.0 { 0.0 } else { e.pdf_rev },
+        }
+    }
+
     #[inline]
     pub fn is_specular(&self) -> bool {
         self.bxdf.is_specular()
@@ -253,4 +308,43 @@ pub(crate) fn mirror_z(w: Vec3, flip: bool) -> Vec3 {
 #[inline]
 pub fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
     a.z * b.z > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::bxdf_examples::examples;
+    use crate::testing::rng::Rng;
+
+    #[test]
+    fn eval_is_f_and_both_pdfs_bit_for_bit() {
+        let mut rng = Rng::new(11);
+        for ex in examples() {
+            let bsdf = Bsdf::new(ex.bxdf, rng.unit_vector());
+            for k in 0..400 {
+                let (wo, wi) = (rng.unit_vector(), rng.unit_vector());
+                // Pairs on one side, on both sides, and at the horizon.
+                let wi = if k % 50 == 0 {
+                    bsdf.frame.to_world(Vec3::X)
+                } else {
+                    wi
+                };
+                for mode in [TransportMode::Radiance, TransportMode::Importance] {
+                    let e = bsdf.eval(wo, wi, mode);
+                    let f = bsdf.f(wo, wi, mode);
+                    let fwd = bsdf.pdf(wo, wi, mode);
+                    let rev = bsdf.pdf(wi, wo, mode.other());
+                    let bits = |s: SampledSpectrum| s.0.map(f32::to_bits);
+                    assert_eq!(bits(e.f), bits(f), "{} f at {wo}, {wi}", ex.name);
+                    assert_eq!(e.pdf_fwd.to_bits(), fwd.to_bits(), "{} pdf", ex.name);
+                    assert_eq!(
+                        e.pdf_rev.to_bits(),
+                        rev.to_bits(),
+                        "{} reverse pdf",
+                        ex.name
+                    );
+                }
+            }
+        }
+    }
 }

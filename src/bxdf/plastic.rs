@@ -29,7 +29,7 @@
 use super::coat::{CoatAlbedo, CoatFresnel, SpecularCoat};
 use super::fresnel::diffuse_fresnel;
 use super::microfacet::TrowbridgeReitz;
-use super::{mirror_z, BsdfSample, TransportMode};
+use super::{mirror_z, BsdfEval, BsdfSample, TransportMode};
 use crate::math::INV_PI;
 use crate::sampling::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::spectral::SampledSpectrum;
@@ -132,6 +132,29 @@ impl PlasticBxdf {
     pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> f32 {
         let flip = wo.z < 0.0;
         self.pdf_upper(mirror_z(wo, flip), mirror_z(wi, flip))
+    }
+
+    /// f(ωo, ωi) with the pdfs of ωi from ωo and of ωo from ωi: bit for bit `f` and `pdf`
+    /// both ways, the coat's microfacet terms and the albedo lookups shared.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> BsdfEval {
+        let flip = wo.z < 0.0;
+        let (wo, wi) = (mirror_z(wo, flip), mirror_z(wi, flip));
+        // Otherwise ωi lies on ωo's side strictly, and `pdf(wi, wo)` mirrors as ωo does.
+        if wi.z <= 0.0 || wo.z <= 0.0 {
+            return BsdfEval {
+                f: SampledSpectrum::ZERO,
+                pdf_fwd: 0.0,
+                pdf_rev: 0.0,
+            };
+        }
+        let (coat_f, coat_fwd, coat_rev) = self.coat.eval_pair(wo, wi);
+        let (pc_o, pc_i) = (self.coat_probability(wo), self.coat_probability(wi));
+        BsdfEval {
+            f: coat_f + self.f_diffuse(wo, wi),
+            pdf_fwd: pc_o * coat_fwd + (1.0 - pc_o) * cosine_hemisphere_pdf(wi.z),
+            pdf_rev: pc_i * coat_rev + (1.0 - pc_i) * cosine_hemisphere_pdf(wo.z),
+        }
     }
 
     #[inline]

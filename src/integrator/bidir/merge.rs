@@ -24,7 +24,7 @@
 
 use super::mis::{Mis, SubpathMis};
 use super::{LightVertexStore, PathVertex};
-use crate::bxdf::TransportMode;
+use crate::bxdf::{BsdfEval, TransportMode};
 use crate::geometry::offset::SHADOW_EPSILON;
 use crate::geometry::Ray;
 use crate::scene::Scene;
@@ -114,15 +114,20 @@ impl LightVertexStore {
         let z_lifted = z.p + arrival_normal(z) * lift;
         self.grid.query(z.p, params.key, |i| {
             let y = &self.vertices[i as usize];
-            if !self.grid.within(z.p, y.p) || y.depth + z.depth > params.max_depth + 1 {
+            if y.depth + z.depth > params.max_depth + 1 {
                 return;
             }
-            let f = z.f_radiance(y.wo);
-            if f.is_black() || (y.mesh != mesh && !unoccluded(scene, z_lifted, y.p + y.n * lift)) {
+            let e = z.bsdf.eval(z.wo, y.wo, TransportMode::Radiance);
+            if e.f.is_black() {
                 return;
             }
-            let w = merge_weight(&params.mis, z, cam, y);
-            let c = z.beta * f * y.beta * (w * params.normalization);
+            let w = merge_weight(&params.mis, cam, y, &e);
+            let c = z.beta * e.f * y.beta * (w * params.normalization);
+            // The light-leak guard last: most candidates lie on z's own mesh, and the rest
+            // need a shadow ray only when they would count.
+            if y.mesh != mesh && !c.is_black() && !unoccluded(scene, z_lifted, y.p + y.n * lift) {
+                return;
+            }
             if y.hero_only && !camera_hero_only {
                 out.hero_only += c;
             } else {
@@ -147,12 +152,7 @@ impl LightVertexStore {
         self.grid.query(m.p, params.key, |i| {
             let y = &self.vertices[i as usize];
             let cos = m.dir.dot(y.wo);
-            if !self.grid.within(m.p, y.p)
-                || cos <= 0.0
-                || y.cos_ng <= 0.0
-                || y.depth < 2
-                || y.depth > params.max_depth + 1
-            {
+            if cos <= 0.0 || y.cos_ng <= 0.0 || y.depth < 2 || y.depth > params.max_depth + 1 {
                 return;
             }
             let w = sensor_merge_weight(&params.mis, m, y);
@@ -193,20 +193,13 @@ pub fn sensor_merge_weight(mis: &Mis, m: &MeterSensor, y: &MergeVertex) -> f32 {
     mis.merge_at_sensor(y.dvcm, y.dvm, m.pdf_dir_w(y.wo))
 }
 
-/// The MIS weight of merging camera vertex `z` (its walk's MIS `cam`) with light vertex `y`
-/// [tech. rep. (38), (39)]: the camera BSDF's density of ω_y (the light side's technique one
-/// vertex longer) and of ω_z from ω_y (the camera side's) enter `Mis::merge`, each only where
-/// its dVM factor is not 0 (the camera's first vertex has none: no merge precedes it), so
-/// that a merge at z_1 evaluates one density, not two.
-pub fn merge_weight(mis: &Mis, z: &PathVertex, cam: &SubpathMis, y: &MergeVertex) -> f32 {
-    let pdf = |wo, wi, mode, factor: f32| {
-        if factor == 0.0 {
-            0.0
-        } else {
-            z.bsdf.pdf(wo, wi, mode)
-        }
-    };
-    let pdf_dir = pdf(z.wo, y.wo, TransportMode::Radiance, y.dvm);
-    let pdf_rev = pdf(y.wo, z.wo, TransportMode::Importance, cam.dvm);
+/// The MIS weight of merging camera vertex z (its walk's MIS `cam`, its BSDF evaluated at
+/// (ω_z, ω_y) in `e`) with light vertex `y` [tech. rep. (38), (39)]: the camera BSDF's
+/// density of ω_y (the light side's technique one vertex longer) and of ω_z from ω_y (the
+/// camera side's) enter `Mis::merge`, each only where its dVM factor is not 0 (the camera's
+/// first vertex has none: no merge precedes it).
+pub fn merge_weight(mis: &Mis, cam: &SubpathMis, y: &MergeVertex, e: &BsdfEval) -> f32 {
+    let pdf_dir = if y.dvm == 0.0 { 0.0 } else { e.pdf_fwd };
+    let pdf_rev = if cam.dvm == 0.0 { 0.0 } else { e.pdf_rev };
     mis.merge(y.dvcm, y.dvm, cam, pdf_dir, pdf_rev)
 }

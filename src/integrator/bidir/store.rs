@@ -9,7 +9,7 @@
 //! are rebuilt from their surface hits with the same wavelengths ([`bsdf_at`]), the same
 //! vertices bit for bit, at a fraction of the cost of tracing the subpath again (no rays, no
 //! sampling). Per light vertex the store holds a [`MergeVertex`] twice (its batch's and the
-//! grid's contiguous copy), its surface hit and dVC ([`VertexHit`]) and ≤ 8 bytes of grid;
+//! grid's contiguous copy), its surface hit and dVC ([`VertexHit`]) and ≤ 20 bytes of grid;
 //! per subpath its origin. Buffers are reused from iteration to iteration.
 
 use super::hashgrid::HashGrid;
@@ -108,10 +108,12 @@ pub struct LightVertexStore {
 
 impl LightVertexStore {
     /// Bytes per stored light vertex: its merge vertex (in its batch and in the grid's
-    /// array), its [`VertexHit`], its key (in the store and the grid) and its grid index.
+    /// array), its [`VertexHit`], its key (in the store and the grid), its grid index and
+    /// the grid's copy of its position.
     pub const BYTES_PER_VERTEX: usize = 2 * std::mem::size_of::<MergeVertex>()
         + std::mem::size_of::<VertexHit>()
-        + 3 * std::mem::size_of::<u32>();
+        + 3 * std::mem::size_of::<u32>()
+        + std::mem::size_of::<glam::Vec3>();
 
     /// Traces light subpaths 0 … n − 1 with `trace(j, buffer)` (which fills the buffer), in
     /// parallel batches of `batch_size` in a fixed order, keeps them, and rebuilds the grid
