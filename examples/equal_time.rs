@@ -40,7 +40,8 @@
 //!    with rare fireflies (`scenes/caustic.usda`: 2–5× from seed to seed), only such means
 //!    compare integrators. With `auto` among the integrators it prints auto's choices, whether
 //!    under `--spp` its image was its choice's at every seed, and issue 11's criterion: auto's
-//!    ratio at most 1.1 × (1 + the share of the run its losing candidates' pilots took).
+//!    ratio at most 1.1 × (1 + the CPU time its losing candidates' pilots took, over the rest
+//!    of its render's; each loser's pilot costed at that integrator's CPU time per sample here).
 //!    Use `--threads 1` and `--spp` on a shared machine: CPU time is then what each render
 //!    cost, whatever the load.
 //!
@@ -208,7 +209,8 @@ struct Render {
     spp: u64,
     cpu: f64,
     choice: Option<&'static str>,
-    pilot_share: f64,
+    /// `auto`'s losing candidates and their pilots' samples per pixel.
+    losers: Vec<(&'static str, u64)>,
 }
 
 /// One render of `seconds` (or of `spp` samples per pixel when given), written to `keep`
@@ -251,17 +253,21 @@ fn render_y(
         )
         .expect("write render");
     }
-    let losers = out
-        .auto
-        .as_ref()
-        .map_or(0, |a| a.pilot.len().saturating_sub(1));
+    let choice = out.auto.as_ref().map(|a| a.choice);
+    let losers = out.auto.as_ref().map_or_else(Vec::new, |a| {
+        a.pilot
+            .iter()
+            .filter(|p| Some(p.integrator) != choice)
+            .map(|p| (p.integrator.name(), p.samples))
+            .collect()
+    });
     Render {
         y: out.xyz.iter().map(|p| p[1] as f64).collect(),
         wall: out.wall_time_s,
         spp: out.spp,
         cpu,
-        choice: out.auto.as_ref().map(|a| a.choice.name()),
-        pilot_share: out.auto.as_ref().map_or(0.0, |a| a.pilot_share) * losers as f64,
+        choice: choice.map(|c| c.name()),
+        losers,
     }
 }
 
@@ -482,7 +488,7 @@ struct Runs<'a> {
     cpu: Vec<f64>,
     spp: Vec<u64>,
     choices: Vec<&'static str>,
-    pilot_share: Vec<f64>,
+    losers: Vec<Vec<(&'static str, u64)>>,
 }
 
 /// `--seeds N`: every integrator renders at seeds S … S + N − 1 (in turn per seed, so that a
@@ -505,7 +511,7 @@ fn many_seeds(
             cpu: Vec::new(),
             spp: Vec::new(),
             choices: Vec::new(),
-            pilot_share: Vec::new(),
+            losers: Vec::new(),
         })
         .collect();
     for seed in args.seed..args.seed + args.seeds {
@@ -519,12 +525,12 @@ fn many_seeds(
                 "seed {seed} {}{chose}: {:.2} CPU-s, image MSE {:.4e}",
                 run.name,
                 r.cpu,
-                run.mse[0][run.mse[0].len() - 1]
+                run.mse[0].last().copied().unwrap_or(f64::NAN)
             );
             run.cpu.push(r.cpu);
             run.spp.push(r.spp);
             run.choices.extend(r.choice);
-            run.pilot_share.push(r.pilot_share);
+            run.losers.push(r.losers);
         }
     }
     let budget = args
@@ -566,7 +572,7 @@ fn inverse_efficiency(r: &Runs, i: usize, idx: Option<&[usize]>) -> f64 {
 }
 
 /// The fixed integrator (not `auto`) of lowest mean MSE × mean CPU time in region `i`.
-fn best_fixed<'r, 'a>(runs: &'r [Runs<'a>], i: usize) -> Option<&'r Runs<'a>> {
+fn best_fixed<'a>(runs: &'a [Runs<'a>], i: usize) -> Option<&'a Runs<'a>> {
     runs.iter()
         .filter(|r| r.name != "auto")
         .min_by(|a, b| inverse_efficiency(a, i, None).total_cmp(&inverse_efficiency(b, i, None)))
@@ -622,7 +628,8 @@ fn seeds_table(runs: &[Runs], i: usize, ref_mean: f64) {
 }
 
 /// Issue 11's criterion: `auto`'s mean MSE × mean CPU time at most 1.1 × (1 + its losing
-/// pilots' share of the run) times the best fixed integrator's; with `auto`'s choices, and,
+/// pilots' CPU time over the rest of its render's, [`pilot_shares`]) times the best fixed
+/// integrator's; with `auto`'s choices, and,
 /// under `--spp`, whether its image was its choice's at every seed.
 fn auto_criterion(runs: &[Runs], i: usize, fixed_spp: bool) {
     let (Some(auto), Some(best)) = (runs.iter().find(|r| r.name == "auto"), best_fixed(runs, i))
@@ -649,12 +656,38 @@ fn auto_criterion(runs: &[Runs], i: usize, fixed_spp: bool) {
     println!("{line}");
     let ratio = inverse_efficiency(auto, i, None) / inverse_efficiency(best, i, None);
     let (lo, hi) = ratio_ci(auto, best, i);
-    let allowed = 1.1 * (1.0 + mean(&auto.pilot_share));
+    let share = mean(&pilot_shares(runs, auto));
+    let allowed = 1.1 * (1.0 + share);
     let verdict = if ratio <= allowed { "met" } else { "NOT met" };
     println!(
         "criterion: auto's MSE × CPU time {ratio:.3} × the best fixed ({}) [ci95 {lo:.3}, {hi:.3}] \
          <= 1.1 × (1 + {:.1} % pilot) = {allowed:.3}: {verdict} on the mean",
         best.name,
-        100.0 * mean(&auto.pilot_share)
+        100.0 * share
     );
+}
+
+/// Per seed, the CPU time `auto`'s losing pilots took as a share of its render's: each loser's
+/// pilot samples per pixel times its CPU seconds per sample per pixel in its own renders here
+/// (a loser not among the integrators counts at auto's own rate).
+fn pilot_shares(runs: &[Runs], auto: &Runs) -> Vec<f64> {
+    let rate = |r: &Runs| mean(&r.cpu) / mean(&r.spp.iter().map(|&n| n as f64).collect::<Vec<_>>());
+    let auto_rate = rate(auto);
+    auto.losers
+        .iter()
+        .zip(&auto.cpu)
+        .map(|(losers, cpu)| {
+            let spent: f64 = losers
+                .iter()
+                .map(|(name, samples)| {
+                    let r = runs
+                        .iter()
+                        .find(|r| r.name == *name)
+                        .map_or(auto_rate, rate);
+                    *samples as f64 * r
+                })
+                .sum();
+            spent / (cpu - spent).max(f64::MIN_POSITIVE)
+        })
+        .collect()
 }
