@@ -1,21 +1,22 @@
 //! Equal-time image error of several integrators against a long reference.
 //!
 //! ```text
-//! cargo run --release --example equal_time -- STAGE [--time S] [--reference-time S]
-//!     [--resolution WxH] [--max-depth N] [--reference REF.exr] [--threads N]
-//!     [--integrators path,bdpt,vcm,vcm:bins=B] [--reference-integrator bdpt|vcm|path]
-//!     [--region NAME=X0,Y0,X1,Y1]... [--exclude X0,Y0,X1,Y1]... [--seed N] [--keep DIR]
+//! cargo run --release --example equal_time -- STAGE [--time S | --spp N] [--seeds N]
+//!     [--reference-time S | --reference-spp N] [--resolution WxH] [--max-depth N|unlimited]
+//!     [--reference REF.exr] [--threads N] [--integrators path,bdpt,vcm,vcm:bins=B,auto]
+//!     [--reference-integrator bdpt|vcm|path] [--region NAME=X0,Y0,X1,Y1]...
+//!     [--exclude X0,Y0,X1,Y1]... [--seed N] [--keep DIR]
 //! ```
 //!
 //! 1. Reference: `--reference-integrator` (default BDPT; VCM where only merging samples the
 //!    light, a consistent rather than unbiased reference) for `--reference-time` seconds
-//!    (default 600) as two independent halves
+//!    (default 600; or `--reference-spp` samples per pixel) as two independent halves
 //!    A and B; the reference is (A + B)/2 and its own noise variance per pixel is estimated as
 //!    (A − B)²/4, which is subtracted from every MSE below. With `--reference PATH` the
 //!    reference is read from (or, if absent, written to) PATH; its noise estimate travels in
 //!    the `XYZ.X` channel of a second file `PATH.noise.exr`.
 //! 2. Each of `--integrators` (default path,bdpt) renders for `--time` seconds (default 30;
-//!    the render loop sizes its passes to end near the budget).
+//!    the render loop sizes its passes to end near the budget), or `--spp` samples per pixel.
 //! 3. For each: RMSE of luminance (XYZ.Y, cd/m²) against the reference, relative RMSE, the
 //!    time actually spent, and the ratio of its MSE and of its MSE × time (the inverse
 //!    efficiency, fair even if the times differ a little) to the first integrator's and to
@@ -30,6 +31,19 @@
 //!    that carry nearly all of every integrator's error with the same technique in all (a
 //!    light seen through specular surfaces, which only the camera path hitting it samples),
 //!    where the ratio is then only the ratio of the costs.
+//!
+//! 5. With `--seeds N` (N > 1) each integrator renders at seeds `--seed` … `--seed` + N − 1 (in
+//!    turn per seed) and, per region, the table gives the mean MSE over the seeds with its
+//!    standard error, the mean CPU time, and the inverse efficiency mean MSE × mean CPU time
+//!    (PBR 3ed §13.7's 1/(V·T) with the MSE for V) over the best fixed integrator's, with a
+//!    95 % interval from a paired bootstrap over the seeds. Where single renders' errors swing
+//!    with rare fireflies (`scenes/caustic.usda`: 2–5× from seed to seed), only such means
+//!    compare integrators. With `auto` among the integrators it prints auto's choices, whether
+//!    under `--spp` its image was its choice's at every seed, and issue 11's criterion: auto's
+//!    ratio at most 1.1 × (1 + the CPU time its losing candidates' pilots took, over the rest
+//!    of its render's; each loser's pilot costed at that integrator's CPU time per sample here).
+//!    Use `--threads 1` and `--spp` on a shared machine: CPU time is then what each render
+//!    cost, whatever the load.
 //!
 //! `--keep DIR` also writes each timed render to DIR/NAME.exr (colour included; two runs with
 //! different `--seed`s give each integrator's colour noise without a reference).
@@ -48,7 +62,10 @@ struct Args {
     time: f64,
     reference_time: f64,
     resolution: Option<(u32, u32)>,
-    max_depth: u32,
+    max_depth: Option<u32>,
+    spp: Option<u32>,
+    reference_spp: Option<u32>,
+    seeds: u64,
     reference: Option<PathBuf>,
     threads: Option<usize>,
     integrators: Vec<(String, Integrator)>,
@@ -70,6 +87,15 @@ fn integrator(name: &str) -> Result<Integrator, String> {
     Integrator::from_name(name).ok_or(format!("unknown integrator {name}"))
 }
 
+/// `--max-depth N`, or `unlimited` (Russian roulette behind the safety cap, the default of
+/// `render`).
+fn depth(v: &str) -> Result<Option<u32>, String> {
+    match v {
+        "unlimited" => Ok(None),
+        _ => v.parse().map(Some).map_err(|e| format!("--max-depth: {e}")),
+    }
+}
+
 /// X0,Y0,X1,Y1 as a pixel rectangle.
 fn rect(v: &str) -> Result<[usize; 4], String> {
     let n: Vec<usize> = v
@@ -85,7 +111,10 @@ fn parse() -> Result<Args, String> {
         time: 30.0,
         reference_time: 600.0,
         resolution: None,
-        max_depth: 7,
+        max_depth: Some(7),
+        spp: None,
+        reference_spp: None,
+        seeds: 1,
         reference: None,
         threads: None,
         integrators: vec![
@@ -114,7 +143,12 @@ fn parse() -> Result<Args, String> {
             "--reference-time" => {
                 a.reference_time = value()?.parse().map_err(|e| format!("{e}"))?
             }
-            "--max-depth" => a.max_depth = value()?.parse().map_err(|e| format!("{e}"))?,
+            "--max-depth" => a.max_depth = depth(&value()?)?,
+            "--spp" => a.spp = Some(value()?.parse().map_err(|e| format!("--spp: {e}"))?),
+            "--reference-spp" => {
+                a.reference_spp = Some(value()?.parse().map_err(|e| format!("{e}"))?)
+            }
+            "--seeds" => a.seeds = value()?.parse().map_err(|e| format!("--seeds: {e}"))?,
             "--threads" => a.threads = Some(value()?.parse().map_err(|e| format!("{e}"))?),
             "--reference" => a.reference = Some(value()?.into()),
             "--integrators" => {
@@ -167,26 +201,40 @@ fn cpu_seconds() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
-/// One render: luminance per pixel, wall time, samples per pixel and CPU seconds; written to
-/// `keep` when given.
+/// What one render gave: luminance per pixel, wall time, samples per pixel, CPU seconds and,
+/// for `auto`, its choice and the share of the run its losing candidates' pilots took.
+struct Render {
+    y: Vec<f64>,
+    wall: f64,
+    spp: u64,
+    cpu: f64,
+    choice: Option<&'static str>,
+    /// `auto`'s losing candidates and their pilots' samples per pixel.
+    losers: Vec<(&'static str, u64)>,
+}
+
+/// One render of `seconds` (or of `spp` samples per pixel when given), written to `keep`
+/// when given.
 fn render_y(
     scene: &spectral_render::scene::Scene,
     args: &Args,
     integrator: Integrator,
-    seconds: f64,
+    (seconds, spp): (f64, Option<u32>),
     seed: u64,
     keep: Option<PathBuf>,
-) -> (Vec<f64>, f64, u64, f64) {
+) -> Render {
     let cpu0 = cpu_seconds();
     let opts = RenderOptions {
-        time_budget: Some(seconds),
+        time_budget: if spp.is_some() { None } else { Some(seconds) },
+        spp,
         seed,
         threads: args.threads,
-        max_depth: Some(args.max_depth),
+        max_depth: args.max_depth,
         integrator,
         ..Default::default()
     };
     let out = session::render(scene, &opts).expect("render");
+    let cpu = cpu_seconds() - cpu0;
     assert_eq!(out.dropped_samples, 0, "non-finite samples");
     if let Some(path) = keep {
         let meta = exr::ExrMetadata {
@@ -196,7 +244,7 @@ fn render_y(
             wall_time_s: out.wall_time_s,
             version: env!("CARGO_PKG_VERSION").into(),
             scene: args.stage.display().to_string(),
-            max_depth: Some(args.max_depth),
+            max_depth: args.max_depth,
             ..Default::default()
         };
         let white = spectral_render::spectral::color::white_xy().map(|c| c as f32);
@@ -205,8 +253,22 @@ fn render_y(
         )
         .expect("write render");
     }
-    let y = out.xyz.iter().map(|p| p[1] as f64).collect();
-    (y, out.wall_time_s, out.spp, cpu_seconds() - cpu0)
+    let choice = out.auto.as_ref().map(|a| a.choice);
+    let losers = out.auto.as_ref().map_or_else(Vec::new, |a| {
+        a.pilot
+            .iter()
+            .filter(|p| Some(p.integrator) != choice)
+            .map(|p| (p.integrator.name(), p.samples))
+            .collect()
+    });
+    Render {
+        y: out.xyz.iter().map(|p| p[1] as f64).collect(),
+        wall: out.wall_time_s,
+        spp: out.spp,
+        cpu,
+        choice: choice.map(|c| c.name()),
+        losers,
+    }
 }
 
 /// The reference luminance and the per-pixel variance of its noise.
@@ -222,10 +284,15 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
             return (read(path, "XYZ.Y"), read(&noise, "XYZ.X"));
         }
     }
-    let half = 0.5 * args.reference_time;
+    let half = (
+        0.5 * args.reference_time,
+        args.reference_spp.map(|n| n.div_ceil(2)),
+    );
     let kind = args.reference_integrator;
-    let (a, ta, sa, _) = render_y(scene, args, kind, half, 1001, None);
-    let (b, tb, sb, _) = render_y(scene, args, kind, half, 1002, None);
+    let a = render_y(scene, args, kind, half, 1001, None);
+    let b = render_y(scene, args, kind, half, 1002, None);
+    let (sa, sb, ta, tb) = (a.spp, b.spp, a.wall, b.wall);
+    let (a, b) = (a.y, b.y);
     eprintln!(
         "reference: {} {} + {} spp in {:.0} + {:.0} s",
         kind.name(),
@@ -272,6 +339,24 @@ fn main() {
     };
     let scene = spectral_render::scene::load(&args.stage, args.resolution).expect("stage");
     let (reference, noise) = reference(&scene, &args);
+    let regions = regions(&scene, &args);
+    let depth = args.max_depth.map_or("unlimited".into(), |d| d.to_string());
+    println!(
+        "{} ({}x{}), max depth {depth}",
+        args.stage.display(),
+        scene.camera.width,
+        scene.camera.height
+    );
+    if args.seeds > 1 {
+        many_seeds(&scene, &args, &regions, (&reference, &noise));
+    } else {
+        single_run(&scene, &args, &regions, (&reference, &noise));
+    }
+}
+
+/// The pixel masks the figures are given over: the image, the image without `--exclude`,
+/// each `--region`.
+fn regions(scene: &spectral_render::scene::Scene, args: &Args) -> Vec<(String, Vec<bool>)> {
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     let inside = |r: &[usize; 4], k: usize| {
         let (x, y) = (k % w, k / w);
@@ -289,86 +374,320 @@ fn main() {
         let mask = (0..w * h).map(|k| inside(r, k)).collect();
         regions.push((format!("region {name} {r:?}"), mask));
     }
-    println!(
-        "{} ({w}x{h}), max depth {}",
-        args.stage.display(),
-        args.max_depth
-    );
-    let renders: Vec<(&str, Vec<f64>, f64, u64, f64)> = args
+    regions
+}
+
+/// The mean of `v` over the pixels of `mask`.
+fn mean_over(v: &[f64], mask: &[bool]) -> f64 {
+    let n = mask.iter().filter(|m| **m).count().max(1) as f64;
+    v.iter()
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .map(|(x, _)| x)
+        .sum::<f64>()
+        / n
+}
+
+/// The MSE of luminance `y` over `mask` against the reference, less the reference's own
+/// noise variance.
+fn region_mse(y: &[f64], (reference, noise): (&[f64], &[f64]), mask: &[bool]) -> f64 {
+    let sq: Vec<f64> = y
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| (a - b).powi(2))
+        .collect();
+    mean_over(&sq, mask) - mean_over(noise, mask)
+}
+
+/// One render per integrator at `--seed`: the table, the ratios to the best and to the first.
+fn single_run(
+    scene: &spectral_render::scene::Scene,
+    args: &Args,
+    regions: &[(String, Vec<bool>)],
+    reference: (&[f64], &[f64]),
+) {
+    let renders: Vec<(&str, Render)> = args
         .integrators
         .iter()
         .map(|(name, kind)| {
             let keep = args.keep.as_ref().map(|d| d.join(format!("{name}.exr")));
-            let (y, t, spp, cpu) = render_y(&scene, &args, *kind, args.time, args.seed, keep);
-            (name.as_str(), y, t, spp, cpu)
+            let budget = (args.time, args.spp);
+            let r = render_y(scene, args, *kind, budget, args.seed, keep);
+            (name.as_str(), r)
         })
         .collect();
-    for (label, mask) in &regions {
-        let n = mask.iter().filter(|m| **m).count() as f64;
-        if n == 0.0 {
+    for (label, mask) in regions {
+        if !mask.iter().any(|m| *m) {
             continue;
         }
-        let over = |v: &[f64]| {
-            v.iter()
-                .zip(mask)
-                .filter(|(_, m)| **m)
-                .map(|(x, _)| x)
-                .sum::<f64>()
-                / n
-        };
-        let ref_mean = over(&reference);
-        let noise_floor = over(&noise);
+        let ref_mean = mean_over(reference.0, mask);
         println!(
             "{label}: reference mean Y {ref_mean:.5} cd/m², reference noise RMSE {:.3e}",
-            noise_floor.sqrt()
+            mean_over(reference.1, mask).sqrt()
         );
         println!(
             "{:>10} {:>8} {:>8} {:>7} {:>12} {:>9}",
             "", "time s", "cpu s", "spp", "RMSE cd/m²", "relRMSE"
         );
         let mut rows = Vec::new();
-        for (name, y, t, spp, cpu) in &renders {
-            let sq: Vec<f64> = y
-                .iter()
-                .zip(&reference)
-                .map(|(a, b)| (a - b).powi(2))
-                .collect();
-            let mse = over(&sq) - noise_floor;
+        for (name, r) in &renders {
+            let mse = region_mse(&r.y, reference, mask);
             let rmse = mse.max(0.0).sqrt();
             println!(
-                "{name:>10} {t:8.1} {cpu:8.1} {spp:7} {rmse:12.4e} {:9.4}",
+                "{name:>10} {:8.1} {:8.1} {:7} {rmse:12.4e} {:9.4}",
+                r.wall,
+                r.cpu,
+                r.spp,
                 rmse / ref_mean
             );
-            rows.push((*name, mse, *t, *cpu));
+            rows.push((*name, mse, r.wall, r.cpu));
         }
-        let over_best = |cost: &dyn Fn(f64, f64, f64) -> f64| {
-            let best = rows
-                .iter()
-                .map(|&(_, m, t, c)| cost(m, t, c))
-                .fold(f64::INFINITY, f64::min);
-            let each: Vec<String> = rows
-                .iter()
-                .map(|&(n, m, t, c)| format!("{n} {:.2}", cost(m, t, c) / best))
-                .collect();
-            each.join(", ")
-        };
+        ratios(&rows);
+    }
+}
+
+/// The single run's ratios: MSE × time and MSE × CPU time over the best's, and each
+/// integrator against the first.
+fn ratios(rows: &[(&str, f64, f64, f64)]) {
+    let over_best = |cost: &dyn Fn(f64, f64, f64) -> f64| {
+        let best = rows
+            .iter()
+            .map(|&(_, m, t, c)| cost(m, t, c))
+            .fold(f64::INFINITY, f64::min);
+        let each: Vec<String> = rows
+            .iter()
+            .map(|&(n, m, t, c)| format!("{n} {:.2}", cost(m, t, c) / best))
+            .collect();
+        each.join(", ")
+    };
+    println!(
+        "MSE × time over the best's: {}",
+        over_best(&|m, t, _| m * t)
+    );
+    println!(
+        "MSE × CPU time over the best's: {}",
+        over_best(&|m, _, c| m * c)
+    );
+    let (first, mse0, t0, cpu0) = rows[0];
+    for &(name, mse, t, cpu) in &rows[1..] {
         println!(
-            "MSE × time over the best's: {}",
-            over_best(&|m, t, _| m * t)
+            "equal time: MSE({first})/MSE({name}) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}; CPU-normalised (MSE × CPU time) = {:.2}",
+            mse0 / mse,
+            (mse0 / mse).sqrt(),
+            (mse0 * t0) / (mse * t),
+            (mse0 * cpu0) / (mse * cpu)
         );
-        println!(
-            "MSE × CPU time over the best's: {}",
-            over_best(&|m, _, c| m * c)
-        );
-        let (first, mse0, t0, cpu0) = rows[0];
-        for &(name, mse, t, cpu) in &rows[1..] {
-            println!(
-                "equal time: MSE({first})/MSE({name}) = {:.2} (RMSE ratio {:.2}); time-normalised (MSE × time) = {:.2}; CPU-normalised (MSE × CPU time) = {:.2}",
-                mse0 / mse,
-                (mse0 / mse).sqrt(),
-                (mse0 * t0) / (mse * t),
-                (mse0 * cpu0) / (mse * cpu)
+    }
+}
+
+/// One integrator's renders over the seeds.
+struct Runs<'a> {
+    name: &'a str,
+    /// MSE per region, per seed (reference noise subtracted).
+    mse: Vec<Vec<f64>>,
+    cpu: Vec<f64>,
+    spp: Vec<u64>,
+    choices: Vec<&'static str>,
+    losers: Vec<Vec<(&'static str, u64)>>,
+}
+
+/// `--seeds N`: every integrator renders at seeds S … S + N − 1 (in turn per seed, so that a
+/// change of the machine's load falls on all alike); per region, the mean MSE over the seeds
+/// with its standard error, the mean CPU time, and the inverse efficiency mean MSE × mean CPU
+/// time over the best fixed integrator's with a 95 % interval from the seeds; for `auto`, its
+/// choices and the criterion of issue 11.
+fn many_seeds(
+    scene: &spectral_render::scene::Scene,
+    args: &Args,
+    regions: &[(String, Vec<bool>)],
+    reference: (&[f64], &[f64]),
+) {
+    let mut runs: Vec<Runs> = args
+        .integrators
+        .iter()
+        .map(|(name, _)| Runs {
+            name,
+            mse: vec![Vec::new(); regions.len()],
+            cpu: Vec::new(),
+            spp: Vec::new(),
+            choices: Vec::new(),
+            losers: Vec::new(),
+        })
+        .collect();
+    for seed in args.seed..args.seed + args.seeds {
+        for ((_, kind), run) in args.integrators.iter().zip(&mut runs) {
+            let r = render_y(scene, args, *kind, (args.time, args.spp), seed, None);
+            let chose = r.choice.map_or(String::new(), |c| format!(" → {c}"));
+            for (i, (_, mask)) in regions.iter().enumerate() {
+                run.mse[i].push(region_mse(&r.y, reference, mask));
+            }
+            eprintln!(
+                "seed {seed} {}{chose}: {:.2} CPU-s, image MSE {:.4e}",
+                run.name,
+                r.cpu,
+                run.mse[0].last().copied().unwrap_or(f64::NAN)
             );
+            run.cpu.push(r.cpu);
+            run.spp.push(r.spp);
+            run.choices.extend(r.choice);
+            run.losers.push(r.losers);
         }
     }
+    let budget = args
+        .spp
+        .map_or(format!("{} s each", args.time), |n| format!("{n} spp"));
+    for (i, (label, mask)) in regions.iter().enumerate() {
+        let ref_mean = mean_over(reference.0, mask);
+        println!(
+            "{label}: {} seeds from {}, {budget}; reference mean Y {ref_mean:.5} cd/m², noise RMSE {:.3e}",
+            args.seeds,
+            args.seed,
+            mean_over(reference.1, mask).sqrt()
+        );
+        seeds_table(&runs, i, ref_mean);
+        auto_criterion(&runs, i, args.spp.is_some());
+    }
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+/// Standard error of the mean of `v`.
+fn std_error(v: &[f64]) -> f64 {
+    let m = mean(v);
+    let n = v.len() as f64;
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0) / n).sqrt()
+}
+
+/// Mean MSE × mean CPU time of `r` in region `i` over the seeds `idx` (all when None).
+fn inverse_efficiency(r: &Runs, i: usize, idx: Option<&[usize]>) -> f64 {
+    match idx {
+        None => mean(&r.mse[i]) * mean(&r.cpu),
+        Some(idx) => {
+            let pick = |v: &[f64]| mean(&idx.iter().map(|&k| v[k]).collect::<Vec<_>>());
+            pick(&r.mse[i]) * pick(&r.cpu)
+        }
+    }
+}
+
+/// The fixed integrator (not `auto`) of lowest mean MSE × mean CPU time in region `i`.
+fn best_fixed<'a>(runs: &'a [Runs<'a>], i: usize) -> Option<&'a Runs<'a>> {
+    runs.iter()
+        .filter(|r| r.name != "auto")
+        .min_by(|a, b| inverse_efficiency(a, i, None).total_cmp(&inverse_efficiency(b, i, None)))
+}
+
+/// The 95 % interval of `a`'s inverse efficiency over `b`'s from the seeds: a percentile
+/// bootstrap (Efron and Tibshirani 1993, §13.3) of 4000 resamplings of the seeds, paired (a
+/// resampled seed takes both integrators' renders of it), from a fixed generator seed.
+fn ratio_ci(a: &Runs, b: &Runs, i: usize) -> (f64, f64) {
+    let n = a.cpu.len();
+    let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+    let mut next = || {
+        // xorshift64* (Vigna 2016)
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as usize % n
+    };
+    let mut ratios: Vec<f64> = (0..4000)
+        .map(|_| {
+            let idx: Vec<usize> = (0..n).map(|_| next()).collect();
+            inverse_efficiency(a, i, Some(&idx)) / inverse_efficiency(b, i, Some(&idx))
+        })
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    (ratios[100], ratios[3899])
+}
+
+/// Per integrator: mean CPU time, samples per pixel, mean MSE ± its standard error, relative
+/// RMSE, and mean MSE × mean CPU time over the best fixed integrator's with its interval.
+fn seeds_table(runs: &[Runs], i: usize, ref_mean: f64) {
+    let Some(best) = best_fixed(runs, i) else {
+        return;
+    };
+    println!(
+        "{:>10} {:>8} {:>7} {:>22} {:>8} {:>9} {:>16}",
+        "", "cpu s", "spp", "MSE (mean ± se)", "relRMSE", "MSE×cpu", "ci95"
+    );
+    for r in runs {
+        let m = mean(&r.mse[i]);
+        let ratio = inverse_efficiency(r, i, None) / inverse_efficiency(best, i, None);
+        let (lo, hi) = ratio_ci(r, best, i);
+        let spp = r.spp.iter().sum::<u64>() / r.spp.len().max(1) as u64;
+        println!(
+            "{:>10} {:8.2} {spp:7} {:>22} {:8.4} {ratio:9.3} {:>16}",
+            r.name,
+            mean(&r.cpu),
+            format!("{m:.4e} ± {:.1e}", std_error(&r.mse[i])),
+            m.max(0.0).sqrt() / ref_mean,
+            format!("[{lo:.3}, {hi:.3}]"),
+        );
+    }
+}
+
+/// Issue 11's criterion: `auto`'s mean MSE × mean CPU time at most 1.1 × (1 + its losing
+/// pilots' CPU time over the rest of its render's, [`pilot_shares`]) times the best fixed
+/// integrator's; with `auto`'s choices, and,
+/// under `--spp`, whether its image was its choice's at every seed.
+fn auto_criterion(runs: &[Runs], i: usize, fixed_spp: bool) {
+    let (Some(auto), Some(best)) = (runs.iter().find(|r| r.name == "auto"), best_fixed(runs, i))
+    else {
+        return;
+    };
+    let mut tally: Vec<(&str, usize)> = Vec::new();
+    for c in &auto.choices {
+        match tally.iter_mut().find(|(n, _)| n == c) {
+            Some(t) => t.1 += 1,
+            None => tally.push((c, 1)),
+        }
+    }
+    let tally: Vec<String> = tally.iter().map(|(n, k)| format!("{n} {k}")).collect();
+    let mut line = format!("auto chose: {}", tally.join(", "));
+    if fixed_spp {
+        let same = auto.choices.iter().enumerate().all(|(s, c)| {
+            runs.iter()
+                .find(|r| r.name == *c)
+                .is_none_or(|r| r.mse[i][s] == auto.mse[i][s])
+        });
+        line += &format!("; its image = its choice's at every seed: {same}");
+    }
+    println!("{line}");
+    let ratio = inverse_efficiency(auto, i, None) / inverse_efficiency(best, i, None);
+    let (lo, hi) = ratio_ci(auto, best, i);
+    let share = mean(&pilot_shares(runs, auto));
+    let allowed = 1.1 * (1.0 + share);
+    let verdict = if ratio <= allowed { "met" } else { "NOT met" };
+    println!(
+        "criterion: auto's MSE × CPU time {ratio:.3} × the best fixed ({}) [ci95 {lo:.3}, {hi:.3}] \
+         <= 1.1 × (1 + {:.1} % pilot) = {allowed:.3}: {verdict} on the mean",
+        best.name,
+        100.0 * share
+    );
+}
+
+/// Per seed, the CPU time `auto`'s losing pilots took as a share of its render's: each loser's
+/// pilot samples per pixel times its CPU seconds per sample per pixel in its own renders here
+/// (a loser not among the integrators counts at auto's own rate).
+fn pilot_shares(runs: &[Runs], auto: &Runs) -> Vec<f64> {
+    let rate = |r: &Runs| mean(&r.cpu) / mean(&r.spp.iter().map(|&n| n as f64).collect::<Vec<_>>());
+    let auto_rate = rate(auto);
+    auto.losers
+        .iter()
+        .zip(&auto.cpu)
+        .map(|(losers, cpu)| {
+            let spent: f64 = losers
+                .iter()
+                .map(|(name, samples)| {
+                    let r = runs
+                        .iter()
+                        .find(|r| r.name == *name)
+                        .map_or(auto_rate, rate);
+                    *samples as f64 * r
+                })
+                .sum();
+            spent / (cpu - spent).max(f64::MIN_POSITIVE)
+        })
+        .collect()
 }

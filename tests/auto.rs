@@ -2,8 +2,8 @@
 //! features `info --json` gives on the project's stages; that `auto` is deterministic for a
 //! seed and that its result under `--spp` is bit for bit the chosen integrator's (the winner's
 //! pilot samples are its first samples, the losers' are discarded), for images and meters.
-//! The "Pilot" benchmark (auto against the best fixed integrator at equal time) is
-//! `tools/equal_time.sh … --integrators path,bdpt,vcm,auto`, not a test.
+//! The "Pilot" benchmark (auto against the best fixed integrator, mean error over many seeds
+//! at equal samples, CPU time per render) is `tools/bench_auto.sh`, not a test.
 
 mod common;
 use common::*;
@@ -120,10 +120,17 @@ fn the_prism_disperses_and_casts_a_caustic() {
 }
 
 #[test]
-fn a_glass_ball_on_a_floor_is_left_to_light_subpaths() {
+fn a_glass_ball_on_a_floor_goes_to_a_pilot_of_all_three() {
+    // The lamp is point-like (0.018 % of the hemisphere) but has a size, and the ball focuses
+    // it: path tracing reaches the caustic and, over 16 seeds at 64 spp and 160 × 120, is the
+    // most efficient (docs/design.md, "The pilot against the best fixed integrator"); bdpt
+    // and vcm are 1.2–1.3× behind it. The pilot takes all three (at this seed and the
+    // stage's own resolution path's pilot draws a caustic firefly and vcm wins).
     let doc = info(&stage("caustic.usda"));
     assert!(on(&doc, "caustics") && on(&doc, "delta_lights"), "{doc}");
-    assert!(["bdpt", "vcm"].contains(&choice(&doc)), "{doc}");
+    assert_eq!(piloted(&doc), 3, "{doc}");
+    let small = ["--resolution", "160x120", "--seed", "1"];
+    assert_eq!(choice(&info_with(&stage("caustic.usda"), &small)), "path");
 }
 
 #[test]

@@ -1,39 +1,47 @@
 #!/usr/bin/env bash
-# The "Pilot" benchmark of issue 11: `--integrator auto` against every fixed integrator at
-# equal time, on the stages the issue names, and the figures behind auto's cost model.
+# The "Pilot" benchmark of issue 11: `--integrator auto` against every fixed integrator, on the
+# stages the issue names, and the figures behind auto's cost model.
 #
-#   1. Equal-time luminance error (examples/equal_time.rs, which runs `auto` through the
-#      library: its pilot counts towards its time) of path, bdpt, vcm and auto on
-#      scenes/cornell-box.usda, tests/data/usd/cbox.usda and scenes/gap.usda (against a long
-#      BDPT render) and on scenes/prism.usda, scenes/caustic.usda and
-#      scenes/caustic-mirror.usda (against a long VCM render: only it converges on SDS paths).
-#      Auto passes when its MSE × time is at most (1 + its pilot's share) × 1.1 of the best.
+#   1. Mean luminance error over many seeds (examples/equal_time.rs --seeds, which runs `auto`
+#      through the library: its pilot counts in its CPU time) of path, bdpt, vcm and auto at a
+#      fixed sample count, one thread, renders in sequence, at the render command's defaults
+#      (unlimited depth), against a long reference of the same stage (bdpt; path on the
+#      prism, where bdpt's dispersed light subpaths converge slowest): per integrator the mean
+#      MSE with its standard error, the mean CPU time, and mean MSE × mean CPU time over the
+#      best fixed integrator's with a 95 % interval from the seeds (paired bootstrap). Single
+#      renders cannot decide: on scenes/caustic.usda their error swings 2–5× from seed to seed.
+#      Auto passes when its ratio is at most 1.1 × (1 + its losing pilots' share of the run).
 #   2. Per stage, ns per ray query of each integrator and its ratio to path's
 #      (examples/auto_pilot.rs), which `session::auto::cost_per_ray` rounds.
 #
-# Usage: tools/bench_auto.sh [SECONDS [REFERENCE_SECONDS [RESOLUTION]]]   (default 30, 600, 160x120)
-# Prints tables; writes nothing in the repository.
+# Usage: tools/bench_auto.sh [SEEDS [SPP [REFERENCE_SPP [RESOLUTION [STAGE…]]]]]
+#   (defaults 16, 64, 4096, 160x120, the six stages below)
+# Prints tables; writes references to a temporary directory, nothing in the repository.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-T="${1:-30}"
-TREF="${2:-600}"
-RES="${3:-160x120}"
+SEEDS="${1:-16}"
+SPP="${2:-64}"
+REF_SPP="${3:-4096}"
+RES="${4:-160x120}"
+shift $(($# < 4 ? $# : 4))
+STAGES=("$@")
+[ ${#STAGES[@]} -gt 0 ] || STAGES=(scenes/cornell-box.usda tests/data/usd/cbox.usda scenes/gap.usda
+  scenes/prism.usda scenes/caustic.usda scenes/caustic-mirror.usda)
 cargo build --release --quiet --manifest-path "$ROOT/Cargo.toml" --example equal_time --example auto_pilot
 EQ="$ROOT/target/release/examples/equal_time"
 PILOT="$ROOT/target/release/examples/auto_pilot"
+TMP="$(mktemp -d)"
+trap 'rm -rf "$TMP"' EXIT
 
-for s in scenes/cornell-box.usda tests/data/usd/cbox.usda scenes/gap.usda; do
-  echo "== $s ($RES)"
-  "$EQ" "$ROOT/$s" --resolution "$RES" --time "$T" --reference-time "$TREF" \
-    --reference-integrator bdpt --integrators path,bdpt,vcm,auto
-done
-for s in prism caustic caustic-mirror; do
-  echo "== scenes/$s.usda ($RES)"
-  "$EQ" "$ROOT/scenes/$s.usda" --resolution "$RES" --time "$T" --reference-time "$TREF" \
-    --reference-integrator vcm --integrators path,bdpt,vcm,auto
+for s in "${STAGES[@]}"; do
+  ref=bdpt
+  [[ "$s" == *prism* ]] && ref=path
+  echo "== $s ($RES, $SPP spp, seeds 1–$SEEDS, reference $ref $REF_SPP spp)"
+  "$EQ" "$ROOT/$s" --resolution "$RES" --max-depth unlimited --threads 1 --spp "$SPP" \
+    --seeds "$SEEDS" --seed 1 --reference "$TMP/$(basename "$s" .usda).exr" \
+    --reference-spp "$REF_SPP" --reference-integrator "$ref" --integrators path,bdpt,vcm,auto
 done
 echo "== cost per ray query (8 spp at $RES)"
-for s in scenes/cornell-box.usda tests/data/usd/cbox.usda scenes/gap.usda scenes/prism.usda \
-  scenes/caustic.usda scenes/caustic-mirror.usda scenes/materials.usda scenes/room.usda; do
+for s in "${STAGES[@]}" scenes/materials.usda scenes/room.usda; do
   "$PILOT" "$ROOT/$s" --spp 8 --resolution "$RES"
 done

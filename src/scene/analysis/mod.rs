@@ -337,20 +337,36 @@ fn probe_specular(scene: &Scene) -> (f32, Vec<String>) {
                 (i as f32 + 0.5) / PROBE_GRID as f32 * cam.width as f32,
                 (j as f32 + 0.5) / PROBE_GRID as f32 * cam.height as f32,
             ];
-            let (ray, t_max) = cam.generate_ray(film, [0.5, 0.5]);
-            let Some(Hit::Surface(h)) = scene.intersect(&ray, t_max) else {
-                continue;
-            };
-            let mesh = &scene.meshes[h.tri.mesh as usize];
-            if lobes::lobes(&scene.materials[h.material as usize]).specular_like() {
+            if let Some(prim) = specular_at(scene, film) {
                 hits += 1;
-                if !seen.contains(&mesh.prim_path) {
-                    seen.push(mesh.prim_path.clone());
+                if !seen.iter().any(|p| p == prim) {
+                    seen.push(prim.to_string());
                 }
             }
         }
     }
     (hits as f32 / (PROBE_GRID * PROBE_GRID) as f32, seen)
+}
+
+/// The prim of the specular or near-specular surface the camera ray through film point `film`
+/// hits first, if it hits one.
+fn specular_at(scene: &Scene, film: [f32; 2]) -> Option<&str> {
+    let (ray, t_max) = scene.camera.generate_ray(film, [0.5, 0.5]);
+    let Some(Hit::Surface(h)) = scene.intersect(&ray, t_max) else {
+        return None;
+    };
+    let specular = lobes::lobes(&scene.materials[h.material as usize]).specular_like();
+    specular.then(|| scene.meshes[h.tri.mesh as usize].prim_path.as_str())
+}
+
+/// Per pixel (rows of the camera's width), whether the camera ray through its centre sees a
+/// specular or near-specular surface first: where paths of the kind E S+ … begin.
+pub fn specular_pixels(scene: &Scene) -> Vec<bool> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| [x as f32 + 0.5, y as f32 + 0.5]))
+        .map(|film| specular_at(scene, film).is_some())
+        .collect()
 }
 
 fn light_features(f: &mut SceneFeatures, lights: &[LightInfo]) {
