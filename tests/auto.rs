@@ -134,6 +134,24 @@ fn a_glass_ball_on_a_floor_goes_to_a_pilot_of_all_three() {
 }
 
 #[test]
+fn a_glass_ball_under_a_point_lamp_is_bidirectional() {
+    // The same ball under a true point lamp (`treatAsPoint`): no BSDF-sampled ray ever hits
+    // it, so path tracing never finds the caustic, and only bdpt and vcm go to the pilot.
+    let text = std::fs::read_to_string(stage("caustic.usda")).unwrap();
+    let point = text.replace(
+        "float inputs:radius = 0.03",
+        "float inputs:radius = 0.03\n        bool treatAsPoint = 1",
+    );
+    assert_ne!(point, text);
+    let path = temp_dir("auto-point-caustic").join("point-caustic.usda");
+    std::fs::write(&path, point).unwrap();
+    let doc = info_with(&path, &["--resolution", "160x120"]);
+    assert!(on(&doc, "caustics") && on(&doc, "delta_lights"), "{doc}");
+    assert_eq!(piloted(&doc), 2, "{doc}");
+    assert!(["bdpt", "vcm"].contains(&choice(&doc)), "{doc}");
+}
+
+#[test]
 fn a_caustic_seen_in_a_mirror_is_merged() {
     let doc = info(&stage("caustic-mirror.usda"));
     assert!(on(&doc, "sds"), "{doc}");
