@@ -62,9 +62,7 @@
 //! # std::fs::remove_file(&path).ok();
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-// `unsafe` only where `accel/avx.rs` and `accel/bvh.rs` allow it: the AVX node test, entered
-// after run-time detection.
-#![deny(unsafe_code)]
+#![forbid(unsafe_code)]
 
 pub mod cli;
 pub mod converge;

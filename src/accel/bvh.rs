@@ -6,11 +6,8 @@
 //! node with the exact f32 boxes of its children, and traverse with our own loop.
 //! This is the only module that names obvhs.
 //!
-//! **Traversal.** A node holds its eight child boxes in SIMD lanes (256 bytes, four 64-byte
-//! cache lines), so a node test is two 4-wide slab tests (Kay, Kajiya 1986; PBR 4ed §6.1.2), or
-//! one 8-wide AVX test (`accel/avx.rs`) when the CPU has AVX (detected at build with
-//! `is_x86_feature_detected!`; the whole traversal is then compiled for AVX). Both give the same
-//! bits, so the hits do not depend on the CPU. The children met are
+//! **Traversal.** A node holds its eight child boxes in SIMD lanes (two halves of four), so a
+//! node test is two 4-wide slab tests (Kay, Kajiya 1986; PBR 4ed §6.1.2). The children met are
 //! sorted by entry distance: leaves are tested at once, near to far, and inner children are
 //! pushed with their entry distance, far to near, so the nearest is popped first; a leaf or a
 //! popped subtree that starts beyond the closest hit found so far is skipped. (The ray-octant
@@ -80,25 +77,19 @@ pub struct Bvh {
     stack_size: StackSize,
     input_count: usize,
     bounds: (Vec3, Vec3),
-    /// The CPU runs AVX: nodes are tested by `accel/avx.rs`, in one 8-wide pass.
-    avx: bool,
 }
 
-/// A node with up to eight children: 256 bytes, aligned to a 64-byte cache line, so a node is
-/// exactly four lines (as Embree's 8-wide node of f32 boxes and 64-bit child references).
-/// Slot `s` is lane `s % 4` of half `s / 4`; a plane row is the eight lanes in slot order, so the
-/// AVX test loads it whole.
+/// A node with up to eight children. Slot `s` is lane `s % 4` of half `s / 4`.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-pub(super) struct WideNode {
-    /// `planes[2k][h]` / `planes[2k + 1][h]`: min / max along axis k of the children of half h.
-    pub(super) planes: [[Vec4; 2]; 6],
+struct WideNode {
+    /// `planes[h][2k]` / `planes[h][2k + 1]`: min / max along axis k of the children of half h.
+    planes: [[Vec4; 6]; 2],
     /// Inner child: its node index; leaf child: its first triangle (BVH order).
     child: [u32; 8],
     /// Triangles of each leaf child (0 for inner children and empty slots).
     count: [u8; 8],
     /// Bit `s`: slot s holds a child.
-    pub(super) present: u8,
+    present: u8,
     /// Bit `s`: slot s holds a leaf.
     leaves: u8,
 }
@@ -208,7 +199,6 @@ impl Bvh {
                 .collect(),
             input_index,
             input_count: triangles.len(),
-            avx: has_avx(),
         }
     }
 
@@ -220,7 +210,6 @@ impl Bvh {
             stack_size: StackSize::Small,
             input_count,
             bounds: (Vec3::ZERO, Vec3::ZERO),
-            avx: has_avx(),
         }
     }
 
@@ -230,17 +219,12 @@ impl Bvh {
             return None;
         }
         let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
-        #[cfg(target_arch = "x86_64")]
-        if self.avx {
-            // SAFETY: `avx` is only set when the CPU runs AVX (`has_avx`).
-            #[allow(unsafe_code)]
-            let (i, hit) = unsafe { self.closest_avx(query, t_max) }?;
-            return Some(BvhHit {
-                prim: self.input_index[i],
-                hit,
-            });
-        }
-        let (i, hit) = self.closest_any_stack::<Sse>(query, t_max)?;
+        let (i, hit) = match self.stack_size {
+            StackSize::Small => self.closest(StackStack::<Entry, 16>::default(), query, t_max),
+            StackSize::Medium => self.closest(StackStack::<Entry, 64>::default(), query, t_max),
+            StackSize::Large => self.closest(StackStack::<Entry, 256>::default(), query, t_max),
+            StackSize::Heap(n) => self.closest(HeapStack::new_with_capacity(n), query, t_max),
+        }?;
         Some(BvhHit {
             prim: self.input_index[i],
             hit,
@@ -256,64 +240,11 @@ impl Bvh {
             return false;
         };
         let query = (&triangle, &RayBoxes::new(ray));
-        #[cfg(target_arch = "x86_64")]
-        if self.avx {
-            // SAFETY: `avx` is only set when the CPU runs AVX (`has_avx`).
-            #[allow(unsafe_code)]
-            return unsafe { self.any_avx(query, t_max) };
-        }
-        self.any_any_stack::<Sse>(query, t_max)
-    }
-
-    /// [`Bvh::closest_any_stack`] with AVX nodes, the whole traversal compiled for AVX.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn closest_avx(
-        &self,
-        query: (&WatertightRay, &RayBoxes),
-        t_max: f32,
-    ) -> Option<(usize, TriangleHit)> {
-        self.closest_any_stack::<Avx>(query, t_max)
-    }
-
-    /// [`Bvh::any_any_stack`] with AVX nodes, the whole traversal compiled for AVX.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn any_avx(&self, query: (&WatertightRay, &RayBoxes), t_max: f32) -> bool {
-        self.any_any_stack::<Avx>(query, t_max)
-    }
-
-    /// Closest hit on the stack the tree needs.
-    #[inline(always)]
-    fn closest_any_stack<T: NodeTest>(
-        &self,
-        query: (&WatertightRay, &RayBoxes),
-        t_max: f32,
-    ) -> Option<(usize, TriangleHit)> {
         match self.stack_size {
-            StackSize::Small => {
-                self.closest::<T, _>(StackStack::<Entry, 16>::default(), query, t_max)
-            }
-            StackSize::Medium => {
-                self.closest::<T, _>(StackStack::<Entry, 64>::default(), query, t_max)
-            }
-            StackSize::Large => {
-                self.closest::<T, _>(StackStack::<Entry, 256>::default(), query, t_max)
-            }
-            StackSize::Heap(n) => {
-                self.closest::<T, _>(HeapStack::new_with_capacity(n), query, t_max)
-            }
-        }
-    }
-
-    /// Any hit on the stack the tree needs.
-    #[inline(always)]
-    fn any_any_stack<T: NodeTest>(&self, query: (&WatertightRay, &RayBoxes), t_max: f32) -> bool {
-        match self.stack_size {
-            StackSize::Small => self.any::<T, _>(StackStack::<Entry, 16>::default(), query, t_max),
-            StackSize::Medium => self.any::<T, _>(StackStack::<Entry, 64>::default(), query, t_max),
-            StackSize::Large => self.any::<T, _>(StackStack::<Entry, 256>::default(), query, t_max),
-            StackSize::Heap(n) => self.any::<T, _>(HeapStack::new_with_capacity(n), query, t_max),
+            StackSize::Small => self.any(StackStack::<Entry, 16>::default(), query, t_max),
+            StackSize::Medium => self.any(StackStack::<Entry, 64>::default(), query, t_max),
+            StackSize::Large => self.any(StackStack::<Entry, 256>::default(), query, t_max),
+            StackSize::Heap(n) => self.any(HeapStack::new_with_capacity(n), query, t_max),
         }
     }
 
@@ -350,15 +281,14 @@ impl Bvh {
     }
 
     /// Closest-hit traversal: the BVH-order index and the hit.
-    #[inline(always)]
-    fn closest<T: NodeTest, S: FastStack<Entry>>(
+    fn closest<S: FastStack<Entry>>(
         &self,
         stack: S,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
     ) -> Option<(usize, TriangleHit)> {
         let mut best = None;
-        self.traverse::<T, S>(stack, boxes, &mut t_max, |first, count, t_max| {
+        self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
             for i in first..first + count {
                 if let Some(hit) = intersect_packed(triangle, &self.triangles[i], *t_max) {
                     *t_max = hit.t;
@@ -371,15 +301,14 @@ impl Bvh {
     }
 
     /// Any-hit traversal with early exit.
-    #[inline(always)]
-    fn any<T: NodeTest, S: FastStack<Entry>>(
+    fn any<S: FastStack<Entry>>(
         &self,
         stack: S,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
     ) -> bool {
         let mut hit = false;
-        self.traverse::<T, S>(stack, boxes, &mut t_max, |first, count, t_max| {
+        self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
             hit = (first..first + count)
                 .any(|i| intersect_packed(triangle, &self.triangles[i], *t_max).is_some());
             hit
@@ -390,7 +319,7 @@ impl Bvh {
     /// Calls `leaf(first, count, t_max)` for the leaves whose boxes the ray meets before
     /// `t_max`, near to far within each node; `leaf` may lower `t_max` and returns true to stop.
     #[inline(always)]
-    fn traverse<T: NodeTest, S: FastStack<Entry>>(
+    fn traverse<S: FastStack<Entry>>(
         &self,
         mut stack: S,
         ray: &RayBoxes,
@@ -404,7 +333,7 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[entry.node as usize];
-            let (hits, t_enter) = T::intersect(node, ray, *t_max);
+            let (hits, t_enter) = node.intersect(ray, *t_max);
             let (slots, n) = by_entry(hits & node.leaves as u32, &t_enter);
             for &slot in &slots[..n] {
                 let (first, count) = (node.child[slot] as usize, node.count[slot] as usize);
@@ -421,47 +350,6 @@ impl Bvh {
             }
         }
     }
-}
-
-/// How a traversal tests a node: the mask of the children met within [0, t_max] and their
-/// entry distances (the same bits from every implementation).
-trait NodeTest {
-    fn intersect(node: &WideNode, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]);
-}
-
-/// Two 4-wide halves (SSE on x86-64; glam's scalar or NEON code elsewhere).
-struct Sse;
-
-impl NodeTest for Sse {
-    #[inline(always)]
-    fn intersect(node: &WideNode, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
-        node.intersect(ray, t_max)
-    }
-}
-
-/// One 8-wide AVX pass (`accel/avx.rs`); only used inside `#[target_feature(enable = "avx")]`
-/// functions, which run only when [`has_avx`].
-#[cfg(target_arch = "x86_64")]
-struct Avx;
-
-#[cfg(target_arch = "x86_64")]
-impl NodeTest for Avx {
-    #[inline(always)]
-    fn intersect(node: &WideNode, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
-        // SAFETY: `Avx` is only used by `closest_avx` and `any_avx`, called when the CPU has AVX.
-        #[allow(unsafe_code)]
-        unsafe {
-            super::avx::intersect_node(node, ray, t_max)
-        }
-    }
-}
-
-/// Whether the CPU runs AVX (detected once per build; cached by std).
-fn has_avx() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return std::arch::is_x86_feature_detected!("avx");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
 }
 
 /// The slots set in `mask` by increasing entry distance (insertion sort of at most 8; ties in
@@ -493,20 +381,20 @@ fn by_entry(mut mask: u32, t_enter: &[f32; 8]) -> ([usize; 8], usize) {
 /// An axis with a non-finite 1/d (the ray is parallel to its slabs, or |d| < 2⁻¹²⁷ there)
 /// constrains nothing: its near planes give 0 (entries are clamped at 0 anyway) and its far
 /// planes +∞, through the splatted terms below, so no NaN ever arises.
-pub(super) struct RayBoxes {
+struct RayBoxes {
     /// Per axis: the plane row (see [`WideNode::planes`]) of the near and the far slab.
-    pub(super) near: [usize; 3],
-    pub(super) far: [usize; 3],
+    near: [usize; 3],
+    far: [usize; 3],
     /// Per axis, splatted: near-plane distance = (plane − o_near)·inv_near, far likewise.
-    pub(super) o_near: [Vec4; 3],
-    pub(super) inv_near: [Vec4; 3],
-    pub(super) o_far: [Vec4; 3],
-    pub(super) inv_far: [Vec4; 3],
+    o_near: [Vec4; 3],
+    inv_near: [Vec4; 3],
+    o_far: [Vec4; 3],
+    inv_far: [Vec4; 3],
 }
 
 /// Widening factors of the slab distances (see [`RayBoxes`]).
-pub(super) const ENTER_SCALE: f32 = 1.0 - 2.0 * gamma(4);
-pub(super) const EXIT_SCALE: f32 = 1.0 + 2.0 * gamma(4);
+const ENTER_SCALE: f32 = 1.0 - 2.0 * gamma(4);
+const EXIT_SCALE: f32 = 1.0 + 2.0 * gamma(4);
 
 impl RayBoxes {
     #[inline(always)]
@@ -528,7 +416,7 @@ impl RayBoxes {
 
 impl WideNode {
     const EMPTY: WideNode = WideNode {
-        planes: [[Vec4::ZERO; 2]; 6],
+        planes: [[Vec4::ZERO; 6]; 2],
         child: [0; 8],
         count: [0; 8],
         present: 0,
@@ -539,8 +427,8 @@ impl WideNode {
     /// widened entry distance of each slot.
     #[inline(always)]
     fn intersect(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
-        let (m0, t0) = slab_half(&self.planes, 0, ray, t_max);
-        let (m1, t1) = slab_half(&self.planes, 1, ray, t_max);
+        let (m0, t0) = slab_half(&self.planes[0], ray, t_max);
+        let (m1, t1) = slab_half(&self.planes[1], ray, t_max);
         let (t0, t1) = (t0.to_array(), t1.to_array());
         let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
         ((m0 | m1 << 4) & self.present as u32, t_enter)
@@ -549,19 +437,19 @@ impl WideNode {
     fn set_box(&mut self, slot: usize, (lo, hi): (Vec3, Vec3)) {
         let (half, lane) = (slot / 4, slot % 4);
         for k in 0..3 {
-            self.planes[2 * k][half][lane] = lo[k];
-            self.planes[2 * k + 1][half][lane] = hi[k];
+            self.planes[half][2 * k][lane] = lo[k];
+            self.planes[half][2 * k + 1][lane] = hi[k];
         }
         self.present |= 1 << slot;
     }
 }
 
 /// The slab test of four children (PBR 4ed §6.1.2, widened as described at [`RayBoxes`]):
-/// the overlap mask (4 bits) and the entry distances of half `h`.
+/// the overlap mask (4 bits) and the entry distances.
 #[inline(always)]
-fn slab_half(planes: &[[Vec4; 2]; 6], h: usize, ray: &RayBoxes, t_max: f32) -> (u32, Vec4) {
-    let near = |k: usize| (planes[ray.near[k]][h] - ray.o_near[k]) * ray.inv_near[k];
-    let far = |k: usize| (planes[ray.far[k]][h] - ray.o_far[k]) * ray.inv_far[k];
+fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: f32) -> (u32, Vec4) {
+    let near = |k: usize| (planes[ray.near[k]] - ray.o_near[k]) * ray.inv_near[k];
+    let far = |k: usize| (planes[ray.far[k]] - ray.o_far[k]) * ray.inv_far[k];
     let enter = near(0).max(near(1)).max(near(2));
     let exit = far(0).min(far(1)).min(far(2));
     let margin = Vec4::splat(f32::MIN_POSITIVE);
@@ -635,9 +523,6 @@ mod tests {
     const _: () = {
         const fn assert_send_sync<T: Send + Sync>() {}
         assert_send_sync::<Bvh>();
-        // One node is four cache lines.
-        assert!(std::mem::size_of::<WideNode>() == 256);
-        assert!(std::mem::align_of::<WideNode>() == 64);
     };
 
     /// Closest hit over all triangles in input order (the first of equal t wins).
@@ -931,39 +816,6 @@ mod tests {
         assert!(hits > 1000, "{hits}");
     }
 
-    /// The AVX node test gives the SSE test's mask and entry distances bit for bit, on the
-    /// nodes of a random soup and of an axis-aligned scene, for random and axis-parallel rays.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn avx_node_test_matches_sse() {
-        if !has_avx() {
-            return;
-        }
-        let mut rng = Rng::new(9);
-        let scenes = [
-            random_soup(&mut rng, 2000, 1.0),
-            axis_aligned_scene(&mut rng, 400, 1.0),
-        ];
-        let mut met = 0;
-        for tris in &scenes {
-            let bvh = Bvh::build(tris);
-            let (lo, hi) = bvh.bounds();
-            let (center, extent) = (0.5 * (lo + hi), (hi - lo).max_element());
-            for _ in 0..4000 {
-                let r = random_ray(&mut rng, center, extent);
-                let t_max = random_t_max(&mut rng, extent);
-                let boxes = RayBoxes::new(&r);
-                let node = &bvh.nodes[rng.below(bvh.nodes.len())];
-                let (mask, t) = Sse::intersect(node, &boxes, t_max);
-                let (mask_avx, t_avx) = Avx::intersect(node, &boxes, t_max);
-                assert_eq!(mask, mask_avx, "{r:?} t_max {t_max}");
-                assert_eq!(t.map(f32::to_bits), t_avx.map(f32::to_bits), "{r:?}");
-                met += mask.count_ones();
-            }
-        }
-        assert!(met > 2000, "{met}");
-    }
-
     /// obvhs's own node test ignores boxes left before t = 1e-4; ours must not.
     #[test]
     fn finds_hits_at_tiny_t() {
@@ -1013,20 +865,15 @@ mod tests {
             let r = Ray::new(o, target - o);
             let (tri, boxes) = bvh.query(&r, f32::INFINITY).unwrap();
             let q = (&tri, &boxes);
-            let large =
-                bvh.closest::<Sse, _>(StackStack::<Entry, 256>::default(), q, f32::INFINITY);
-            let heap = bvh.closest::<Sse, _>(
+            let large = bvh.closest(StackStack::<Entry, 256>::default(), q, f32::INFINITY);
+            let heap = bvh.closest(
                 HeapStack::new_with_capacity(7 * depth - 5),
                 q,
                 f32::INFINITY,
             );
             let mut results = vec![large, heap];
             if depth <= 9 {
-                results.push(bvh.closest::<Sse, _>(
-                    StackStack::<Entry, 64>::default(),
-                    q,
-                    f32::INFINITY,
-                ));
+                results.push(bvh.closest(StackStack::<Entry, 64>::default(), q, f32::INFINITY));
             }
             let expected = brute_closest(&tris, &r, f32::INFINITY).map(|h| h.hit.t);
             for got in results {
