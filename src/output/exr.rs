@@ -203,9 +203,17 @@ pub fn write_with_layers(
     white_xy: [f32; 2],
     meta: &ExrMetadata,
 ) -> Result<()> {
-    let fail = |reason: String| Error::io(path, format!("cannot write EXR: {reason}"));
-    let image = layered_image((width, height), rgb, xyz, layers, white_xy, meta).map_err(fail)?;
-    write_atomically(path, |file| encode(image, file)).map_err(|e| fail(e.to_string()))
+    let whole = [0, 0, width, height];
+    write_window(
+        path,
+        (width, height),
+        whole,
+        rgb,
+        xyz,
+        layers,
+        white_xy,
+        meta,
+    )
 }
 
 /// [`write_with_layers()`] of a window of an image (`--crop`, a stage's `dataWindowNDC`):
