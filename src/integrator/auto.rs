@@ -7,16 +7,21 @@
 //! | no lights | path (the answer is 0 whatever the integrator) |
 //! | partially opaque surfaces | path (bdpt and vcm treat them as opaque) |
 //! | caustics of point-like lights on diffuse surfaces, seen through specular surfaces (SDS) on ≥ 10 % of the view, or reaching a meter | vcm (only merging samples them) |
-//! | caustics of point-like lights of some size (spheres, disks, meshes) on diffuse surfaces, seen directly (L S+ D), or through specular surfaces on < 10 % of the view | path, bdpt, vcm |
-//! | the same behind a point light or a distant light of angle 0 | bdpt, vcm |
+//! | caustics of point-like lights on diffuse surfaces, seen directly (L S+ D), or through specular surfaces on < 10 % of the view | bdpt, vcm |
 //! | otherwise (no specular chains, large lights behind them, or near-specular receivers) | path, bdpt |
 //!
 //! Path tracing finds a caustic on a diffuse surface only by a BSDF-sampled ray hitting the
-//! light after the specular surfaces: never behind a point light, so the table excludes path
-//! there (`SceneFeatures::hard_caustics`). Behind a small lamp of some size it is rarer than
-//! the lamp's solid angle suggests only where the specular surfaces do not focus it; where
-//! they do (a glass ball: the lamp's image fills much of the ball seen from the caustic),
-//! path tracing is the most efficient (`scenes/caustic.usda`), so path goes to the pilot. On a near-specular receiver the narrow lobe
+//! light after the specular surfaces: never behind a point light, and behind a point-like lamp
+//! of some size (under
+//! [`POINT_LIKE_SHARE`](crate::scene::analysis::lights::POINT_LIKE_SHARE) of the hemisphere) with a probability of the
+//! order of the lamp's solid angle, each hit then carrying the caustic over that probability.
+//! Its variance there is in these rare, enormous samples, which a pilot of a few samples per
+//! pixel mostly does not draw: it then measures path's variance without them, far below its
+//! expectation, and picks path. So path is no candidate there (`SceneFeatures::hard_caustics`).
+//! Measured on `scenes/caustic.usda` (a 3 cm lamp, 0.018 % of the hemisphere; 96×72, 32 spp,
+//! 8 seeds, one thread, without the lamp's glints through the ball): path's mean MSE × CPU
+//! time is 136× vcm's and bdpt's 8.2×, yet path's 2-spp pilot won at all 8 seeds (docs/design.md,
+//! "The pilot against the best fixed integrator"). On a near-specular receiver the narrow lobe
 //! aims at the light and path tracing is the efficient one (`scenes/prism.usda`).
 //! Likewise bdpt cannot connect to a specular vertex, so an SDS path from a point-like light
 //! is out of its reach, as is light reaching a meter (a point) through glass; only vcm's
@@ -102,14 +107,9 @@ pub fn candidates(f: &SceneFeatures, target: Target, mis: MisHeuristic) -> Candi
 /// runs), so neither is excluded. 10 % lies between; a rule of thumb, not a derived bound.
 pub const SDS_DECIDES: f32 = 0.10;
 
-/// Whether every point-like light has a size (a sphere, disk or mesh, not a point or a
-/// distant light of angle 0), so that path tracing reaches it through specular surfaces at all.
-fn finite_lights(f: &SceneFeatures) -> bool {
-    f.lights
-        .iter()
-        .filter(|l| l.point_like)
-        .all(|l| l.share > 0.0)
-}
+/// Why path is no candidate for caustics of point-like lights (the module's header).
+const BIDIRECTIONAL: &str = "light subpaths find them, while path tracing reaches them only \
+     by rare hits on the light, whose variance a short pilot cannot see: bdpt or vcm by the pilot";
 
 /// Caustics of point-like lights: vcm where only merging samples them, else bdpt or vcm.
 fn point_like_caustics(
@@ -133,50 +133,18 @@ fn point_like_caustics(
                 100.0 * f.seen_specular
             ),
         ),
-        Target::Image if f.sds.on => with_path(
-            f,
-            bdpt,
-            vcm,
+        Target::Image if f.sds.on => (
+            vec![bdpt, vcm],
             format!(
                 "caustics of point-like lights seen through specular surfaces (SDS) on only \
-                 {:.0} % of the view, caustics seen directly elsewhere",
+                 {:.0} % of the view, caustics seen directly elsewhere: {BIDIRECTIONAL}",
                 100.0 * f.seen_specular
             ),
         ),
-        Target::Image => with_path(
-            f,
-            bdpt,
-            vcm,
-            "caustics of point-like lights seen directly (L S+ D): light subpaths find them"
-                .to_string(),
+        Target::Image => (
+            vec![bdpt, vcm],
+            format!("caustics of point-like lights seen directly (L S+ D): {BIDIRECTIONAL}"),
         ),
-    }
-}
-
-/// bdpt and vcm for the pilot, and path before them where the point-like lights have a size
-/// ([`finite_lights`]): a glass ball focuses a small lamp into an image that fills much of the
-/// ball as seen from the caustic, which BSDF sampling then hits often. Measured on
-/// `scenes/caustic.usda` (a lamp of 0.018 % of the hemisphere, 16 seeds at 64 spp, 160×120,
-/// `tools/bench_auto.sh`): path's mean MSE × CPU time is the lowest of the three, bdpt's and
-/// vcm's 1.23× and 1.34× it (95 % intervals 0.85–1.67 and 0.90–1.88). Behind a point or a
-/// distant light of angle 0 path never finds the caustic, and only bdpt and vcm go to the
-/// pilot.
-fn with_path(
-    f: &SceneFeatures,
-    bdpt: Integrator,
-    vcm: Integrator,
-    why: String,
-) -> (Vec<Integrator>, String) {
-    if finite_lights(f) {
-        (
-            vec![Integrator::Path, bdpt, vcm],
-            format!(
-                "{why}; the lights have a size, so BSDF sampling through the specular surfaces \
-                 reaches them: path, bdpt or vcm by the pilot"
-            ),
-        )
-    } else {
-        (vec![bdpt, vcm], format!("{why}: bdpt or vcm by the pilot"))
     }
 }
 
@@ -226,11 +194,11 @@ mod tests {
         f.delta_lights = on();
         assert_eq!(image(&f), ["path", "bdpt"]);
         f.hard_caustics = true;
-        assert_eq!(image(&f), ["path", "bdpt", "vcm"]);
+        assert_eq!(image(&f), ["bdpt", "vcm"]);
         assert_eq!(names(&candidates(&f, Target::Meters, mis)), ["vcm"]);
         f.sds = on();
         f.seen_specular = 0.04;
-        assert_eq!(image(&f), ["path", "bdpt", "vcm"]);
+        assert_eq!(image(&f), ["bdpt", "vcm"]);
         // Behind a point light path never finds the caustic.
         let mut point = f.clone();
         point.lights[0].share = 0.0;
