@@ -10,13 +10,13 @@
 //! | camera | `Camera::generate_ray` (pinhole) | the same arithmetic over 8 lanes |
 //! | ray queries | `Scene::intersect`, one light sample's `Scene::occluded` | the same, per lane |
 //! | light sample | `LightSampler::sample`, `Light::sample_li` | the same, per lane |
-//! | shading | `Material::bsdf`, NEE `Bsdf::f`/`pdf` + power heuristic, `Bsdf::sample_f`, β | Lambertian over 8 lanes: reflectance table gathers, frame, MIS, cosine sampling |
+//! | shading | `Material::bsdf`, NEE `Bsdf::f`/`pdf` + power heuristic, `Bsdf::sample_f`, β | over 8 lanes: reflectance table gathers, frame, MIS, sampling |
 //!
-//! The scalar shading stage runs twice: with the scene's own materials (the Cornell box's
-//! UsdPreviewSurface walls are the plastic, coat and diffuse base) and with the same
-//! reflectances as Lambertians (`Material::Diffuse`), which is what the lockstep kernel
-//! computes; the lockstep results are checked against the latter (largest relative
-//! difference printed). Each stage is a pass over all N samples (stage-major, so each stage's
+//! The shading stage runs twice each way: with the same reflectances as Lambertians
+//! (`Material::Diffuse`) and with the scene's own materials when every material a hit meets
+//! is an untextured UsdPreviewSurface plastic (the Cornell box's walls: a GGX coat with
+//! Schlick's Fresnel over the coupled diffuse base, `bxdf/plastic.rs`). The lockstep results
+//! are checked against the scalar ones (largest relative differences printed). Each stage is a pass over all N samples (stage-major, so each stage's
 //! time is its own; the intermediate results stay in memory, N = width × height), timed on
 //! one thread, the fastest of `--reps` passes. The lockstep side also pays the transposition
 //! of the scalar stages' hits and light samples into SoA (`stage_pack`). The lockstep kernels are compiled twice: for
@@ -40,10 +40,12 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
+use spectral_render::bxdf::CoatAlbedo;
 use spectral_render::bxdf::{Bsdf, TransportMode};
 use spectral_render::geometry::offset::{spawn_ray, spawn_ray_to_point};
 use spectral_render::geometry::Ray;
 use spectral_render::light::{LightLiSample, LightSampleContext};
+use spectral_render::material::preview::PreviewLobes;
 use spectral_render::material::{ColorInput, Material};
 use spectral_render::sampling::{power_heuristic, Sampler};
 use spectral_render::scene::{self, Hit, Scene, SurfaceHit};
@@ -113,18 +115,20 @@ fn ln(x: F) -> F {
 
 /// sin and cos of |x| ≤ π/4 (Cephes `sinf`/`cosf` minimax polynomials on that range).
 #[inline(always)]
-fn sin_cos_quarter(x: F) -> (F, F) {
-    let s = map(|i| {
-        let z = x[i] * x[i];
-        let p = (-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1;
-        x[i] + x[i] * z * p
-    });
-    let c = map(|i| {
-        let z = x[i] * x[i];
-        let p = (2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2;
-        1.0 - 0.5 * z + z * z * p
-    });
+fn sin_cos_quarter1(x: f32) -> (f32, f32) {
+    let z = x * x;
+    let s = x + x * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
+    let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
     (s, c)
+}
+
+/// [`sin_cos_quarter1`] over the lanes.
+#[inline(always)]
+fn sin_cos_quarter(x: F) -> (F, F) {
+    (
+        map(|i| sin_cos_quarter1(x[i]).0),
+        map(|i| sin_cos_quarter1(x[i]).1),
+    )
 }
 
 // ---------------------------------------------------------------------------------------
@@ -241,19 +245,7 @@ fn shade_kernel(tables: &[&[f32; DENSE_LEN]], a: &ShadeIn, out: &mut ShadeOut) {
     }
     // Shading frame around ns (`Frame::from_normal`, Duff et al. 2017).
     let n = &a.ns;
-    let sign = map(|i| 1.0f32.copysign(n.z[i]));
-    let ka = map(|i| -1.0 / (sign[i] + n.z[i]));
-    let kb = map(|i| n.x[i] * n.y[i] * ka[i]);
-    let s = V3 {
-        x: map(|i| 1.0 + sign[i] * n.x[i] * n.x[i] * ka[i]),
-        y: map(|i| sign[i] * kb[i]),
-        z: map(|i| -sign[i] * n.x[i]),
-    };
-    let t = V3 {
-        x: kb,
-        y: map(|i| sign[i] + n.y[i] * n.y[i] * ka[i]),
-        z: map(|i| -n.y[i]),
-    };
+    let (s, t) = frame_soa(n);
     let wo_z = dot(&a.wo, n);
     // Next-event estimation.
     let wi_z = dot(&a.wi_l, n);
@@ -315,6 +307,298 @@ fn shade_kernel(tables: &[&[f32; DENSE_LEN]], a: &ShadeIn, out: &mut ShadeOut) {
     out.beta = rho.map(|r| map(|i| r[i] * w[i]));
 }
 
+/// A UsdPreviewSurface plastic's constants (`PreviewMaterial` with `PreviewLobes::Plastic`,
+/// untextured, the specular workflow): the coat's GGX α, its albedo table (E(μ) at
+/// μ = (j/15)², `CoatAlbedo::Table`), its average transmittance and the internal diffuse
+/// Fresnel reflectance; the diffuse and F0 spectra are the material's tables.
+#[derive(Clone, Copy)]
+struct PlasticK {
+    alpha: f32,
+    albedo: [f32; 16],
+    t_avg: f32,
+    fdr: f32,
+}
+
+/// E(μ) of the coat albedo table (`CoatAlbedo::eval`).
+#[inline(always)]
+fn coat_albedo(t: &[f32; 16], mu: f32) -> f32 {
+    let x = mu.abs().min(1.0).sqrt() * 15.0;
+    let i = (x as usize).min(14);
+    let a = x - i as f32;
+    (1.0 - a) * t[i] + a * t[i + 1]
+}
+
+/// Λ(w) of an isotropic Trowbridge–Reitz distribution from cos² θ (PBR 4ed eq. 9.22).
+#[inline(always)]
+fn ggx_lambda(alpha: f32, cos2: f32) -> f32 {
+    let tan2 = (1.0 - cos2).max(0.0) / cos2;
+    if cos2 == 0.0 {
+        f32::INFINITY
+    } else {
+        0.5 * ((1.0 + alpha * alpha * tan2).sqrt() - 1.0)
+    }
+}
+
+/// D(ωm) of an isotropic Trowbridge–Reitz distribution from cos² θm (PBR 4ed eq. 9.16).
+#[inline(always)]
+fn ggx_d(alpha: f32, cos2: f32) -> f32 {
+    let cos4 = cos2 * cos2;
+    let tan2 = (1.0 - cos2).max(0.0) / cos2;
+    let e = tan2 / (alpha * alpha);
+    let d = 1.0 / (std::f32::consts::PI * alpha * alpha * cos4 * (1.0 + e) * (1.0 + e));
+    if cos4 < 1e-16 {
+        0.0
+    } else {
+        d
+    }
+}
+
+/// The plastic's f (coat + coupled diffuse) and pdf (coat VNDF and cosine, mixed by the
+/// coat's selection probability pc) for one lane, both directions local and in the upper
+/// hemisphere (`PlasticBxdf::f_upper`, `pdf_upper`), `tt` = T(μo) T(μi): f per wavelength is
+/// F(ωo · ωm) D G / (4 cos θo cos θi) + diffuse · tt, returned as (D G / (4 cos cos),
+/// Schlick's (1 − cos)⁵, tt) with the pdf; outside the upper hemisphere all 0.
+#[inline(always)]
+fn plastic_upper(alpha: f32, wo: Vec3, wi: Vec3, pc: f32, tt: f32) -> (f32, f32, f32, f32) {
+    let upper = wi.z > 0.0 && wo.z > 0.0;
+    let h = wo + wi;
+    let len2 = h.length_squared();
+    let ok = len2 > 0.0 && len2.is_finite();
+    let wm = h * (1.0 / len2.sqrt());
+    let (lo, li) = (
+        ggx_lambda(alpha, wo.z * wo.z),
+        ggx_lambda(alpha, wi.z * wi.z),
+    );
+    let d = ggx_d(alpha, wm.z * wm.z);
+    let dg = d / (1.0 + lo + li) / (4.0 * wo.z * wi.z);
+    let m = (1.0 - wo.dot(wm).abs().min(1.0)).max(0.0);
+    let m5 = (m * m) * (m * m) * m;
+    // The coat's pdf: D_visible(ωo, ωm) / (4 |ωo · ωm|) with ωm in the upper hemisphere.
+    let dot = wo.dot(wm).abs();
+    let pdf_coat = (1.0 / (1.0 + lo)) / wo.z * d * dot / (4.0 * dot);
+    let pdf_cos = (1.0 - pc) * wi.z * INV_PI;
+    // Selects, not branches, so that the loop over lanes vectorises.
+    let (dg, m5, pdf) = if ok {
+        (dg, m5, pc * pdf_coat + pdf_cos)
+    } else {
+        (0.0, 0.0, pdf_cos)
+    };
+    if upper {
+        (dg, m5, tt, pdf)
+    } else {
+        (0.0, 0.0, 0.0, 0.0)
+    }
+}
+
+/// The visible-normal sample of the coat's GGX (Heitz 2018; `TrowbridgeReitz::sample_wm`),
+/// reflected about it (`sample_reflection`); the uniform disk's angle 2π u₁ is reduced to
+/// [−π/4, π/4] by quadrant.
+#[inline(always)]
+fn ggx_sample(alpha: f32, wo: Vec3, u: [f32; 2]) -> Vec3 {
+    let mut wh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
+    if wh.z < 0.0 {
+        wh = -wh;
+    }
+    let t1 = if wh.z < 0.99999 {
+        Vec3::new(-wh.y, wh.x, 0.0).normalize()
+    } else {
+        Vec3::X
+    };
+    let t2 = wh.cross(t1);
+    let r = u[0].sqrt();
+    let x = u[1] * 4.0;
+    let q = (x + 0.5).floor();
+    let (s, c) = sin_cos_quarter1((x - q) * std::f32::consts::FRAC_PI_2);
+    // Rotated by q quarter turns: (c, s), (−s, c), (−c, −s), (s, −c).
+    let k = q as i32 & 3;
+    let (c, s) = if k & 1 == 0 { (c, s) } else { (-s, c) };
+    let (c, s) = if k & 2 == 0 { (c, s) } else { (-c, -s) };
+    let (px, py) = (r * c, r * s);
+    let h = (1.0 - px * px).max(0.0).sqrt();
+    let sw = 0.5 * (1.0 + wh.z);
+    let py = (1.0 - sw) * h + sw * py;
+    let pz = (1.0 - px * px - py * py).max(0.0).sqrt();
+    let nh = px * t1 + py * t2 + pz * wh;
+    let wm = Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(1e-6)).normalize();
+    -wo + 2.0 * wo.dot(wm) * wm
+}
+
+/// The box's plastic for 8 lanes: the same arithmetic as `PreviewMaterial::plastic`,
+/// `PlasticBxdf` and the `Bsdf` wrapper (frame, mirroring for ωo below the surface), NEE's
+/// f, pdf and power-heuristic weight, and `sample_f` (coat or diffuse by uc < pc; both are
+/// computed and one selected per lane, which is what lockstep costs on divergent branches).
+/// In passes over the lanes: the per-material gathers, then the arithmetic.
+#[inline(always)]
+fn plastic_kernel(
+    mats: &[PlasticK],
+    tables: &[&[f32; DENSE_LEN]],
+    f0s: &[&[f32; DENSE_LEN]],
+    a: &ShadeIn,
+    uc: &F,
+    out: &mut ShadeOut,
+) {
+    // Gathers: the material's constants and its spectra at the lanes' wavelengths.
+    let mk: [&PlasticK; W] = std::array::from_fn(|i| &mats[a.table[i]]);
+    let alpha = map(|i| mk[i].alpha);
+    let rho = gather_spectrum(tables, a);
+    let f0 = gather_spectrum(f0s, a);
+    let diffuse: [F; 4] = std::array::from_fn(|j| {
+        map(|i| {
+            let (fdr, t_avg) = (mk[i].fdr, mk[i].t_avg);
+            let r = rho[j][i] * (1.0 - fdr) / (1.0 - rho[j][i] * fdr);
+            if t_avg > 0.0 {
+                r * (INV_PI / t_avg)
+            } else {
+                0.0
+            }
+        })
+    });
+    let diffuse_albedo = map(|i| {
+        (0..4)
+            .map(|j| rho[j][i] * (1.0 - mk[i].fdr) / (1.0 - rho[j][i] * mk[i].fdr))
+            .sum::<f32>()
+            / 4.0
+    });
+    // The shading frame; ωo and the light's ωi in it, mirrored above the surface.
+    let (sf, tf) = frame_soa(&a.ns);
+    let n = &a.ns;
+    let wo = to_local(&sf, &tf, n, &a.wo);
+    let flip: M = std::array::from_fn(|i| wo.z[i] < 0.0);
+    let wo_u = mirror(&wo, &flip);
+    let wl = mirror(&to_local(&sf, &tf, n, &a.wi_l), &flip);
+    let e = map(|i| coat_albedo(&mk[i].albedo, wo_u.z[i]));
+    let pc = map(|i| {
+        let d = (1.0 - e[i]).max(0.0) * diffuse_albedo[i];
+        if e[i] + d > 0.0 {
+            e[i] / (e[i] + d)
+        } else {
+            1.0
+        }
+    });
+    let t_o = map(|i| (1.0 - e[i]).max(0.0));
+    // NEE.
+    let t_l = map(|i| (1.0 - coat_albedo(&mk[i].albedo, wl.z[i])).max(0.0));
+    let ev = upper_soa(&alpha, &wo_u, &wl, &pc, &t_o, &t_l);
+    let w_nee = map(|i| {
+        let (pa, pb) = (a.pdf_light[i] * a.pdf_light[i], ev.3[i] * ev.3[i]);
+        let cos = (a.wi_l.x[i] * n.x[i] + a.wi_l.y[i] * n.y[i] + a.wi_l.z[i] * n.z[i]).abs();
+        let live = a.hit[i] && a.light[i] && wo.z[i] != 0.0 && a.tr[i] > 0.0;
+        if live && pa + pb > 0.0 {
+            a.tr[i] * cos * pa / ((pa + pb) * a.pdf_light[i])
+        } else {
+            0.0
+        }
+    });
+    out.nee = std::array::from_fn(|j| {
+        map(|i| {
+            let fr = f0[j][i] + (1.0 - f0[j][i]) * ev.1[i];
+            (fr * ev.0[i] + diffuse[j][i] * ev.2[i]) * a.l[j][i] * w_nee[i]
+        })
+    });
+    // BSDF sampling: the coat's visible normals or the cosine hemisphere, per lane.
+    let mut wi = V3::default();
+    for i in 0..W {
+        let wo_i = lane(&wo_u, i);
+        let u = [a.u[0][i], a.u[1][i]];
+        let coat = ggx_sample(alpha[i], wo_i, u);
+        let d = spectral_render::sampling::warp::concentric_disk(u);
+        let cos = Vec3::new(d.x, d.y, (1.0 - d.x * d.x - d.y * d.y).max(0.0).sqrt());
+        set_lane(&mut wi, i, if uc[i] < pc[i] { coat } else { cos });
+    }
+    let t_i = map(|i| (1.0 - coat_albedo(&mk[i].albedo, wi.z[i])).max(0.0));
+    let ev = upper_soa(&alpha, &wo_u, &wi, &pc, &t_o, &t_i);
+    let wi_w = to_world(&sf, &tf, n, &mirror(&wi, &flip));
+    let cos = dot(&wi_w, n);
+    out.ok = std::array::from_fn(|i| {
+        let dir = uc[i] >= pc[i] || wo_u.z[i] * wi.z[i] > 0.0;
+        a.hit[i] && wo.z[i] != 0.0 && dir && ev.3[i] > 0.0 && ev.3[i].is_finite() && wi.z[i] != 0.0
+    });
+    let g = map(|i| {
+        if out.ok[i] {
+            cos[i].abs() / ev.3[i]
+        } else {
+            0.0
+        }
+    });
+    out.beta = std::array::from_fn(|j| {
+        map(|i| {
+            let fr = f0[j][i] + (1.0 - f0[j][i]) * ev.1[i];
+            (fr * ev.0[i] + diffuse[j][i] * ev.2[i]) * g[i]
+        })
+    });
+    out.wi = wi_w;
+}
+
+/// A spectrum per lane at its 4 wavelengths from each lane's table, clamped to [0, 1].
+#[inline(always)]
+fn gather_spectrum(tables: &[&[f32; DENSE_LEN]], a: &ShadeIn) -> [F; 4] {
+    std::array::from_fn(|j| {
+        map(|i| {
+            let t = tables[a.table[i]];
+            let x = a.lambda[j][i] - LAMBDA_MIN;
+            let k = (x as usize).min(DENSE_LEN - 2);
+            let f = x - k as f32;
+            (t[k] * (1.0 - f) + t[k + 1] * f).clamp(0.0, 1.0)
+        })
+    })
+}
+
+/// `Frame::from_normal` over the lanes: the tangents s, t.
+#[inline(always)]
+fn frame_soa(n: &V3) -> (V3, V3) {
+    let sign = map(|i| 1.0f32.copysign(n.z[i]));
+    let ka = map(|i| -1.0 / (sign[i] + n.z[i]));
+    let kb = map(|i| n.x[i] * n.y[i] * ka[i]);
+    let s = V3 {
+        x: map(|i| 1.0 + sign[i] * n.x[i] * n.x[i] * ka[i]),
+        y: map(|i| sign[i] * kb[i]),
+        z: map(|i| -sign[i] * n.x[i]),
+    };
+    let t = V3 {
+        x: kb,
+        y: map(|i| sign[i] + n.y[i] * n.y[i] * ka[i]),
+        z: map(|i| -n.y[i]),
+    };
+    (s, t)
+}
+
+#[inline(always)]
+fn to_local(s: &V3, t: &V3, n: &V3, v: &V3) -> V3 {
+    V3 {
+        x: dot(v, s),
+        y: dot(v, t),
+        z: dot(v, n),
+    }
+}
+
+#[inline(always)]
+fn to_world(s: &V3, t: &V3, n: &V3, v: &V3) -> V3 {
+    V3 {
+        x: map(|i| s.x[i] * v.x[i] + t.x[i] * v.y[i] + n.x[i] * v.z[i]),
+        y: map(|i| s.y[i] * v.x[i] + t.y[i] * v.y[i] + n.y[i] * v.z[i]),
+        z: map(|i| s.z[i] * v.x[i] + t.z[i] * v.y[i] + n.z[i] * v.z[i]),
+    }
+}
+
+#[inline(always)]
+fn mirror(v: &V3, flip: &M) -> V3 {
+    V3 {
+        z: map(|i| if flip[i] { -v.z[i] } else { v.z[i] }),
+        ..*v
+    }
+}
+
+/// [`plastic_upper`] over the lanes, with the coat transmittances T(μo), T(μi) given.
+#[inline(always)]
+fn upper_soa(alpha: &F, wo: &V3, wi: &V3, pc: &F, t_o: &F, t_i: &F) -> (F, F, F, F) {
+    let mut r = ([0.0; W], [0.0; W], [0.0; W], [0.0; W]);
+    for i in 0..W {
+        let e = plastic_upper(alpha[i], lane(wo, i), lane(wi, i), pc[i], t_o[i] * t_i[i]);
+        (r.0[i], r.1[i], r.2[i], r.3[i]) = e;
+    }
+    r
+}
+
 // The kernels compiled for the baseline target and for AVX2 + FMA. Each `stage_*` is one pass
 // over all groups and is never inlined, so callgrind's inclusive counts separate the stages.
 
@@ -363,6 +647,70 @@ fn stage_shading_lockstep(t: &[&[f32; DENSE_LEN]], a: &[ShadeIn], out: &mut [Sha
 fn stage_shading_lockstep_avx2(t: &[&[f32; DENSE_LEN]], a: &[ShadeIn], out: &mut [ShadeOut]) {
     for (x, o) in a.iter().zip(out.iter_mut()) {
         shade_kernel(t, x, o);
+    }
+}
+
+/// The plastic's constants and tables for every material, and whether the material is an
+/// untextured UsdPreviewSurface plastic in the specular workflow with a tabulated coat (the
+/// others get placeholders: the plastic kernel runs only when no hit meets one).
+type PlasticTables = (Vec<PlasticK>, Vec<DenseSpectrum>, Vec<bool>);
+
+fn plastics(materials: &[Material]) -> PlasticTables {
+    let (mut ks, mut f0s, mut known) = (Vec::new(), Vec::new(), Vec::new());
+    for m in materials {
+        let plastic = match m {
+            Material::Preview(p) => {
+                match (p.lobes, p.bsdf_is_textured(), &p.specular, p.base_albedo) {
+                    (PreviewLobes::Plastic, false, Some(f0), CoatAlbedo::Table(albedo)) => Some((
+                        PlasticK {
+                            alpha: p.distrib.alpha_x,
+                            albedo,
+                            t_avg: p.base_t_avg,
+                            fdr: p.base_fdr_internal,
+                        },
+                        DenseSpectrum::from_fn(|l| f0.eval(l)),
+                    )),
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
+        known.push(plastic.is_some());
+        let (k, f0) = plastic.unwrap_or((
+            PlasticK {
+                alpha: 1.0,
+                albedo: [0.0; 16],
+                t_avg: 1.0,
+                fdr: 0.0,
+            },
+            DenseSpectrum::constant(0.0),
+        ));
+        ks.push(k);
+        f0s.push(f0);
+    }
+    (ks, f0s, known)
+}
+
+/// The plastic kernel's per-material data and each group's lobe-choice numbers.
+type PlasticIn<'a> = (
+    &'a [PlasticK],
+    &'a [&'a [f32; DENSE_LEN]],
+    &'a [&'a [f32; DENSE_LEN]],
+    &'a [F],
+);
+
+#[inline(never)]
+fn stage_plastic_lockstep(p: PlasticIn, a: &[ShadeIn], out: &mut [ShadeOut]) {
+    for (g, (x, o)) in a.iter().zip(out.iter_mut()).enumerate() {
+        plastic_kernel(p.0, p.1, p.2, x, &p.3[g], o);
+    }
+}
+
+#[target_feature(enable = "avx2,fma")]
+#[inline(never)]
+fn stage_plastic_lockstep_avx2(p: PlasticIn, a: &[ShadeIn], out: &mut [ShadeOut]) {
+    for (g, (x, o)) in a.iter().zip(out.iter_mut()).enumerate() {
+        plastic_kernel(p.0, p.1, p.2, x, &p.3[g], o);
     }
 }
 
@@ -762,6 +1110,7 @@ fn main() {
     // same samples.
     let mut ins = vec![ShadeIn::default(); groups];
     let l_pack = time(a.reps, n, || stage_pack(x, &mut ins));
+    let best = |s: f64, a: Option<f64>| a.unwrap_or(s).min(s);
     let row = |name: &str, scalar: f64, sse: f64, avx: Option<f64>| {
         let avx_s = avx.map_or("-".to_string(), |v| format!("{v:.2}"));
         let sp = avx.map_or("-".to_string(), |v| format!("{:.2}×", scalar / v));
@@ -802,12 +1151,27 @@ fn main() {
         })
     });
     row("shading, Lambertian", t_shade_lambert, l_sh, l_sh_avx);
-    row(
-        "shading, scene's BSDF vs Lambert lockstep",
-        t_shade_scene,
-        l_sh,
-        l_sh_avx,
-    );
+    let lambert_out = out.clone();
+    // The scene's own plastic, when every material is one the plastic kernel knows.
+    let (ks, f0s, known) = plastics(&scene.materials);
+    let plastic = hits.iter().flatten().all(|h| known[h.material as usize]);
+    let mut plastic_time = None;
+    if plastic {
+        let f0_ref: Vec<&[f32; DENSE_LEN]> = f0s.iter().map(|t| &*t.values).collect();
+        let uc: Vec<F> = us.chunks(W).map(|c| map(|i| c[i].bsdf)).collect();
+        let p: PlasticIn = (&ks, &tables_ref, &f0_ref, &uc);
+        let l_p = time(a.reps, n, || stage_plastic_lockstep(p, &ins, &mut out));
+        let l_p_avx = has_avx2().then(|| {
+            time(a.reps, n, || {
+                // SAFETY: as above.
+                unsafe { stage_plastic_lockstep_avx2(p, &ins, &mut out) }
+            })
+        });
+        row("shading, the scene's plastic", t_shade_scene, l_p, l_p_avx);
+        plastic_time = Some(best(l_p, l_p_avx));
+    } else {
+        println!("(a hit's material is not an untextured plastic: no plastic kernel)");
+    }
     println!(
         "{:<34} {:>9} {l_pack:>11.2}",
         "SoA packing of hits, light samples", "-"
@@ -822,7 +1186,6 @@ fn main() {
         "shading, scene's BSDF (scalar)", t_shade_scene
     );
     let total_s = t_sampler + t_wl + t_cam + t_isect + t_light + t_shadow + t_shade_lambert;
-    let best = |s: f64, a: Option<f64>| a.unwrap_or(s).min(s);
     let total_l = t_sampler
         + best(l_wl, l_wl_avx)
         + best(l_cam, l_cam_avx)
@@ -835,23 +1198,52 @@ fn main() {
         "\nfirst hit, Lambertian walls: scalar {total_s:.1} ns/sample, lockstep {total_l:.1} ns/sample: {:.2}×",
         total_s / total_l
     );
+    if let Some(l_p) = plastic_time {
+        let s = total_s - t_shade_lambert + t_shade_scene;
+        let l = total_l - best(l_sh, l_sh_avx) + l_p;
+        println!(
+            "first hit, the scene's plastic: scalar {s:.1} ns/sample, lockstep {l:.1} ns/sample: {:.2}×",
+            s / l
+        );
+    }
     let mut shaded = vec![Shaded::default(); n];
     shade_scalar(&lambert, x, &mut shaded);
-    check(&lam, &lam_w, (&rays, &cam), (&shaded, &out), &hits);
+    check(&lam, &lam_w, (&rays, &cam));
+    let d = shading_diff(&shaded, &lambert_out, &hits);
+    println!("  Lambertian shading: {d}");
+    if plastic {
+        shade_scalar(&scene.materials, x, &mut shaded);
+        let d = shading_diff(&shaded, &out, &hits);
+        println!("  plastic shading: {d}");
+    }
+}
+
+/// Largest relative differences of the NEE estimates and β, and of the sampled directions,
+/// between the scalar and the lockstep shading.
+fn shading_diff(shaded: &[Shaded], out: &[ShadeOut], hits: &[Option<SurfaceHit>]) -> String {
+    let (mut dn, mut db, mut dw) = (0f32, 0f32, 0f32);
+    let rel = |a: f32, b: f32| (a - b).abs() / b.abs().max(1e-6);
+    let lit = shaded.iter().filter(|s| !s.nee.is_black()).count();
+    for k in 0..shaded.len() {
+        let (g, i) = (k / W, k % W);
+        if hits[k].is_none() {
+            continue;
+        }
+        for j in 0..4 {
+            dn = dn.max(rel(out[g].nee[j][i], shaded[k].nee[j]));
+            db = db.max(rel(out[g].beta[j][i], shaded[k].beta[j]));
+        }
+        if !shaded[k].beta.is_black() {
+            dw = dw.max((shaded[k].wi - lane(&out[g].wi, i)).abs().max_element());
+        }
+    }
+    format!("NEE {dn:.2e} rel ({lit} samples lit), β {db:.2e} rel, ωi {dw:.2e}")
 }
 
 /// Largest differences between the lockstep and the scalar results.
-fn check(
-    lam: &[SampledWavelengths],
-    lam_w: &[[F; 4]],
-    (rays, cam): (&[(Ray, f32)], &[CamOut]),
-    (shaded, out): (&[Shaded], &[ShadeOut]),
-    hits: &[Option<SurfaceHit>],
-) {
-    let (mut dl, mut dp, mut dd, mut dt, mut dn, mut db, mut dw) =
-        (0f32, 0f32, 0f32, 0f32, 0f32, 0f32, 0f32);
+fn check(lam: &[SampledWavelengths], lam_w: &[[F; 4]], (rays, cam): (&[(Ray, f32)], &[CamOut])) {
+    let (mut dl, mut dp, mut dd, mut dt) = (0f32, 0f32, 0f32, 0f32);
     let rel = |a: f32, b: f32| (a - b).abs() / b.abs().max(1e-6);
-    let lit = shaded.iter().filter(|s| !s.nee.is_black()).count();
     for k in 0..lam.len() {
         let (g, i) = (k / W, k % W);
         for (l, lw) in lam[k].lambda.iter().zip(&lam_w[g]) {
@@ -860,20 +1252,9 @@ fn check(
         dd = dd.max((rays[k].0.d - lane(&cam[g].1, i)).abs().max_element());
         dp = dp.max((rays[k].0.o - lane(&cam[g].0, i)).abs().max_element());
         dt = dt.max(rel(cam[g].2[i], rays[k].1));
-        if hits[k].is_none() {
-            continue;
-        }
-        for j in 0..4 {
-            dn = dn.max(rel(out[g].nee[j][i], shaded[k].nee[j]));
-            db = db.max(rel(out[g].beta[j][i], shaded[k].beta[j]));
-        }
-        if shaded[k].beta.is_black() {
-            continue;
-        }
-        dw = dw.max((shaded[k].wi - lane(&out[g].wi, i)).abs().max_element());
     }
     println!(
-        "check, lockstep vs scalar: λ {dl:.2e} nm, ray o {dp:.2e}, d {dd:.2e}, t_max {dt:.2e} rel; NEE {dn:.2e} rel ({lit} samples lit), β {db:.2e} rel, ωi {dw:.2e}"
+        "check, lockstep vs scalar: λ {dl:.2e} nm, ray o {dp:.2e}, d {dd:.2e}, t_max {dt:.2e} rel"
     );
 }
 
