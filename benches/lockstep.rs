@@ -16,18 +16,20 @@
 //! (`Material::Diffuse`) and with the scene's own materials when every material a hit meets
 //! is an untextured UsdPreviewSurface plastic (the Cornell box's walls: a GGX coat with
 //! Schlick's Fresnel over the coupled diffuse base, `bxdf/plastic.rs`). The lockstep results
-//! are checked against the scalar ones (largest relative differences printed). Each stage is a pass over all N samples (stage-major, so each stage's
-//! time is its own; the intermediate results stay in memory, N = width × height), timed on
-//! one thread, the fastest of `--reps` passes. The lockstep side also pays the transposition
-//! of the scalar stages' hits and light samples into SoA (`stage_pack`). The lockstep kernels are compiled twice: for
-//! the baseline target (SSE2, 4-wide registers: an `[f32; 8]` is two of them) and with
-//! `#[target_feature(enable = "avx2,fma")]` (8-wide), chosen at run time when the CPU has
-//! AVX2 (the only `unsafe` here: calling those kernels after the check).
+//! are checked against the scalar ones (largest relative differences printed).
 //!
-//! `--occupancy` runs the path tracer's bounce loop (scalar, the scene's materials, pbrt-v4's
-//! roulette as `integrator/path.rs`) on groups of 8 samples (a 4×2 pixel block, one sample
-//! each; and 8 samples of one pixel) and prints, per bounce, the lanes still alive and the
-//! share of group-steps a masked lockstep loop would spend on dead lanes.
+//! Each stage is a pass over all N = width × height samples (stage-major, so each stage's
+//! time is its own; the intermediate results stay in memory), timed on one thread, the
+//! fastest of `--reps` passes. The lockstep side also pays the transposition of the scalar
+//! stages' hits and light samples into SoA (`stage_pack`). The lockstep kernels are compiled
+//! twice: for the baseline target (SSE2, 4-wide registers: an `[f32; 8]` is two of them) and
+//! with `#[target_feature(enable = "avx2,fma")]` (8-wide), chosen at run time when the CPU
+//! has AVX2 (the only `unsafe` here: calling those kernels after the check).
+//!
+//! `--occupancy` runs the path tracer's bounce loop (scalar, the scene's materials, with
+//! pbrt-v4's roulette as `integrator/path.rs` and with Mitsuba 3's) on groups of 8 samples
+//! (a 4×2 pixel block, one sample each; and 8 samples of one pixel) and prints, per bounce,
+//! the lanes still alive and the utilisation of a masked lockstep loop.
 //!
 //! Instruction counts per stage: run under callgrind with `--reps 1` and read the inclusive
 //! counts of the `stage_*` functions (`callgrind_annotate --inclusive=yes`).
@@ -1029,89 +1031,249 @@ fn main() {
     let a = args();
     let scene = match scene::load(&a.stage, Some((a.width, a.height))) {
         Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(1);
-        }
+        Err(e) => refuse(&e.to_string()),
     };
     let (width, height) = (scene.camera.width, scene.camera.height);
     if a.occupancy {
         occupancy(&scene, width, height);
         return;
     }
+    let stage = a.stage.display();
     if scene.camera.lens_radius > 0.0 {
-        eprintln!(
-            "{}: the prototype's camera kernel is a pinhole's",
-            a.stage.display()
-        );
-        std::process::exit(1);
+        refuse(&format!(
+            "{stage}: the prototype's camera kernel is a pinhole's"
+        ));
     }
     let n = (width * height) as usize;
     if !n.is_multiple_of(W) {
-        eprintln!(
-            "{}: width × height must be a multiple of {W}",
-            a.stage.display()
-        );
-        std::process::exit(1);
+        refuse(&format!(
+            "{stage}: width × height must be a multiple of {W}"
+        ));
     }
-    let groups = n / W;
-    let (tables, lambert) = lambertians(&scene.materials);
     println!(
-        "{}: {width}×{height} = {n} samples, {groups} groups of {W}; one thread, fastest of {} passes; AVX2: {}",
-        a.stage.display(),
+        "{stage}: {width}×{height} = {n} samples, {} groups of {W}; one thread, fastest of {} passes; AVX2: {}",
+        n / W,
         a.reps,
         has_avx2()
     );
+    let (tables, lambert) = lambertians(&scene.materials);
+    let sc = scalar_stages(&scene, &lambert, a.reps);
+    let (lt, lo) = lockstep_stages(&scene, &sc, &tables, a.reps);
+    report(&sc.t, &lt);
+    let x: ScalarIn = (&sc.us, &sc.rays, &sc.hits, &sc.lam, &sc.picks);
+    check(&sc.lam, &lo.lambda, (&sc.rays, &lo.cam));
+    let mut shaded = vec![Shaded::default(); n];
+    shade_scalar(&lambert, x, &mut shaded);
+    let d = shading_diff(&shaded, &lo.lambert, &sc.hits);
+    println!("  Lambertian shading: {d}");
+    if let Some(out) = &lo.plastic {
+        shade_scalar(&scene.materials, x, &mut shaded);
+        let d = shading_diff(&shaded, out, &sc.hits);
+        println!("  plastic shading: {d}");
+    }
+}
 
-    // Scalar: today's code, stage by stage.
+/// Ends the run with a one-line error.
+fn refuse(message: &str) -> ! {
+    eprintln!("{message}");
+    std::process::exit(1);
+}
+
+/// The scalar stages' times, ns per sample.
+#[derive(Clone, Copy)]
+struct ScalarTimes {
+    sampler: f64,
+    wavelengths: f64,
+    camera: f64,
+    intersect: f64,
+    light: f64,
+    shadow: f64,
+    shade_scene: f64,
+    shade_lambert: f64,
+}
+
+/// The scalar stages' results (the lockstep stages start from the same ones) and times.
+struct Scalar {
+    us: Vec<Us>,
+    lam: Vec<SampledWavelengths>,
+    rays: Vec<(Ray, f32)>,
+    hits: Vec<Option<SurfaceHit>>,
+    picks: Vec<LightPick>,
+    t: ScalarTimes,
+}
+
+/// Today's code, stage by stage, over every sample of the image.
+fn scalar_stages(scene: &Scene, lambert: &[Material], reps: usize) -> Scalar {
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let n = (width * height) as usize;
     let mut us = vec![Us::default(); n];
-    let t_sampler = time(a.reps, n, || stage_sampler(width, height, &mut us));
+    let sampler = time(reps, n, || stage_sampler(width, height, &mut us));
     let mut lam = vec![SampledWavelengths::sample_visible(0.0); n];
-    let t_wl = time(a.reps, n, || stage_wavelengths_scalar(&us, &mut lam));
+    let wavelengths = time(reps, n, || stage_wavelengths_scalar(&us, &mut lam));
     let mut rays = vec![(Ray::new(Vec3::ZERO, Vec3::Z), 0.0); n];
-    let t_cam = time(a.reps, n, || {
-        stage_camera_scalar(&scene, width, &us, &mut rays)
+    let camera = time(reps, n, || {
+        stage_camera_scalar(scene, width, &us, &mut rays)
     });
     let mut hits = vec![None; n];
-    let t_isect = time(a.reps, n, || stage_intersect(&scene, &rays, &mut hits));
+    let intersect = time(reps, n, || stage_intersect(scene, &rays, &mut hits));
     let blank = LightPick {
         ls: None,
         pdf_light: 0.0,
         tr: 0.0,
     };
     let mut picks = vec![blank; n];
-    let t_light = time(a.reps, n, || {
-        stage_light_sample(&scene, &us, &hits, &lam, &mut picks)
+    let light = time(reps, n, || {
+        stage_light_sample(scene, &us, &hits, &lam, &mut picks)
     });
     let mut tr = vec![0.0; n];
-    let t_shadow = time(a.reps, n, || {
-        stage_shadow_rays(&scene, &hits, &picks, &mut tr)
-    });
+    let shadow = time(reps, n, || stage_shadow_rays(scene, &hits, &picks, &mut tr));
     picks.iter_mut().zip(&tr).for_each(|(p, t)| p.tr = *t);
     let mut shaded = vec![Shaded::default(); n];
     let x: ScalarIn = (&us, &rays, &hits, &lam, &picks);
-    let t_shade_scene = time(a.reps, n, || {
+    let shade_scene = time(reps, n, || {
         stage_shading_scalar_scene(&scene.materials, x, &mut shaded)
     });
-    let t_shade_lambert = time(a.reps, n, || {
-        stage_shading_scalar_lambert(&lambert, x, &mut shaded)
+    let shade_lambert = time(reps, n, || {
+        stage_shading_scalar_lambert(lambert, x, &mut shaded)
     });
+    let t = ScalarTimes {
+        sampler,
+        wavelengths,
+        camera,
+        intersect,
+        light,
+        shadow,
+        shade_scene,
+        shade_lambert,
+    };
+    Scalar {
+        us,
+        lam,
+        rays,
+        hits,
+        picks,
+        t,
+    }
+}
 
-    // Lockstep: the same stages over groups of 8.
-    let us_w: Vec<F> = us.chunks(W).map(|c| map(|i| c[i].wavelength)).collect();
-    let mut lam_w = vec![[[0.0; W]; 4]; groups];
-    let mut pdf_w = vec![[[0.0; W]; 4]; groups];
-    let film = pack_film(width, &us);
-    let k = pinhole(&scene);
+/// A lockstep stage's time with the baseline kernel and, on CPUs with AVX2 and FMA, with the
+/// AVX2 kernel.
+type Both = (f64, Option<f64>);
+
+/// The lockstep stages' times, ns per sample (`plastic`: when the scene's hits are all on
+/// plastics).
+struct LockTimes {
+    wavelengths: Both,
+    camera: Both,
+    lambert: Both,
+    plastic: Option<Both>,
+    pack: f64,
+}
+
+/// The lockstep stages' results, for the check.
+struct LockOut {
+    lambda: Vec<[F; 4]>,
+    cam: Vec<CamOut>,
+    lambert: Vec<ShadeOut>,
+    plastic: Option<Vec<ShadeOut>>,
+}
+
+/// Times `f(false)` (the baseline kernel) and, when the CPU has AVX2 and FMA, `f(true)`
+/// (which may then call the AVX2 kernel).
+fn time_both(reps: usize, n: usize, mut f: impl FnMut(bool)) -> Both {
+    let sse = time(reps, n, || f(false));
+    (sse, has_avx2().then(|| time(reps, n, || f(true))))
+}
+
+/// The same stages over groups of 8, from the scalar stages' random numbers, rays, hits and
+/// light samples (so that both shade the same samples).
+fn lockstep_stages(
+    scene: &Scene,
+    sc: &Scalar,
+    tables: &[DenseSpectrum],
+    reps: usize,
+) -> (LockTimes, LockOut) {
+    let width = scene.camera.width;
+    let n = sc.us.len();
+    let groups = n / W;
+    let us_w: Vec<F> = sc.us.chunks(W).map(|c| map(|i| c[i].wavelength)).collect();
+    let mut lambda = vec![[[0.0; W]; 4]; groups];
+    let mut pdf = vec![[[0.0; W]; 4]; groups];
+    // SAFETY (every `unsafe` below): `time_both` asks for the AVX2 kernel only on CPUs with
+    // AVX2 and FMA, the features those kernels are compiled for.
+    let wavelengths = time_both(reps, n, |avx| {
+        if avx {
+            unsafe { stage_wavelengths_lockstep_avx2(&us_w, &mut lambda, &mut pdf) }
+        } else {
+            stage_wavelengths_lockstep(&us_w, &mut lambda, &mut pdf)
+        }
+    });
+    let film = pack_film(width, &sc.us);
+    let k = pinhole(scene);
     let mut cam = vec![(V3::default(), V3::default(), [0.0; W]); groups];
-    let tables_ref: Vec<&[f32; DENSE_LEN]> = tables.iter().map(|t| &*t.values).collect();
-    let mut out = vec![ShadeOut::default(); groups];
-    // The scalar stages' wavelengths, rays, hits and light samples, so that both shade the
-    // same samples.
+    let camera = time_both(reps, n, |avx| {
+        if avx {
+            unsafe { stage_camera_lockstep_avx2(&k, &film, &mut cam) }
+        } else {
+            stage_camera_lockstep(&k, &film, &mut cam)
+        }
+    });
+    let x: ScalarIn = (&sc.us, &sc.rays, &sc.hits, &sc.lam, &sc.picks);
     let mut ins = vec![ShadeIn::default(); groups];
-    let l_pack = time(a.reps, n, || stage_pack(x, &mut ins));
-    let best = |s: f64, a: Option<f64>| a.unwrap_or(s).min(s);
-    let row = |name: &str, scalar: f64, sse: f64, avx: Option<f64>| {
+    let pack = time(reps, n, || stage_pack(x, &mut ins));
+    let tables: Vec<&[f32; DENSE_LEN]> = tables.iter().map(|t| &*t.values).collect();
+    let mut out = vec![ShadeOut::default(); groups];
+    let lambert = time_both(reps, n, |avx| {
+        if avx {
+            unsafe { stage_shading_lockstep_avx2(&tables, &ins, &mut out) }
+        } else {
+            stage_shading_lockstep(&tables, &ins, &mut out)
+        }
+    });
+    let lambert_out = out.clone();
+    // The scene's own plastic, when every material a hit meets is one the kernel knows.
+    let (ks, f0s, known) = plastics(&scene.materials);
+    let plastic = sc
+        .hits
+        .iter()
+        .flatten()
+        .all(|h| known[h.material as usize])
+        .then(|| {
+            let f0: Vec<&[f32; DENSE_LEN]> = f0s.iter().map(|t| &*t.values).collect();
+            let uc: Vec<F> = sc.us.chunks(W).map(|c| map(|i| c[i].bsdf)).collect();
+            let p: PlasticIn = (&ks, &tables, &f0, &uc);
+            time_both(reps, n, |avx| {
+                if avx {
+                    unsafe { stage_plastic_lockstep_avx2(p, &ins, &mut out) }
+                } else {
+                    stage_plastic_lockstep(p, &ins, &mut out)
+                }
+            })
+        });
+    let times = LockTimes {
+        wavelengths,
+        camera,
+        lambert,
+        plastic,
+        pack,
+    };
+    let outs = LockOut {
+        lambda,
+        cam,
+        lambert: lambert_out,
+        plastic: plastic.map(|_| out),
+    };
+    (times, outs)
+}
+
+/// The faster of a stage's two kernels.
+fn best((sse, avx): Both) -> f64 {
+    avx.unwrap_or(sse).min(sse)
+}
+
+/// Prints the stages' times, the gains and the first hit's totals.
+fn report(s: &ScalarTimes, l: &LockTimes) {
+    let row = |name: &str, scalar: f64, (sse, avx): Both| {
         let avx_s = avx.map_or("-".to_string(), |v| format!("{v:.2}"));
         let sp = avx.map_or("-".to_string(), |v| format!("{:.2}×", scalar / v));
         println!(
@@ -1123,98 +1285,40 @@ fn main() {
         "\n{:<34} {:>9} {:>11} {:>11} {:>10} {:>9}",
         "stage (ns/sample)", "scalar", "lock SSE2", "lock AVX2", "SSE2 gain", "AVX2 gain"
     );
-    let l_wl = time(a.reps, n, || {
-        stage_wavelengths_lockstep(&us_w, &mut lam_w, &mut pdf_w)
-    });
-    let l_wl_avx = has_avx2().then(|| {
-        time(a.reps, n, || {
-            // SAFETY: the CPU has AVX2 and FMA (checked by `has_avx2`).
-            unsafe { stage_wavelengths_lockstep_avx2(&us_w, &mut lam_w, &mut pdf_w) }
-        })
-    });
-    row("wavelengths (4 per sample)", t_wl, l_wl, l_wl_avx);
-    let l_cam = time(a.reps, n, || stage_camera_lockstep(&k, &film, &mut cam));
-    let l_cam_avx = has_avx2().then(|| {
-        time(a.reps, n, || {
-            // SAFETY: as above.
-            unsafe { stage_camera_lockstep_avx2(&k, &film, &mut cam) }
-        })
-    });
-    row("camera ray", t_cam, l_cam, l_cam_avx);
-    let l_sh = time(a.reps, n, || {
-        stage_shading_lockstep(&tables_ref, &ins, &mut out)
-    });
-    let l_sh_avx = has_avx2().then(|| {
-        time(a.reps, n, || {
-            // SAFETY: as above.
-            unsafe { stage_shading_lockstep_avx2(&tables_ref, &ins, &mut out) }
-        })
-    });
-    row("shading, Lambertian", t_shade_lambert, l_sh, l_sh_avx);
-    let lambert_out = out.clone();
-    // The scene's own plastic, when every material is one the plastic kernel knows.
-    let (ks, f0s, known) = plastics(&scene.materials);
-    let plastic = hits.iter().flatten().all(|h| known[h.material as usize]);
-    let mut plastic_time = None;
-    if plastic {
-        let f0_ref: Vec<&[f32; DENSE_LEN]> = f0s.iter().map(|t| &*t.values).collect();
-        let uc: Vec<F> = us.chunks(W).map(|c| map(|i| c[i].bsdf)).collect();
-        let p: PlasticIn = (&ks, &tables_ref, &f0_ref, &uc);
-        let l_p = time(a.reps, n, || stage_plastic_lockstep(p, &ins, &mut out));
-        let l_p_avx = has_avx2().then(|| {
-            time(a.reps, n, || {
-                // SAFETY: as above.
-                unsafe { stage_plastic_lockstep_avx2(p, &ins, &mut out) }
-            })
-        });
-        row("shading, the scene's plastic", t_shade_scene, l_p, l_p_avx);
-        plastic_time = Some(best(l_p, l_p_avx));
-    } else {
-        println!("(a hit's material is not an untextured plastic: no plastic kernel)");
+    row("wavelengths (4 per sample)", s.wavelengths, l.wavelengths);
+    row("camera ray", s.camera, l.camera);
+    row("shading, Lambertian", s.shade_lambert, l.lambert);
+    match l.plastic {
+        Some(p) => row("shading, the scene's plastic", s.shade_scene, p),
+        None => println!("(a hit's material is not an untextured plastic: no plastic kernel)"),
     }
     println!(
-        "{:<34} {:>9} {l_pack:>11.2}",
-        "SoA packing of hits, light samples", "-"
+        "{:<34} {:>9} {:>11.2}",
+        "SoA packing of hits, light samples", "-", l.pack
     );
     println!("\nscalar in both (ns/sample):");
-    println!("{:<34} {t_sampler:>9.2}", "sampler (11 numbers)");
-    println!("{:<34} {t_isect:>9.2}", "primary ray query");
-    println!("{:<34} {t_light:>9.2}", "light sample");
-    println!("{:<34} {t_shadow:>9.2}", "shadow ray query");
+    println!("{:<34} {:>9.2}", "sampler (11 numbers)", s.sampler);
+    println!("{:<34} {:>9.2}", "primary ray query", s.intersect);
+    println!("{:<34} {:>9.2}", "light sample", s.light);
+    println!("{:<34} {:>9.2}", "shadow ray query", s.shadow);
     println!(
         "{:<34} {:>9.2}",
-        "shading, scene's BSDF (scalar)", t_shade_scene
+        "shading, scene's BSDF (scalar)", s.shade_scene
     );
-    let total_s = t_sampler + t_wl + t_cam + t_isect + t_light + t_shadow + t_shade_lambert;
-    let total_l = t_sampler
-        + best(l_wl, l_wl_avx)
-        + best(l_cam, l_cam_avx)
-        + t_isect
-        + t_light
-        + t_shadow
-        + best(l_sh, l_sh_avx)
-        + l_pack;
+    let shared = s.sampler + s.intersect + s.light + s.shadow;
+    let total_s = shared + s.wavelengths + s.camera + s.shade_lambert;
+    let total_l = shared + best(l.wavelengths) + best(l.camera) + best(l.lambert) + l.pack;
     println!(
         "\nfirst hit, Lambertian walls: scalar {total_s:.1} ns/sample, lockstep {total_l:.1} ns/sample: {:.2}×",
         total_s / total_l
     );
-    if let Some(l_p) = plastic_time {
-        let s = total_s - t_shade_lambert + t_shade_scene;
-        let l = total_l - best(l_sh, l_sh_avx) + l_p;
+    if let Some(p) = l.plastic {
+        let ps = total_s - s.shade_lambert + s.shade_scene;
+        let pl = total_l - best(l.lambert) + best(p);
         println!(
-            "first hit, the scene's plastic: scalar {s:.1} ns/sample, lockstep {l:.1} ns/sample: {:.2}×",
-            s / l
+            "first hit, the scene's plastic: scalar {ps:.1} ns/sample, lockstep {pl:.1} ns/sample: {:.2}×",
+            ps / pl
         );
-    }
-    let mut shaded = vec![Shaded::default(); n];
-    shade_scalar(&lambert, x, &mut shaded);
-    check(&lam, &lam_w, (&rays, &cam));
-    let d = shading_diff(&shaded, &lambert_out, &hits);
-    println!("  Lambertian shading: {d}");
-    if plastic {
-        shade_scalar(&scene.materials, x, &mut shaded);
-        let d = shading_diff(&shaded, &out, &hits);
-        println!("  plastic shading: {d}");
     }
 }
 
