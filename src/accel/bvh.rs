@@ -17,8 +17,8 @@
 //!
 //! **Robustness.**
 //! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored in
-//!   BVH primitive order, 36 bytes each (no index indirection per test; a leaf of up to three
-//!   triangles spans at most two cache lines).
+//!   BVH primitive order, 36 bytes each (no index indirection per test; a leaf of three
+//!   triangles is 108 contiguous bytes).
 //! - Child boxes are the exact bounds of their triangles (the CWBVH's 8-bit quantised boxes are
 //!   not used), and the box test is conservative in the spirit of PBR 4ed §6.8.2
 //!   ("Conservative Ray–Bounds Intersections"; see `RayBoxes` in the source). A box the exact
