@@ -16,8 +16,9 @@
 //! stop at the first hit and compute nothing else.
 //!
 //! **Robustness.**
-//! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles packed in
-//!   BVH primitive order (no index indirection per test).
+//! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored in
+//!   BVH primitive order, 36 bytes each (no index indirection per test; a leaf of three
+//!   triangles is 108 contiguous bytes).
 //! - Child boxes are the exact bounds of their triangles (the CWBVH's 8-bit quantised boxes are
 //!   not used), and the box test is conservative in the spirit of PBR 4ed §6.8.2
 //!   ("Conservative Ray–Bounds Intersections"; see `RayBoxes` in the source). A box the exact
@@ -27,7 +28,8 @@
 //!
 //! Degenerate triangles (zero area, or a non-finite vertex) are left out of the tree: they can
 //! never be hit. `Bvh` is plain data (`Send + Sync`); queries allocate nothing (the traversal
-//! stack lives on the call stack), except on pathologically deep trees (see `StackSize`).
+//! stack's first [`STACK_PLACES`] entries live on the call stack), except on pathologically
+//! deep trees (see [`super::stack`]).
 //!
 //! ```
 //! use glam::Vec3;
@@ -48,14 +50,15 @@ use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
-use obvhs::faststack::{FastStack, HeapStack, StackStack};
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::triangle::Triangle;
 
+use super::stack::Stack;
 use crate::geometry::offset::gamma;
 use crate::geometry::ray::Ray;
 use crate::geometry::triangle::{
-    intersect_packed, is_degenerate, PackedTriangle, TriangleHit, WatertightRay,
+    intersect_packed, is_degenerate, PackedTriangle, TriangleHit, WatertightRay, ROW_FLOATS,
+    ROW_PADDING,
 };
 
 /// A hit found by the BVH: `prim` indexes the slice given to [`Bvh::build`].
@@ -69,12 +72,10 @@ pub struct BvhHit {
 pub struct Bvh {
     /// Node 0 is the root; empty for a BVH without hittable triangles.
     nodes: Vec<WideNode>,
-    /// Triangles in BVH primitive order, packed for the SIMD test.
-    triangles: Vec<PackedTriangle>,
+    /// Triangles in BVH primitive order, as a row store for [`PackedTriangle::load`].
+    rows: Vec<f32>,
     /// BVH primitive order → index into the slice given to `build`.
     input_index: Vec<u32>,
-    /// Traversal stack needed by the deepest path of the tree.
-    stack_size: StackSize,
     input_count: usize,
     bounds: (Vec3, Vec3),
 }
@@ -101,34 +102,10 @@ struct Entry {
     t_enter: f32,
 }
 
-/// Which traversal stack the tree needs. Wide BVHs are shallow; deeper trees only arise from
-/// adversarial inputs (e.g. geometrically spaced triangles).
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum StackSize {
-    /// 16 entries on the call stack (128 bytes).
-    Small,
-    /// 64 entries on the call stack (512 bytes).
-    Medium,
-    /// 256 entries on the call stack (2 KiB).
-    Large,
-    /// Heap-allocated per query, with this capacity.
-    Heap(usize),
-}
-
-impl StackSize {
-    /// While a node at level l (the root is level 1) is visited, each ancestor has left at most
-    /// 7 of its ≤ 8 pushed children on the stack, and the node pushes at most 8 if l < depth:
-    /// at most 7·(depth − 2) + 8 = 7·depth − 6 entries (1 for a lone root). obvhs's
-    /// `StackStack<_, N>` holds N − 1 (a push on a full stack overwrites the top).
-    fn for_depth(depth: usize) -> StackSize {
-        match (7 * depth).max(7) - 5 {
-            n if n <= 16 => StackSize::Small,
-            n if n <= 64 => StackSize::Medium,
-            n if n <= 256 => StackSize::Large,
-            n => StackSize::Heap(n),
-        }
-    }
-}
+/// Traversal stack entries kept on the call stack (256 bytes); deeper traversals spill to the
+/// heap. The worst case 7·depth − 6 (each ancestor of the visited node leaves at most 7 of its
+/// ≤ 8 children on the stack, the node pushes at most 8) is far above what rays meet.
+const STACK_PLACES: usize = 32;
 
 /// Triangles per leaf (the CWBVH maximum).
 const LEAF_SIZE: u32 = 3;
@@ -190,13 +167,9 @@ impl Bvh {
         let ordered: Vec<[Vec3; 3]> = input_index.iter().map(|&i| triangles[i as usize]).collect();
         let nodes = wide_nodes(&cwbvh.nodes, &ordered);
         Bvh {
-            stack_size: StackSize::for_depth(tree_depth(&nodes)),
+            rows: row_store(&ordered),
             nodes,
             bounds: bounds_of(&ordered),
-            triangles: ordered
-                .iter()
-                .map(|&[p0, p1, p2]| PackedTriangle::new(p0, p1, p2))
-                .collect(),
             input_index,
             input_count: triangles.len(),
         }
@@ -205,9 +178,8 @@ impl Bvh {
     fn empty(input_count: usize) -> Bvh {
         Bvh {
             nodes: Vec::new(),
-            triangles: Vec::new(),
+            rows: Vec::new(),
             input_index: Vec::new(),
-            stack_size: StackSize::Small,
             input_count,
             bounds: (Vec3::ZERO, Vec3::ZERO),
         }
@@ -219,16 +191,8 @@ impl Bvh {
             return None;
         }
         let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
-        let (i, hit) = match self.stack_size {
-            StackSize::Small => self.closest(StackStack::<Entry, 16>::default(), query, t_max),
-            StackSize::Medium => self.closest(StackStack::<Entry, 64>::default(), query, t_max),
-            StackSize::Large => self.closest(StackStack::<Entry, 256>::default(), query, t_max),
-            StackSize::Heap(n) => self.closest(HeapStack::new_with_capacity(n), query, t_max),
-        }?;
-        Some(BvhHit {
-            prim: self.input_index[i],
-            hit,
-        })
+        let (prim, hit) = self.closest(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max)?;
+        Some(BvhHit { prim, hit })
     }
 
     /// Whether anything is hit with t in (0, t_max) (shadow rays; stops at the first hit).
@@ -240,12 +204,7 @@ impl Bvh {
             return false;
         };
         let query = (&triangle, &RayBoxes::new(ray));
-        match self.stack_size {
-            StackSize::Small => self.any(StackStack::<Entry, 16>::default(), query, t_max),
-            StackSize::Medium => self.any(StackStack::<Entry, 64>::default(), query, t_max),
-            StackSize::Large => self.any(StackStack::<Entry, 256>::default(), query, t_max),
-            StackSize::Heap(n) => self.any(HeapStack::new_with_capacity(n), query, t_max),
-        }
+        self.any(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max)
     }
 
     /// Number of triangles given to [`Bvh::build`] (degenerate ones included).
@@ -255,10 +214,10 @@ impl Bvh {
 
     /// Bytes held: `(nodes, triangles)`, the triangles with their index into the input.
     pub fn memory_bytes(&self) -> (usize, usize) {
-        let triangles = std::mem::size_of::<PackedTriangle>() + std::mem::size_of::<u32>();
         (
             self.nodes.len() * std::mem::size_of::<WideNode>(),
-            self.triangles.len() * triangles,
+            self.rows.len() * std::mem::size_of::<f32>()
+                + self.input_index.len() * std::mem::size_of::<u32>(),
         )
     }
 
@@ -280,37 +239,41 @@ impl Bvh {
         Some((WatertightRay::new(ray)?, RayBoxes::new(ray)))
     }
 
-    /// Closest-hit traversal: the BVH-order index and the hit.
-    fn closest<S: FastStack<Entry>>(
+    /// Closest-hit traversal: the input index and the hit.
+    fn closest<const N: usize>(
         &self,
-        stack: S,
+        stack: &mut Stack<Entry, N>,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
-    ) -> Option<(usize, TriangleHit)> {
-        let mut best = None;
+    ) -> Option<(u32, TriangleHit)> {
+        let mut best: Option<(usize, TriangleHit)> = None;
         self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
             for i in first..first + count {
-                if let Some(hit) = intersect_packed(triangle, &self.triangles[i], *t_max) {
+                let tri = PackedTriangle::load(&self.rows, i);
+                if let Some(hit) = intersect_packed(triangle, &tri, *t_max) {
                     *t_max = hit.t;
                     best = Some((i, hit));
                 }
             }
             false
         });
-        best
+        let (i, hit) = best?;
+        Some((*self.input_index.get(i)?, hit))
     }
 
     /// Any-hit traversal with early exit.
-    fn any<S: FastStack<Entry>>(
+    fn any<const N: usize>(
         &self,
-        stack: S,
+        stack: &mut Stack<Entry, N>,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
     ) -> bool {
         let mut hit = false;
         self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
-            hit = (first..first + count)
-                .any(|i| intersect_packed(triangle, &self.triangles[i], *t_max).is_some());
+            hit = (first..first + count).any(|i| {
+                let tri = PackedTriangle::load(&self.rows, i);
+                intersect_packed(triangle, &tri, *t_max).is_some()
+            });
             hit
         });
         hit
@@ -319,16 +282,15 @@ impl Bvh {
     /// Calls `leaf(first, count, t_max)` for the leaves whose boxes the ray meets before
     /// `t_max`, near to far within each node; `leaf` may lower `t_max` and returns true to stop.
     #[inline(always)]
-    fn traverse<S: FastStack<Entry>>(
+    fn traverse<const N: usize>(
         &self,
-        mut stack: S,
+        stack: &mut Stack<Entry, N>,
         ray: &RayBoxes,
         t_max: &mut f32,
         mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
     ) {
         stack.push(Entry::default());
-        while !stack.is_empty() {
-            let entry = stack.pop_fast();
+        while let Some(entry) = stack.pop() {
             if entry.t_enter > *t_max {
                 continue;
             }
@@ -490,7 +452,18 @@ fn wide_nodes(cw: &[CwBvhNode], triangles: &[[Vec3; 3]]) -> Vec<WideNode> {
     nodes
 }
 
+/// The triangles' row store for [`PackedTriangle::load`], in BVH primitive order.
+fn row_store(ordered: &[[Vec3; 3]]) -> Vec<f32> {
+    let mut rows = Vec::with_capacity(ROW_FLOATS * ordered.len() + ROW_PADDING);
+    for &tri in ordered {
+        PackedTriangle::push_rows(&mut rows, tri);
+    }
+    rows.extend([0.0; ROW_PADDING]);
+    rows
+}
+
 /// Number of nodes on the longest root-to-leaf path.
+#[cfg(test)]
 fn tree_depth(nodes: &[WideNode]) -> usize {
     let mut deepest = 0;
     let mut pending = vec![(0u32, 1usize)];
@@ -834,52 +807,52 @@ mod tests {
         }
     }
 
-    /// Triangles at geometrically growing distances give a deep tree; every stack size agrees.
+    /// Triangles at geometrically growing distances give a deep tree, a random soup a bushy
+    /// one. Traversals with 1, 2 and the default number of in-place stack entries (the first
+    /// two spill to the heap) all find brute force's hit.
     #[test]
-    fn deep_trees_and_all_stack_sizes() {
+    fn deep_trees_and_stack_spills() {
         let mut rng = Rng::new(6);
-        let tris: Vec<[Vec3; 3]> = (0..400)
+        let deep: Vec<[Vec3; 3]> = (0..400)
             .map(|k| {
                 let c = Vec3::splat(1.12f32.powi(k) * 1e-6);
                 [c, c + Vec3::X * 1e-7, c + Vec3::Y * 1e-7]
             })
             .collect();
-        let bvh = Bvh::build(&tris);
-        let depth = tree_depth(&bvh.nodes);
-        assert!(depth >= 3, "depth {depth}");
-        assert!(
-            depth <= 37,
-            "depth {depth}: the large stack below would be too small"
-        );
-        assert_eq!(StackSize::for_depth(1), StackSize::Small);
-        assert_eq!(StackSize::for_depth(3), StackSize::Small);
-        assert_eq!(StackSize::for_depth(4), StackSize::Medium);
-        assert_eq!(StackSize::for_depth(9), StackSize::Medium);
-        assert_eq!(StackSize::for_depth(10), StackSize::Large);
-        assert_eq!(StackSize::for_depth(37), StackSize::Large);
-        assert_eq!(StackSize::for_depth(38), StackSize::Heap(261));
-        for _ in 0..3000 {
-            let k = rng.below(tris.len());
-            let target = (tris[k][0] + tris[k][1] + tris[k][2]) / 3.0;
-            let o = target + Vec3::new(0.1, -0.2, 1.0) * 1.12f32.powi(k as i32) * 1e-6;
-            let r = Ray::new(o, target - o);
-            let (tri, boxes) = bvh.query(&r, f32::INFINITY).unwrap();
-            let q = (&tri, &boxes);
-            let large = bvh.closest(StackStack::<Entry, 256>::default(), q, f32::INFINITY);
-            let heap = bvh.closest(
-                HeapStack::new_with_capacity(7 * depth - 5),
-                q,
-                f32::INFINITY,
-            );
-            let mut results = vec![large, heap];
-            if depth <= 9 {
-                results.push(bvh.closest(StackStack::<Entry, 64>::default(), q, f32::INFINITY));
-            }
-            let expected = brute_closest(&tris, &r, f32::INFINITY).map(|h| h.hit.t);
-            for got in results {
-                assert_eq!(got.map(|(_, h)| h.t), expected);
+        let soup = random_soup(&mut rng, 3000, 1.0);
+        let mut spills = 0;
+        for (tris, k) in [(&deep, 0), (&soup, 1)] {
+            let bvh = Bvh::build(tris);
+            assert!(tree_depth(&bvh.nodes) >= 3);
+            let (lo, hi) = bvh.bounds();
+            let (center, extent) = (0.5 * (lo + hi), (hi - lo).max_element());
+            for _ in 0..3000 {
+                let r = if k == 0 {
+                    let k = rng.below(tris.len());
+                    let target = (tris[k][0] + tris[k][1] + tris[k][2]) / 3.0;
+                    let o = target + Vec3::new(0.1, -0.2, 1.0) * 1.12f32.powi(k as i32) * 1e-6;
+                    Ray::new(o, target - o)
+                } else {
+                    random_ray(&mut rng, center, extent)
+                };
+                let Some((tri, boxes)) = bvh.query(&r, f32::INFINITY) else {
+                    continue;
+                };
+                let q = (&tri, &boxes);
+                let (mut one, mut two) = (Stack::<Entry, 1>::new(), Stack::<Entry, 2>::new());
+                let results = [
+                    bvh.closest(&mut one, q, f32::INFINITY),
+                    bvh.closest(&mut two, q, f32::INFINITY),
+                    bvh.closest(&mut Stack::<Entry, STACK_PLACES>::new(), q, f32::INFINITY),
+                ];
+                spills += two.spilled() as usize;
+                let expected = brute_closest(tris, &r, f32::INFINITY).map(|h| h.hit.t);
+                for got in results {
+                    assert_eq!(got.map(|(_, h)| h.t), expected);
+                }
             }
         }
+        assert!(spills > 100, "{spills}");
     }
 
     /// Rays spawned from hit points on a tessellated, tilted planar mesh (PBR 4ed §6.8.6 offsets)

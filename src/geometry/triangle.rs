@@ -61,19 +61,54 @@ pub fn is_degenerate(p0: Vec3, p1: Vec3, p2: Vec3) -> bool {
     !finite || (p1 - p0).cross(p2 - p0) == Vec3::ZERO
 }
 
-/// A triangle stored by coordinate: `rows[k]` holds coordinate k of p0, p1, p2 in lanes 0–2
-/// (lane 3 is 0 and ignored). 48 bytes.
+/// A triangle by coordinate: `rows[k]` holds coordinate k of p0, p1, p2 in lanes 0–2. Lane 3 is
+/// ignored by every test: 0 from [`PackedTriangle::new`], the next stored float from
+/// [`PackedTriangle::load`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct PackedTriangle {
     rows: [Vec4; 3],
 }
 
+/// Floats per triangle in a row store ([`PackedTriangle::push_rows`]).
+pub(crate) const ROW_FLOATS: usize = 9;
+/// Floats that end a row store, so the last row's four-lane load stays inside it.
+pub(crate) const ROW_PADDING: usize = 1;
+
 impl PackedTriangle {
+    #[cfg(any(test, feature = "testing"))]
     #[inline]
     pub fn new(p0: Vec3, p1: Vec3, p2: Vec3) -> PackedTriangle {
         let row = |k: usize| Vec4::new(p0[k], p1[k], p2[k], 0.0);
         PackedTriangle {
             rows: [row(0), row(1), row(2)],
+        }
+    }
+
+    /// Appends the triangle to a row store, 36 bytes: x, y, z of p0, p1, p2, by coordinate.
+    pub fn push_rows(rows: &mut Vec<f32>, [p0, p1, p2]: [Vec3; 3]) {
+        for k in 0..3 {
+            rows.extend([p0[k], p1[k], p2[k]]);
+        }
+    }
+
+    /// Triangle `i` of a row store built by [`PackedTriangle::push_rows`] and ended by
+    /// [`ROW_PADDING`] floats (each row is loaded as four lanes). Out of range (not built so):
+    /// the zero triangle, which nothing hits.
+    #[inline(always)]
+    pub fn load(rows: &[f32], i: usize) -> PackedTriangle {
+        let start = ROW_FLOATS * i;
+        let stored = rows.get(start..start + ROW_FLOATS + ROW_PADDING);
+        match stored.and_then(|r| <&[f32; ROW_FLOATS + ROW_PADDING]>::try_from(r).ok()) {
+            Some(r) => PackedTriangle {
+                rows: [
+                    Vec4::from_slice(&r[0..4]),
+                    Vec4::from_slice(&r[3..7]),
+                    Vec4::from_slice(&r[6..10]),
+                ],
+            },
+            None => PackedTriangle {
+                rows: [Vec4::ZERO; 3],
+            },
         }
     }
 
@@ -96,12 +131,12 @@ pub struct WatertightRay {
     o: Vec3,
     d: Vec3,
     /// Rows of a [`PackedTriangle`] that become x, y, z: the ray's largest |d| component is z.
-    axes: [usize; 3],
+    pub(super) axes: [usize; 3],
     /// The origin's permuted coordinates, each splatted.
-    o_perm: [Vec4; 3],
+    pub(super) o_perm: [Vec4; 3],
     /// Shear taking the permuted direction to (0, 0, 1): x' = x + sx z, y' = y + sy z,
     /// z' = sz z; `[sx, sy, sz]`, each splatted.
-    shear: [Vec4; 3],
+    pub(super) shear: [Vec4; 3],
 }
 
 impl WatertightRay {
