@@ -115,7 +115,14 @@ impl CoatAlbedo {
     /// 1 − E(μ): what the coat lets through to the layer below.
     #[inline]
     pub fn transmittance(&self, mu: f32) -> f32 {
-        (1.0 - self.eval(mu)).max(0.0)
+        self.eval_and_transmittance(mu).1
+    }
+
+    /// (E(μ), 1 − E(μ)) from one lookup, for callers that need both.
+    #[inline]
+    pub fn eval_and_transmittance(&self, mu: f32) -> (f32, f32) {
+        let e = self.eval(mu);
+        (e, (1.0 - e).max(0.0))
     }
 
     /// The hemispherical average of the transmittance, T̄ = ∫₀¹ (1 − E(μ)) 2μ dμ.
@@ -205,6 +212,15 @@ impl SpecularCoat {
             return 0.0;
         }
         self.distrib.reflection_pdf(wo, wi)
+    }
+
+    /// (f, pdf of ωi from ωo): bit for bit `f(wo, wi)` and `pdf(wo, wi)`, sharing the
+    /// microfacet terms ([`TrowbridgeReitz::reflection_eval_pair`]; its reverse pdf, unused,
+    /// is dropped by the compiler once inlined).
+    #[inline]
+    pub fn f_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
+        let (f, pdf, _) = self.eval_pair(wo, wi);
+        (f, pdf)
     }
 
     /// (f, pdf of ωi from ωo, pdf of ωo from ωi): bit for bit `f(wo, wi)`, `pdf(wo, wi)` and

@@ -175,6 +175,16 @@ impl Bxdf {
         dispatch!(self, b => b.pdf(wo, wi, mode))
     }
 
+    /// (`f(wo, wi, mode)`, `pdf(wo, wi, mode)`) bit for bit: next event estimation's pair.
+    /// The plastic shares its terms; the other models evaluate the two.
+    #[inline]
+    pub fn f_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (SampledSpectrum, f32) {
+        match self {
+            Bxdf::Plastic(b) => b.f_pdf(wo, wi, mode),
+            _ => dispatch!(self, b => (b.f(wo, wi, mode), b.pdf(wo, wi, mode))),
+        }
+    }
+
     /// [`BsdfEval`] in the local frame: the same values, bit for bit, as `f(wo, wi, mode)`,
     /// `pdf(wo, wi, mode)` and `pdf(wi, wo, mode.other())`; the plastic (the Cornell box's
     /// UsdPreviewSurface) shares its terms, the other models evaluate the three.
@@ -271,6 +281,17 @@ impl Bsdf {
         self.bxdf.pdf(wo, wi, mode)
     }
 
+    /// Bit for bit (`f(wo, wi, mode)`, `pdf(wo, wi, mode)`), one frame change and the
+    /// model's shared terms ([`Bxdf::f_pdf`]).
+    #[inline]
+    pub fn f_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (SampledSpectrum, f32) {
+        let (wo, wi) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        if wo.z == 0.0 {
+            return (SampledSpectrum::ZERO, 0.0);
+        }
+        self.bxdf.f_pdf(wo, wi, mode)
+    }
+
     /// [`BsdfEval`] of the pair: bit for bit `f(wo, wi, mode)`, `pdf(wo, wi, mode)` and
     /// `pdf(wi, wo, mode.other())`, at the cost of about one evaluation.
     #[inline]
@@ -346,5 +367,36 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_plastic_sample_carries_f_and_pdf_bit_for_bit() {
+        // The plastic's non-delta samples' f and pdf (computed with shared terms in
+        // `sample_f`) are its own `f` and `pdf` of the sampled pair.
+        let mut rng = Rng::new(12);
+        let mut checked = 0;
+        for ex in examples() {
+            if !matches!(ex.bxdf, Bxdf::Plastic(_)) {
+                continue;
+            }
+            for _ in 0..400 {
+                let wo = rng.unit_vector();
+                let (uc, u) = (rng.f32(), [rng.f32(), rng.f32()]);
+                let mode = TransportMode::Radiance;
+                let Some(s) = ex.bxdf.sample_f(wo, uc, u, mode) else {
+                    continue;
+                };
+                if s.specular {
+                    continue;
+                }
+                let bits = |s: SampledSpectrum| s.0.map(f32::to_bits);
+                let f = ex.bxdf.f(wo, s.wi, mode);
+                assert_eq!(bits(s.f), bits(f), "{} f at {wo}, {}", ex.name, s.wi);
+                let pdf = ex.bxdf.pdf(wo, s.wi, mode);
+                assert_eq!(s.pdf_w.to_bits(), pdf.to_bits(), "{} pdf", ex.name);
+                checked += 1;
+            }
+        }
+        assert!(checked > 500, "{checked}");
     }
 }

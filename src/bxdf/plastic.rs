@@ -89,8 +89,13 @@ impl PlasticBxdf {
     /// The probability of sampling the coat at ωo (upper hemisphere).
     #[inline]
     pub fn coat_probability(&self, wo: Vec3) -> f32 {
-        let e = self.albedo.eval(wo.z);
-        let d = self.albedo.transmittance(wo.z) * self.diffuse_albedo;
+        self.coat_probability_at(self.albedo.eval_and_transmittance(wo.z))
+    }
+
+    /// [`Self::coat_probability`] from the coat's (E(μo), t(μo)).
+    #[inline]
+    fn coat_probability_at(&self, (e, t): (f32, f32)) -> f32 {
+        let d = t * self.diffuse_albedo;
         if e + d > 0.0 {
             e / (e + d)
         } else {
@@ -120,6 +125,27 @@ impl PlasticBxdf {
         }
         let pc = self.coat_probability(wo);
         pc * self.coat.pdf(wo, wi) + (1.0 - pc) * cosine_hemisphere_pdf(wi.z)
+    }
+
+    /// `f_upper` and `pdf_upper` of one pair, bit for bit, with the coat's microfacet terms
+    /// shared and the coat's (E(μo), t(μo)) given (`at_o`, one lookup).
+    #[inline]
+    fn f_pdf_upper(&self, wo: Vec3, wi: Vec3, at_o: (f32, f32)) -> (SampledSpectrum, f32) {
+        if wi.z <= 0.0 || wo.z <= 0.0 {
+            return (SampledSpectrum::ZERO, 0.0);
+        }
+        let (coat_f, coat_pdf) = self.coat.f_pdf(wo, wi);
+        let f = coat_f + self.diffuse * (at_o.1 * self.albedo.transmittance(wi.z));
+        let pc = self.coat_probability_at(at_o);
+        (f, pc * coat_pdf + (1.0 - pc) * cosine_hemisphere_pdf(wi.z))
+    }
+
+    /// Bit for bit (`f(wo, wi)`, `pdf(wo, wi)`) at about the cost of `f` alone.
+    #[inline]
+    pub fn f_pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> (SampledSpectrum, f32) {
+        let flip = wo.z < 0.0;
+        let (wo, wi) = (mirror_z(wo, flip), mirror_z(wi, flip));
+        self.f_pdf_upper(wo, wi, self.albedo.eval_and_transmittance(wo.z))
     }
 
     #[inline]
@@ -170,7 +196,8 @@ impl PlasticBxdf {
         if wo.z == 0.0 {
             return None;
         }
-        let pc = self.coat_probability(wo);
+        let at_o = self.albedo.eval_and_transmittance(wo.z);
+        let pc = self.coat_probability_at(at_o);
         let wi = if uc < pc {
             if self.coat.is_delta() {
                 let wi = Vec3::new(-wo.x, -wo.y, wo.z);
@@ -181,8 +208,7 @@ impl PlasticBxdf {
         } else {
             cosine_hemisphere(u)
         };
-        let f = self.f_upper(wo, wi);
-        let pdf = self.pdf_upper(wo, wi);
+        let (f, pdf) = self.f_pdf_upper(wo, wi, at_o);
         Some(BsdfSample::reflection(f, mirror_z(wi, flip), pdf, false))
     }
 }

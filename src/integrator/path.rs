@@ -537,7 +537,9 @@ impl Nee<'_> {
 
     fn shared(&self, ls: &LightLiSample) -> Shared {
         let si = self.si;
-        let f = self.bsdf.f(self.wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(si.ns).abs();
+        // f and the BSDF's pdf of ωi together: one frame change, shared microfacet terms.
+        let (f, pdf_bsdf) = self.bsdf.f_pdf(self.wo, ls.wi, TransportMode::Radiance);
+        let f = f * ls.wi.dot(si.ns).abs();
         if f.is_black() {
             return (f, 0.0, 0.0, 0.0);
         }
@@ -548,7 +550,6 @@ impl Nee<'_> {
         let w = if ls.delta || tr == 0.0 || !self.scene.casts_shadows(self.light as u32) {
             1.0
         } else {
-            let pdf_bsdf = self.bsdf.pdf(self.wo, ls.wi, TransportMode::Radiance);
             power_heuristic(pdf_light, pdf_bsdf)
         };
         (f, tr, pdf_light, w)

@@ -82,6 +82,9 @@ pub struct PreviewMaterial {
     pub textures: PreviewTextures,
     /// The lobes that can carry weight, decided when the material is built.
     pub lobes: PreviewLobes,
+    /// True when the BSDF reads a texture ([`Self::bsdf_is_textured`]), decided when the
+    /// material is built (and by [`Self::prepare_textures`]) rather than tested per hit.
+    pub bsdf_textured: bool,
 }
 
 /// Which BSDF a UsdPreviewSurface becomes: its lobes whose weight is exactly zero for every
@@ -130,6 +133,22 @@ pub enum BaseCoats {
     /// A textured `specularColor`: Schlick at F0 = 0 and 1, at every roughness level or at
     /// the constant roughness.
     Schlick(SchlickLevels),
+}
+
+impl PreviewTextures {
+    /// True when a texture feeds the BSDF (the opacity and the normal map do not).
+    fn read_by_bsdf(&self) -> bool {
+        [
+            &self.diffuse,
+            &self.specular,
+            &self.metallic,
+            &self.roughness,
+            &self.clearcoat,
+            &self.clearcoat_roughness,
+        ]
+        .iter()
+        .any(|t| t.is_some())
+    }
 }
 
 impl BaseCoats {
@@ -202,6 +221,7 @@ impl PreviewMaterial {
                 ..PreviewTextures::default()
             },
             lobes: PreviewLobes::Full,
+            bsdf_textured: false,
         };
         m.lobes = m.lobes_with_weight();
         m
@@ -248,6 +268,7 @@ impl PreviewMaterial {
             }))
         });
         self.lobes = self.lobes_with_weight();
+        self.bsdf_textured = self.textures.read_by_bsdf();
     }
 
     /// The base GGX distribution, its coat albedo and average transmittance at `tc`;
@@ -412,18 +433,9 @@ impl PreviewMaterial {
 
     /// True when an input of the BSDF is textured (not `normal`, `opacity` or
     /// `emissiveColor`, which are looked up at the finest level).
+    #[inline]
     pub fn bsdf_is_textured(&self) -> bool {
-        let t = &self.textures;
-        [
-            &t.diffuse,
-            &t.specular,
-            &t.metallic,
-            &t.roughness,
-            &t.clearcoat,
-            &t.clearcoat_roughness,
-        ]
-        .iter()
-        .any(|t| t.is_some())
+        self.bsdf_textured
     }
 
     /// True when `normal` (constant or textured) perturbs the shading normal.
@@ -530,6 +542,7 @@ mod tests {
         textured.textures.clearcoat = Some(constant_texture(scalars, TextureChannel::G));
         textured.textures.roughness = Some(constant_texture(scalars, TextureChannel::B));
         textured.prepare_textures();
+        assert!(textured.bsdf_is_textured() && !plain.bsdf_is_textured());
         assert_same_f(&plain, &textured, Vec2::new(0.3, 0.7), 1e-6);
     }
 

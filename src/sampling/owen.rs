@@ -22,16 +22,28 @@ fn lk_permutation(mut x: u32, seed: u32) -> u32 {
 }
 
 /// Nested uniform (Owen) scramble of the 32-bit fraction `x`: bit j, counted from the most
-/// significant, flipped by a function of `seed` and the bits above it.
+/// significant, flipped by a function of `seed` and the bits above it. The definition, kept
+/// for the tests: the sampler has the reversed bits at hand and calls [`scramble_reversed`].
+#[cfg(test)]
 #[inline]
 pub fn scramble(x: u32, seed: u32) -> u32 {
-    lk_permutation(x.reverse_bits(), seed).reverse_bits()
+    scramble_reversed(x.reverse_bits(), seed)
+}
+
+/// `scramble` of the fraction whose bits, reversed, are `x_reversed`: for callers that have
+/// the reversed bits at hand (a van der Corput point is its index reversed, `sobol.rs`), one
+/// reversal fewer.
+#[inline]
+pub fn scramble_reversed(x_reversed: u32, seed: u32) -> u32 {
+    lk_permutation(x_reversed, seed).reverse_bits()
 }
 
 /// The index permutation of Burley 2020 §4 ("shuffling"): the same nested scramble on the
 /// index, so bit j of the result is bit j of `index` flipped by a function of the bits above
 /// it. Every aligned block of 2^k indices maps onto an aligned block of 2^k indices, so a
-/// shuffled (0, 2)-sequence keeps its nets.
+/// shuffled (0, 2)-sequence keeps its nets. The sampler shuffles with [`scramble_reversed`] of
+/// the index's reversed bits (`zsobol.rs`); this is the definition the tests check it by.
+#[cfg(test)]
 #[inline]
 pub fn shuffle(index: u32, seed: u32) -> u32 {
     scramble(index, seed)

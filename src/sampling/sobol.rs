@@ -8,12 +8,15 @@
 //! point of index i is i with its bits reversed. Dimension 1 has the primitive polynomial
 //! x + 1 and initial direction number m₁ = 1; the recurrence m_k = m_{k−1} ⊕ 2 m_{k−1}
 //! (Bratley and Fox 1988, eq. 2) makes its generator matrix Pascal's triangle mod 2.
-//! Both matrices are computed here; there is no table of data.
+//! Both matrices are computed here; there is no table of data: dimension 1 by a five-step
+//! transform of the index's bits ([`dim1_reversed`]), with no branch.
 
 /// Column k of dimension 1's generator matrix as a 32-bit fraction (the k-th direction number
 /// v_{k+1} = m_{k+1} / 2^{k+1}, most significant bit first).
+#[cfg(test)]
 const DIM1: [u32; 32] = dim1_columns();
 
+#[cfg(test)]
 const fn dim1_columns() -> [u32; 32] {
     let mut cols = [0u32; 32];
     let mut m: u32 = 1;
@@ -26,15 +29,42 @@ const fn dim1_columns() -> [u32; 32] {
     cols
 }
 
-/// Point `index` of Sobol' dimension 0 as a 32-bit fraction.
+/// Point `index` of Sobol' dimension 0 as a 32-bit fraction (the definition, for the tests:
+/// the sampler scrambles the index itself, which is this point's bits reversed).
+#[cfg(test)]
 #[inline]
 pub fn dim0(index: u32) -> u32 {
     index.reverse_bits()
 }
 
-/// Point `index` of Sobol' dimension 1 as a 32-bit fraction.
+/// Point `index` of Sobol' dimension 1 as a 32-bit fraction (for the tests: the sampler
+/// scrambles [`dim1_reversed`]).
+#[cfg(test)]
 #[inline]
-pub fn dim1(mut index: u32) -> u32 {
+pub fn dim1(index: u32) -> u32 {
+    dim1_reversed(index).reverse_bits()
+}
+
+/// `dim1` with its bits reversed (least significant = 1/2), without a branch or a table.
+/// Column k of the generator matrix holds the binomial coefficients C(k, p) mod 2 in the
+/// reversed bit p, and C(k, p) is odd iff the bits of p are a subset of those of k (Lucas's
+/// theorem), so reversed bit p is the XOR of the index's bits k ⊇ p: the superset-sum
+/// (Möbius) transform over GF(2), five shift–mask–XOR steps (one per bit of p). Equal to the
+/// column-by-column product for every index (tested against it).
+#[inline]
+pub fn dim1_reversed(mut index: u32) -> u32 {
+    index ^= (index >> 1) & 0x5555_5555;
+    index ^= (index >> 2) & 0x3333_3333;
+    index ^= (index >> 4) & 0x0f0f_0f0f;
+    index ^= (index >> 8) & 0x00ff_00ff;
+    index ^= (index >> 16) & 0x0000_ffff;
+    index
+}
+
+/// `dim1` as the product of the index's bits with the generator matrix, column by column:
+/// the definition, kept as the tests' reference.
+#[cfg(test)]
+fn dim1_by_columns(mut index: u32) -> u32 {
     let mut v = 0;
     while index != 0 {
         v ^= DIM1[index.trailing_zeros() as usize];
@@ -49,6 +79,21 @@ mod tests {
 
     fn f(x: u32) -> f64 {
         f64::from(x) / 4_294_967_296.0
+    }
+
+    #[test]
+    fn the_transform_is_the_matrix_product() {
+        // Every single bit (the columns), then indices spread over the whole range.
+        for k in 0..32 {
+            assert_eq!(dim1(1 << k), DIM1[k as usize], "column {k}");
+        }
+        let mut x = 0x1234_5678u32;
+        for i in 0..200_000u32 {
+            x = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            assert_eq!(dim1(x), dim1_by_columns(x), "{x:#x}");
+            assert_eq!(dim1(i), dim1_by_columns(i), "{i}");
+        }
+        assert_eq!(dim1(u32::MAX), dim1_by_columns(u32::MAX));
     }
 
     #[test]

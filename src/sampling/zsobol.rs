@@ -61,17 +61,21 @@ impl ZSobol {
         let key = mix64(self.seed ^ mix64(r ^ mix64(epoch ^ mix64(high))));
         Stream {
             key,
-            index: low,
+            index_reversed: low.reverse_bits(),
             dim: 0,
         }
     }
 }
 
-/// One sample's draws from the sequence: dimension `dim` next.
+/// One sample's draws from the sequence: dimension `dim` next. The index is kept with its
+/// bits reversed, as the shuffle takes it (`owen::scramble_reversed`), so each draw costs a
+/// seed hash, the shuffle and one scramble per dimension, with three bit reversals for a 2D
+/// draw — the same bits as `scramble(dim0(shuffle(index)))` and `scramble(dim1(..))`, by
+/// dim0(i) = reverse(i) and dim1(i) = reverse(dim1_reversed(i)) (tested).
 #[derive(Clone, Copy, Debug)]
 pub struct Stream {
     key: u64,
-    index: u32,
+    index_reversed: u32,
     dim: u32,
 }
 
@@ -81,13 +85,20 @@ impl Stream {
         mix64(self.key ^ u64::from(d).wrapping_mul(0x9e37_79b9_7f4a_7c15))
     }
 
-    /// The next dimension as a 32-bit fraction.
+    /// The index shuffled with the seed hash `h` (Burley 2020 §4): `owen::shuffle`.
+    #[inline]
+    fn shuffled(&self, h: u64) -> u32 {
+        owen::scramble_reversed(self.index_reversed, h as u32)
+    }
+
+    /// The next dimension as a 32-bit fraction: Sobol' dimension 0 at the shuffled index,
+    /// scrambled (dim0(i) reversed is i).
     #[inline]
     pub fn next_1d(&mut self) -> u32 {
         let h = self.seeds(self.dim);
         self.dim += 1;
-        let i = owen::shuffle(self.index, h as u32);
-        owen::scramble(sobol::dim0(i), (h >> 32) as u32)
+        let i = self.shuffled(h);
+        owen::scramble_reversed(i, (h >> 32) as u32)
     }
 
     /// The next two dimensions, a point of one (0, 2)-sequence, as 32-bit fractions.
@@ -95,11 +106,11 @@ impl Stream {
     pub fn next_2d(&mut self) -> [u32; 2] {
         let h = self.seeds(self.dim);
         self.dim += 2;
-        let i = owen::shuffle(self.index, h as u32);
+        let i = self.shuffled(h);
         let h2 = mix64(h);
         [
-            owen::scramble(sobol::dim0(i), (h >> 32) as u32),
-            owen::scramble(sobol::dim1(i), h2 as u32),
+            owen::scramble_reversed(i, (h >> 32) as u32),
+            owen::scramble_reversed(sobol::dim1_reversed(i), h2 as u32),
         ]
     }
 
@@ -136,6 +147,31 @@ mod tests {
         assert_eq!(morton(0, 1), 2);
         assert_eq!(morton(3, 3), 15);
         assert_eq!(morton(u32::MAX, 0), 0x5555_5555_5555_5555);
+    }
+
+    /// The draws as the definition writes them: shuffle, Sobol' point, scramble.
+    fn reference_2d(q: &Stream, d: u32) -> [u32; 2] {
+        let h = q.seeds(d);
+        let i = owen::shuffle(q.index_reversed.reverse_bits(), h as u32);
+        [
+            owen::scramble(sobol::dim0(i), (h >> 32) as u32),
+            owen::scramble(sobol::dim1(i), mix64(h) as u32),
+        ]
+    }
+
+    #[test]
+    fn draws_are_the_definitions_bits() {
+        let z = ZSobol::new(7, Some(64));
+        for (x, y, s) in [(0, 0, 0), (3, 5, 17), (63, 1, 63), (1000, 77, 5)] {
+            let mut q = z.stream(x, y, s);
+            for d in [0u32, 1, 5, 12, 40] {
+                q.set_dimension(d);
+                let want = reference_2d(&q, d);
+                assert_eq!(q.next_2d(), want, "pixel ({x}, {y}) sample {s} dim {d}");
+                q.set_dimension(d);
+                assert_eq!(q.next_1d(), want[0], "pixel ({x}, {y}) sample {s} dim {d}");
+            }
+        }
     }
 
     #[test]
