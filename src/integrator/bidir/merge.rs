@@ -10,7 +10,8 @@
 //! iteration. No cosine: the density of the light subpath's arrival per area carries it.
 //!
 //! The store ([`LightVertexStore`], `store.rs`) keeps what merging needs of every non-specular
-//! light vertex of the iteration in [`MergeVertex`] (76 bytes), and a hash grid over them.
+//! light vertex of the iteration in [`MergeVertex`] (76 bytes), in the slot order of a hash
+//! grid over them: a cell's candidates are contiguous.
 //!
 //! **No merges through walls.** A light vertex on another mesh than the camera vertex merges
 //! only when the segment between the two points, each lifted off its surface by r/100 to the
@@ -33,7 +34,7 @@ use crate::spectral::SampledSpectrum;
 use glam::Vec3;
 
 /// A light vertex y_i (i ≥ 1) as merging needs it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MergeVertex {
     pub p: Vec3,
     /// Unit direction from y_i back towards y_{i−1}.
@@ -112,8 +113,8 @@ impl LightVertexStore {
         let mut out = Merged::default();
         let lift = MERGE_LIFT * self.grid.radius();
         let z_lifted = z.p + arrival_normal(z) * lift;
-        self.grid.query(z.p, params.key, |i| {
-            let y = &self.vertices[i as usize];
+        self.grid.query(z.p, params.key, |s| {
+            let y = &self.vertices[s];
             if y.depth + z.depth > params.max_depth + 1 {
                 return;
             }
@@ -149,8 +150,8 @@ impl LightVertexStore {
         params: &MergeParams,
     ) -> Merged {
         let mut out = Merged::default();
-        self.grid.query(m.p, params.key, |i| {
-            let y = &self.vertices[i as usize];
+        self.grid.query(m.p, params.key, |s| {
+            let y = &self.vertices[s];
             let cos = m.dir.dot(y.wo);
             if cos <= 0.0 || y.cos_ng <= 0.0 || y.depth < 2 || y.depth > params.max_depth + 1 {
                 return;
