@@ -126,7 +126,12 @@ impl HashGrid {
         let step = |f: f32| if f < 0.5 { -1 } else { 1 };
         let b = [base.x as i64, base.y as i64, base.z as i64];
         let d = [step(frac.x), step(frac.y), step(frac.z)];
+        // First the slots' ranges, then their points: the 8 slot lookups are independent
+        // loads that the processor overlaps, rather than each waiting behind the previous
+        // slot's scan.
         let mut seen = [usize::MAX; 8];
+        let mut ranges = [(0usize, 0usize); 8];
+        let mut count = 0;
         for (n, corner) in (0..8).enumerate() {
             let cell = [
                 b[0] + if corner & 1 != 0 { d[0] } else { 0 },
@@ -144,7 +149,10 @@ impl HashGrid {
             } else {
                 self.slot_end[k - 1] as usize
             };
-            let end = self.slot_end[k] as usize;
+            ranges[count] = (start, self.slot_end[k] as usize);
+            count += 1;
+        }
+        for &(start, end) in &ranges[..count] {
             for (s, g) in self.points[start..end].iter().enumerate() {
                 if g.key == key && self.within(q, g.p) {
                     visit(start + s);
