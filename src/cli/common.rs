@@ -84,7 +84,7 @@ pub struct IntegratorArgs {
     /// What VCM does at a vertex.
     #[arg(long = "vcm-mode", value_parser = named::<VcmMode>("VCM mode"))]
     pub vcm_mode: Option<VcmMode>,
-    /// VCM's base merging radius r0 in metres (default: 1.5 pixel footprints at the first
+    /// VCM's base merging radius r0 in metres (default: 0.75 pixel footprints at the first
     /// hit for images, 0.003 × the scene's radius for meters).
     #[arg(long = "vcm-radius", allow_negative_numbers = true)]
     pub vcm_radius: Option<f32>,

@@ -9,76 +9,114 @@
 //! slots, at least as many as points (Teschner et al. 2003, "Optimized spatial hashing for
 //! collision detection of deformable objects", with their three primes); points are sorted by
 //! slot with a counting sort, so a slot's points are contiguous. Hash collisions only add
-//! candidates: every candidate is tested against the radius, by the grid itself on a copy of
-//! the positions in slot order (a query reads a candidate's index, key and position from
-//! three contiguous arrays, not the caller's record; on a surface the 2 × 2 × 2 block holds
-//! about 5 candidates for each inside the ball, (4r)² / π r²). The buffers are kept and
-//! reused by the next build.
+//! candidates: every candidate is tested against the radius, by the grid itself on its own
+//! copy of the points in slot order, position and key side by side in 16 bytes (on a surface
+//! the 2 × 2 × 2 block holds about 5 candidates for each inside the ball, (4r)² / π r²).
+//! Queries report a candidate by its position in that order ([`HashGrid::order`] maps it back
+//! to the point's index), so that the caller can keep its own records in slot order too and
+//! read a cell's records contiguously.
+//!
+//! The build is parallel (rayon) and deterministic: the bounds, the points' slots and the
+//! gather into slot order are computed in parallel, each element independently; only the
+//! counting sort's histogram and placement, a few integer operations per point, run serially,
+//! in point order. The order within a slot is by decreasing point index whatever the thread
+//! count. The buffers are kept and reused by the next build.
 
 use glam::Vec3;
+use rayon::prelude::*;
+
+/// A point and its key, as the grid stores them in slot order.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GridPoint {
+    pub p: Vec3,
+    pub key: u32,
+}
 
 #[derive(Clone, Debug, Default)]
 pub struct HashGrid {
-    /// Point indices sorted by slot, with their keys and positions.
-    indices: Vec<u32>,
-    keys: Vec<u32>,
-    points: Vec<Vec3>,
-    /// `slot_end[k]`: one past the last entry of slot k in `indices` (slot k starts at
+    /// The points in slot order.
+    points: Vec<GridPoint>,
+    /// `order[i]`: the index of the i-th point in slot order.
+    order: Vec<u32>,
+    /// The slot of every point, by point index (a build's scratch).
+    slot: Vec<u32>,
+    /// `slot_end[k]`: one past the last entry of slot k in `points` (slot k starts at
     /// `slot_end[k − 1]`, or 0).
     slot_end: Vec<u32>,
+    /// The counting sort's cursors (a build's scratch).
+    cursor: Vec<u32>,
     origin: Vec3,
     inv_cell: f32,
     radius2: f32,
 }
 
+/// Points per parallel task of a build.
+const BUILD_CHUNK: usize = 4096;
+
 impl HashGrid {
-    /// Rebuilds the grid over `points` (position, key) for queries of radius `radius` (> 0,
-    /// finite).
-    pub fn build(
-        &mut self,
-        points: impl ExactSizeIterator<Item = (Vec3, u32)> + Clone,
-        radius: f32,
-    ) {
-        let n = points.len();
+    /// Rebuilds the grid over the `n` points `point(0)` … `point(n − 1)` (position, key) for
+    /// queries of radius `radius` (> 0, finite).
+    pub fn build(&mut self, n: usize, point: impl Fn(usize) -> GridPoint + Sync, radius: f32) {
         let slots = n.max(1).next_power_of_two();
-        let lo = points
-            .clone()
-            .fold(Vec3::splat(f32::INFINITY), |a, (p, _)| a.min(p));
+        let lo = (0..n)
+            .into_par_iter()
+            .with_min_len(BUILD_CHUNK)
+            .map(|i| point(i).p)
+            .reduce(|| Vec3::splat(f32::INFINITY), Vec3::min);
         self.origin = if lo.is_finite() { lo } else { Vec3::ZERO };
         self.inv_cell = 1.0 / (2.0 * radius);
         self.radius2 = radius * radius;
         self.slot_end.clear();
         self.slot_end.resize(slots, 0);
-        for (p, key) in points.clone() {
-            let k = self.slot_of(self.cell_of(p), key);
-            self.slot_end[k] += 1;
+        let mut slot = std::mem::take(&mut self.slot);
+        slot.clear();
+        slot.resize(n, 0);
+        let grid = &*self;
+        slot.par_iter_mut()
+            .with_min_len(BUILD_CHUNK)
+            .enumerate()
+            .for_each(|(i, s)| {
+                let q = point(i);
+                *s = grid.slot_of(grid.cell_of(q.p), q.key) as u32;
+            });
+        self.slot = slot;
+        for &k in &self.slot {
+            self.slot_end[k as usize] += 1;
         }
         let mut start = 0u32;
         for c in self.slot_end.iter_mut() {
             start += *c;
             *c = start;
         }
-        self.indices.clear();
-        self.indices.resize(n, 0);
-        self.keys.clear();
-        self.keys.resize(n, 0);
-        self.points.clear();
-        self.points.resize(n, Vec3::ZERO);
         // Filling from the back leaves the cursor at each slot's start.
-        let mut cursor = self.slot_end.clone();
-        for (i, (p, key)) in points.enumerate() {
-            let k = self.slot_of(self.cell_of(p), key);
-            cursor[k] -= 1;
-            self.indices[cursor[k] as usize] = i as u32;
-            self.keys[cursor[k] as usize] = key;
-            self.points[cursor[k] as usize] = p;
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.slot_end);
+        self.order.clear();
+        self.order.resize(n, 0);
+        for (i, &k) in self.slot.iter().enumerate() {
+            let c = &mut self.cursor[k as usize];
+            *c -= 1;
+            self.order[*c as usize] = i as u32;
         }
+        self.points.clear();
+        self.points.resize(n, GridPoint::default());
+        self.points
+            .par_iter_mut()
+            .with_min_len(BUILD_CHUNK)
+            .zip(self.order.par_iter())
+            .for_each(|(q, &i)| *q = point(i as usize));
     }
 
-    /// Calls `visit(i)` for every point index i of key `key` whose point lies within the
-    /// radius of `q` ([`Self::within`]), in a fixed order.
-    pub fn query(&self, q: Vec3, key: u32, mut visit: impl FnMut(u32)) {
-        if self.indices.is_empty() {
+    /// The index of every point in slot order: the position a query reports ↦ the point's
+    /// index in the build.
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// Calls `visit(s)` for the position s in slot order ([`Self::order`]) of every point of
+    /// key `key` that lies within the radius of `q` ([`Self::within`]), in a fixed order.
+    pub fn query(&self, q: Vec3, key: u32, mut visit: impl FnMut(usize)) {
+        if self.points.is_empty() {
             return;
         }
         let c = (q - self.origin) * self.inv_cell;
@@ -88,7 +126,12 @@ impl HashGrid {
         let step = |f: f32| if f < 0.5 { -1 } else { 1 };
         let b = [base.x as i64, base.y as i64, base.z as i64];
         let d = [step(frac.x), step(frac.y), step(frac.z)];
+        // First the slots' ranges, then their points: the 8 slot lookups are independent
+        // loads that the processor overlaps, rather than each waiting behind the previous
+        // slot's scan.
         let mut seen = [usize::MAX; 8];
+        let mut ranges = [(0usize, 0usize); 8];
+        let mut count = 0;
         for (n, corner) in (0..8).enumerate() {
             let cell = [
                 b[0] + if corner & 1 != 0 { d[0] } else { 0 },
@@ -101,17 +144,18 @@ impl HashGrid {
                 continue;
             }
             seen[n] = k;
-            let range = if k == 0 {
+            let start = if k == 0 {
                 0
             } else {
                 self.slot_end[k - 1] as usize
-            }..self.slot_end[k] as usize;
-            let entries = self.indices[range.clone()]
-                .iter()
-                .zip(&self.keys[range.clone()]);
-            for ((&i, &pk), &p) in entries.zip(&self.points[range]) {
-                if pk == key && self.within(q, p) {
-                    visit(i);
+            };
+            ranges[count] = (start, self.slot_end[k] as usize);
+            count += 1;
+        }
+        for &(start, end) in &ranges[..count] {
+            for (s, g) in self.points[start..end].iter().enumerate() {
+                if g.key == key && self.within(q, g.p) {
+                    visit(start + s);
                 }
             }
         }
@@ -130,9 +174,12 @@ impl HashGrid {
 
     /// Bytes held by the grid's buffers.
     pub fn bytes(&self) -> usize {
-        (self.indices.capacity() + self.keys.capacity() + self.slot_end.capacity())
+        (self.order.capacity()
+            + self.slot.capacity()
+            + self.slot_end.capacity()
+            + self.cursor.capacity())
             * std::mem::size_of::<u32>()
-            + self.points.capacity() * std::mem::size_of::<Vec3>()
+            + self.points.capacity() * std::mem::size_of::<GridPoint>()
     }
 
     fn cell_of(&self, p: Vec3) -> [i64; 3] {
@@ -164,12 +211,16 @@ mod tests {
         let mut grid = HashGrid::default();
         let key = |i: usize| (i % 3) as u32;
         for radius in [0.05f32, 0.2, 3.0] {
-            grid.build(points.iter().enumerate().map(|(i, p)| (*p, key(i))), radius);
+            let point = |i: usize| GridPoint {
+                p: points[i],
+                key: key(i),
+            };
+            grid.build(points.len(), point, radius);
             for _ in 0..200 {
                 let q = rng.vec3(-1.2, 1.2);
                 for k in 0..4 {
                     let mut found: Vec<u32> = Vec::new();
-                    grid.query(q, k, |i| found.push(i));
+                    grid.query(q, k, |s| found.push(grid.order()[s]));
                     found.sort_unstable();
                     let brute: Vec<u32> = (0..points.len() as u32)
                         .filter(|&i| {
@@ -185,12 +236,45 @@ mod tests {
     #[test]
     fn an_empty_grid_and_far_points_are_safe() {
         let mut grid = HashGrid::default();
-        grid.build(std::iter::empty::<(Vec3, u32)>(), 0.1);
+        grid.build(0, |_| unreachable!("no points"), 0.1);
         grid.query(Vec3::ZERO, 0, |_| panic!("no points"));
         let far = [Vec3::splat(1e30), Vec3::splat(-1e30), Vec3::ZERO];
-        grid.build(far.iter().map(|p| (*p, 0)), 1e-6);
+        grid.build(far.len(), |i| GridPoint { p: far[i], key: 0 }, 1e-6);
         let mut found = Vec::new();
-        grid.query(Vec3::ZERO, 0, |i| found.push(i));
+        grid.query(Vec3::ZERO, 0, |s| found.push(grid.order()[s]));
         assert_eq!(found, [2]);
+    }
+
+    #[test]
+    fn the_build_is_the_same_on_one_thread_and_on_several() {
+        let mut rng = Rng::new(11);
+        // Several build chunks, clustered so that slots hold many points.
+        let points: Vec<Vec3> = (0..3 * BUILD_CHUNK + 17)
+            .map(|_| rng.vec3(-0.3, 0.3))
+            .collect();
+        let point = |i: usize| GridPoint {
+            p: points[i],
+            key: (i % 2) as u32,
+        };
+        let build = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut grid = HashGrid::default();
+            pool.install(|| grid.build(points.len(), point, 0.02));
+            grid
+        };
+        let (one, four) = (build(1), build(4));
+        assert_eq!(one.order, four.order);
+        assert_eq!(one.points, four.points);
+        assert_eq!(one.slot_end, four.slot_end);
+        // Within a slot, by decreasing point index.
+        let mut start = 0usize;
+        for &end in &one.slot_end {
+            let slot = &one.order[start..end as usize];
+            assert!(slot.windows(2).all(|w| w[0] > w[1]), "{slot:?}");
+            start = end as usize;
+        }
     }
 }

@@ -10,7 +10,8 @@
 //! iteration. No cosine: the density of the light subpath's arrival per area carries it.
 //!
 //! The store ([`LightVertexStore`], `store.rs`) keeps what merging needs of every non-specular
-//! light vertex of the iteration in [`MergeVertex`] (76 bytes), and a hash grid over them.
+//! light vertex of the iteration in [`MergeVertex`] (76 bytes), in the slot order of a hash
+//! grid over them: a cell's candidates are contiguous.
 //!
 //! **No merges through walls.** A light vertex on another mesh than the camera vertex merges
 //! only when the segment between the two points, each lifted off its surface by r/100 to the
@@ -33,7 +34,7 @@ use crate::spectral::SampledSpectrum;
 use glam::Vec3;
 
 /// A light vertex y_i (i ≥ 1) as merging needs it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MergeVertex {
     pub p: Vec3,
     /// Unit direction from y_i back towards y_{i−1}.
@@ -112,31 +113,52 @@ impl LightVertexStore {
         let mut out = Merged::default();
         let lift = MERGE_LIFT * self.grid.radius();
         let z_lifted = z.p + arrival_normal(z) * lift;
-        self.grid.query(z.p, params.key, |i| {
-            let y = &self.vertices[i as usize];
-            if y.depth + z.depth > params.max_depth + 1 {
-                return;
+        // The candidates within the radius, in the grid's order, a batch at a time: their
+        // records' first reads (the depth test) are independent loads the processor overlaps,
+        // before each kept one's BSDF evaluation.
+        let mut batch = [0usize; MERGE_BATCH];
+        let mut n = 0;
+        let merge_batch = |batch: &[usize], out: &mut Merged| {
+            let mut keep = [false; MERGE_BATCH];
+            for (k, &s) in keep.iter_mut().zip(batch) {
+                *k = self.vertices[s].depth + z.depth <= params.max_depth + 1;
             }
-            let e = z.bsdf.eval(z.wo, y.wo, TransportMode::Radiance);
-            if e.f.is_black() {
-                return;
+            for (&s, _) in batch.iter().zip(keep).filter(|(_, k)| *k) {
+                let y = &self.vertices[s];
+                let e = z.bsdf.eval(z.wo, y.wo, TransportMode::Radiance);
+                if e.f.is_black() {
+                    continue;
+                }
+                let w = merge_weight(&params.mis, cam, y, &e);
+                let c = z.beta * e.f * y.beta * (w * params.normalization);
+                // The light-leak guard last: most candidates lie on z's own mesh, and the
+                // rest need a shadow ray only when they would count.
+                if y.mesh != mesh && !c.is_black() && !unoccluded(scene, z_lifted, y.p + y.n * lift)
+                {
+                    continue;
+                }
+                if y.hero_only && !camera_hero_only {
+                    out.hero_only += c;
+                } else {
+                    out.all += c;
+                }
             }
-            let w = merge_weight(&params.mis, cam, y, &e);
-            let c = z.beta * e.f * y.beta * (w * params.normalization);
-            // The light-leak guard last: most candidates lie on z's own mesh, and the rest
-            // need a shadow ray only when they would count.
-            if y.mesh != mesh && !c.is_black() && !unoccluded(scene, z_lifted, y.p + y.n * lift) {
-                return;
-            }
-            if y.hero_only && !camera_hero_only {
-                out.hero_only += c;
-            } else {
-                out.all += c;
+        };
+        self.grid.query(z.p, params.key, |s| {
+            batch[n] = s;
+            n += 1;
+            if n == MERGE_BATCH {
+                merge_batch(&batch, &mut out);
+                n = 0;
             }
         });
+        merge_batch(&batch[..n], &mut out);
         out
     }
 }
+
+/// Merge candidates gathered before their contributions are computed ([`LightVertexStore::merge`]).
+const MERGE_BATCH: usize = 16;
 
 impl LightVertexStore {
     /// Merges the light vertices within the radius of irradiance meter `m`'s point, weighted
@@ -149,8 +171,8 @@ impl LightVertexStore {
         params: &MergeParams,
     ) -> Merged {
         let mut out = Merged::default();
-        self.grid.query(m.p, params.key, |i| {
-            let y = &self.vertices[i as usize];
+        self.grid.query(m.p, params.key, |s| {
+            let y = &self.vertices[s];
             let cos = m.dir.dot(y.wo);
             if cos <= 0.0 || y.cos_ng <= 0.0 || y.depth < 2 || y.depth > params.max_depth + 1 {
                 return;

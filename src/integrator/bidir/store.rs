@@ -8,11 +8,15 @@
 //! BSDFs are not kept (a [`crate::bxdf::Bsdf`] is a few hundred bytes): a subpath's vertices
 //! are rebuilt from their surface hits with the same wavelengths ([`bsdf_at`]), the same
 //! vertices bit for bit, at a fraction of the cost of tracing the subpath again (no rays, no
-//! sampling). Per light vertex the store holds a [`MergeVertex`] twice (its batch's and the
-//! grid's contiguous copy), its surface hit and dVC ([`VertexHit`]) and ≤ 20 bytes of grid;
-//! per subpath its origin. Buffers are reused from iteration to iteration.
+//! sampling). Per light vertex the store holds a [`MergeVertex`] twice (its batch's, and a
+//! copy in the grid's slot order, so that a merge reads the records of a cell's candidates
+//! contiguously), its surface hit and dVC ([`VertexHit`]), its key and the grid's 24 bytes
+//! (its position and key in slot order, its index, its slot); per subpath its origin. The
+//! subpaths are traced, and the grid built and the copy gathered, in parallel and in a fixed
+//! order: the same store for any thread count. Buffers are reused from iteration to
+//! iteration.
 
-use super::hashgrid::HashGrid;
+use super::hashgrid::{GridPoint, HashGrid};
 use super::mis::SubpathMis;
 use super::subpath::LightSubpath;
 use super::vertex::{bsdf_at, LightOrigin, PathVertex};
@@ -21,6 +25,9 @@ use crate::scene::{Scene, SurfaceHit};
 use crate::spectral::SampledWavelengths;
 use crate::texture::TextureFilter;
 use rayon::prelude::*;
+
+/// Vertices per parallel task of the gather into slot order.
+const STORE_GATHER_CHUNK: usize = 4096;
 
 /// What a stored light vertex needs besides its [`MergeVertex`] to be rebuilt as the
 /// [`PathVertex`] it was: its surface hit (for the BSDF) and dVC.
@@ -57,6 +64,8 @@ struct SubpathBatch {
     paths: Vec<StoredSubpath>,
     vertices: Vec<MergeVertex>,
     hits: Vec<VertexHit>,
+    /// Each vertex's key (its subpath's).
+    keys: Vec<u32>,
 }
 
 impl SubpathBatch {
@@ -64,6 +73,7 @@ impl SubpathBatch {
         self.paths.clear();
         self.vertices.clear();
         self.hits.clear();
+        self.keys.clear();
     }
 
     fn push(&mut self, path: &LightSubpath, traced: Traced) {
@@ -76,6 +86,7 @@ impl SubpathBatch {
                 hit: *hit,
                 dvc: v.mis.dvc,
             });
+            self.keys.push(traced.key);
         }
         self.paths.push(StoredSubpath {
             origin: path.origin,
@@ -88,6 +99,7 @@ impl SubpathBatch {
         self.paths.capacity() * std::mem::size_of::<StoredSubpath>()
             + self.vertices.capacity() * std::mem::size_of::<MergeVertex>()
             + self.hits.capacity() * std::mem::size_of::<VertexHit>()
+            + self.keys.capacity() * std::mem::size_of::<u32>()
     }
 }
 
@@ -95,11 +107,12 @@ impl SubpathBatch {
 /// reused from iteration to iteration.
 #[derive(Clone, Debug, Default)]
 pub struct LightVertexStore {
-    /// Every stored vertex, in subpath order (the grid indexes this), and its key.
+    /// Every stored vertex, in the grid's slot order (position s of a grid query).
     pub vertices: Vec<MergeVertex>,
-    keys: Vec<u32>,
     pub(super) grid: HashGrid,
     batches: Vec<SubpathBatch>,
+    /// `batch_start[b]`: the index of batch b's first vertex in subpath order.
+    batch_start: Vec<usize>,
     /// Subpaths per batch (all but the last batch hold this many).
     batch_size: u64,
     /// The largest number of bytes the store has held.
@@ -107,13 +120,12 @@ pub struct LightVertexStore {
 }
 
 impl LightVertexStore {
-    /// Bytes per stored light vertex: its merge vertex (in its batch and in the grid's
-    /// array), its [`VertexHit`], its key (in the store and the grid), its grid index and
-    /// the grid's copy of its position.
+    /// Bytes per stored light vertex: its merge vertex (in its batch and in slot order), its
+    /// [`VertexHit`], its key, and the grid's position and key, index and slot of it.
     pub const BYTES_PER_VERTEX: usize = 2 * std::mem::size_of::<MergeVertex>()
         + std::mem::size_of::<VertexHit>()
         + 3 * std::mem::size_of::<u32>()
-        + std::mem::size_of::<glam::Vec3>();
+        + std::mem::size_of::<GridPoint>();
 
     /// Traces light subpaths 0 … n − 1 with `trace(j, buffer)` (which fills the buffer), in
     /// parallel batches of `batch_size` in a fixed order, keeps them, and rebuilds the grid
@@ -137,27 +149,46 @@ impl LightVertexStore {
                 }
             },
         );
-        self.vertices.clear();
-        self.keys.clear();
+        self.batch_start.clear();
+        let mut n = 0;
         for b in &self.batches {
-            self.vertices.extend_from_slice(&b.vertices);
-            let mut start = 0;
-            for path in &b.paths {
-                let count = (path.end - start) as usize;
-                self.keys
-                    .extend(std::iter::repeat_n(path.traced.key, count));
-                start = path.end;
-            }
+            self.batch_start.push(n);
+            n += b.vertices.len();
         }
-        let points = self.vertices.iter().zip(&self.keys).map(|(v, k)| (v.p, *k));
-        self.grid.build(points, radius);
+        let (batches, starts) = (&self.batches, &self.batch_start);
+        // Vertex i in subpath order: (its batch, its index there).
+        let at = |i: usize| {
+            let b = starts.partition_point(|&s| s <= i) - 1;
+            (&batches[b], i - starts[b])
+        };
+        self.grid.build(
+            n,
+            |i| {
+                let (b, k) = at(i);
+                GridPoint {
+                    p: b.vertices[k].p,
+                    key: b.keys[k],
+                }
+            },
+            radius,
+        );
+        let order = self.grid.order();
+        self.vertices.resize(n, MergeVertex::default());
+        self.vertices
+            .par_iter_mut()
+            .with_min_len(STORE_GATHER_CHUNK)
+            .zip(order.par_iter())
+            .for_each(|(v, &i)| {
+                let (b, k) = at(i as usize);
+                *v = b.vertices[k];
+            });
         self.peak_bytes = self.peak_bytes.max(self.bytes());
     }
 
     /// Bytes held now (vertices, subpaths and grid).
     pub fn bytes(&self) -> usize {
         self.vertices.capacity() * std::mem::size_of::<MergeVertex>()
-            + self.keys.capacity() * std::mem::size_of::<u32>()
+            + self.batch_start.capacity() * std::mem::size_of::<usize>()
             + self.batches.iter().map(SubpathBatch::bytes).sum::<usize>()
             + self.grid.bytes()
     }
