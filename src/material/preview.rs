@@ -165,18 +165,7 @@ impl BaseCoats {
 impl PreviewTextures {
     /// True when no input is textured.
     pub fn is_empty(&self) -> bool {
-        [
-            &self.diffuse,
-            &self.specular,
-            &self.metallic,
-            &self.roughness,
-            &self.clearcoat,
-            &self.clearcoat_roughness,
-            &self.opacity,
-            &self.normal,
-        ]
-        .iter()
-        .all(|t| t.is_none())
+        !self.read_by_bsdf() && self.opacity.is_none() && self.normal.is_none()
     }
 }
 
