@@ -131,12 +131,12 @@ pub struct WatertightRay {
     o: Vec3,
     d: Vec3,
     /// Rows of a [`PackedTriangle`] that become x, y, z: the ray's largest |d| component is z.
-    pub(super) axes: [usize; 3],
+    axes: [usize; 3],
     /// The origin's permuted coordinates, each splatted.
-    pub(super) o_perm: [Vec4; 3],
+    o_perm: [Vec4; 3],
     /// Shear taking the permuted direction to (0, 0, 1): x' = x + sx z, y' = y + sy z,
     /// z' = sz z; `[sx, sy, sz]`, each splatted.
-    pub(super) shear: [Vec4; 3],
+    shear: [Vec4; 3],
 }
 
 impl WatertightRay {

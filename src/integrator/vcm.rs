@@ -131,7 +131,7 @@ pub const METER_RADIUS_FACTOR: f32 = 0.003;
 /// equal-CPU-time sweep (docs/design.md "### VCM", "Radius"): the smaller r_0, the less the
 /// merges blur and cost and the closer VCM comes to BDPT on diffuse scenes (the Cornell box),
 /// while the variance of merged caustics grows as 1/r_0² (Georgiev et al. 2012 §5; SmallVCM
-/// sets r_0 = 0.003 × the scene's radius). 0.75 keeps a mirror-seen caustic 30× below the path
+/// sets r_0 = 0.003 × the scene's radius). 0.75 keeps a mirror-seen caustic 34× below the path
 /// tracer's MSE, with a 3× margin over issue 10's 10×; 1.5 before.
 pub const IMAGE_RADIUS_FOOTPRINTS: f32 = 0.75;
 /// Light subpaths traced per parallel task when filling the store (one batch of the store).

@@ -84,7 +84,7 @@ pub struct PreviewMaterial {
     pub lobes: PreviewLobes,
     /// True when the BSDF reads a texture ([`Self::bsdf_is_textured`]), decided when the
     /// material is built (and by [`Self::prepare_textures`]) rather than tested per hit.
-    pub bsdf_textured: bool,
+    bsdf_textured: bool,
 }
 
 /// Which BSDF a UsdPreviewSurface becomes: its lobes whose weight is exactly zero for every
@@ -135,6 +135,17 @@ pub enum BaseCoats {
     Schlick(SchlickLevels),
 }
 
+impl BaseCoats {
+    /// E and T̄ at perceptual roughness `r`, for the Schlick bound `f0` (textured specular).
+    #[inline]
+    fn get(&self, r: f32, f0: f32) -> (CoatAlbedo, f32) {
+        match self {
+            BaseCoats::Fixed(l) => l.get(l.level(r)),
+            BaseCoats::Schlick(s) => s.get(s.f0_zero.level(r), f0),
+        }
+    }
+}
+
 impl PreviewTextures {
     /// True when a texture feeds the BSDF (the opacity and the normal map do not).
     fn read_by_bsdf(&self) -> bool {
@@ -149,20 +160,7 @@ impl PreviewTextures {
         .iter()
         .any(|t| t.is_some())
     }
-}
 
-impl BaseCoats {
-    /// E and T̄ at perceptual roughness `r`, for the Schlick bound `f0` (textured specular).
-    #[inline]
-    fn get(&self, r: f32, f0: f32) -> (CoatAlbedo, f32) {
-        match self {
-            BaseCoats::Fixed(l) => l.get(l.level(r)),
-            BaseCoats::Schlick(s) => s.get(s.f0_zero.level(r), f0),
-        }
-    }
-}
-
-impl PreviewTextures {
     /// True when no input is textured.
     pub fn is_empty(&self) -> bool {
         !self.read_by_bsdf() && self.opacity.is_none() && self.normal.is_none()

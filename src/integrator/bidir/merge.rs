@@ -113,52 +113,31 @@ impl LightVertexStore {
         let mut out = Merged::default();
         let lift = MERGE_LIFT * self.grid.radius();
         let z_lifted = z.p + arrival_normal(z) * lift;
-        // The candidates within the radius, in the grid's order, a batch at a time: their
-        // records' first reads (the depth test) are independent loads the processor overlaps,
-        // before each kept one's BSDF evaluation.
-        let mut batch = [0usize; MERGE_BATCH];
-        let mut n = 0;
-        let merge_batch = |batch: &[usize], out: &mut Merged| {
-            let mut keep = [false; MERGE_BATCH];
-            for (k, &s) in keep.iter_mut().zip(batch) {
-                *k = self.vertices[s].depth + z.depth <= params.max_depth + 1;
-            }
-            for (&s, _) in batch.iter().zip(keep).filter(|(_, k)| *k) {
-                let y = &self.vertices[s];
-                let e = z.bsdf.eval(z.wo, y.wo, TransportMode::Radiance);
-                if e.f.is_black() {
-                    continue;
-                }
-                let w = merge_weight(&params.mis, cam, y, &e);
-                let c = z.beta * e.f * y.beta * (w * params.normalization);
-                // The light-leak guard last: most candidates lie on z's own mesh, and the
-                // rest need a shadow ray only when they would count.
-                if y.mesh != mesh && !c.is_black() && !unoccluded(scene, z_lifted, y.p + y.n * lift)
-                {
-                    continue;
-                }
-                if y.hero_only && !camera_hero_only {
-                    out.hero_only += c;
-                } else {
-                    out.all += c;
-                }
-            }
-        };
         self.grid.query(z.p, params.key, |s| {
-            batch[n] = s;
-            n += 1;
-            if n == MERGE_BATCH {
-                merge_batch(&batch, &mut out);
-                n = 0;
+            let y = &self.vertices[s];
+            if y.depth + z.depth > params.max_depth + 1 {
+                return;
+            }
+            let e = z.bsdf.eval(z.wo, y.wo, TransportMode::Radiance);
+            if e.f.is_black() {
+                return;
+            }
+            let w = merge_weight(&params.mis, cam, y, &e);
+            let c = z.beta * e.f * y.beta * (w * params.normalization);
+            // The light-leak guard last: most candidates lie on z's own mesh, and the rest
+            // need a shadow ray only when they would count.
+            if y.mesh != mesh && !c.is_black() && !unoccluded(scene, z_lifted, y.p + y.n * lift) {
+                return;
+            }
+            if y.hero_only && !camera_hero_only {
+                out.hero_only += c;
+            } else {
+                out.all += c;
             }
         });
-        merge_batch(&batch[..n], &mut out);
         out
     }
 }
-
-/// Merge candidates gathered before their contributions are computed ([`LightVertexStore::merge`]).
-const MERGE_BATCH: usize = 16;
 
 impl LightVertexStore {
     /// Merges the light vertices within the radius of irradiance meter `m`'s point, weighted
