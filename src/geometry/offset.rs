@@ -100,7 +100,14 @@ pub fn spawn_ray_to(
     n_to: Vec3,
 ) -> (Ray, f32) {
     let from = offset_ray_origin(p_from, err_from, n_from, p_to - p_from);
-    let to = offset_ray_origin(p_to, err_to, n_to, from - p_to);
+    let to = if err_to == Vec3::ZERO {
+        // An exact end (a light sample's point) does not move: `offset_ray_origin` would add
+        // an offset of ±0 and round no coordinate (the same point, up to the sign of a zero
+        // coordinate; tested), so its normalisation and tests are skipped per shadow ray.
+        p_to
+    } else {
+        offset_ray_origin(p_to, err_to, n_to, from - p_to)
+    };
     (Ray::new(from, to - from), 1.0 - SHADOW_EPSILON)
 }
 
@@ -320,5 +327,28 @@ mod tests {
             offset_ray_origin(p, e, n * 37.0, w),
             offset_ray_origin(p, e, n.normalize(), w)
         );
+    }
+
+    #[test]
+    fn an_exact_end_is_the_offset_of_zero_error() {
+        // `spawn_ray_to` leaves an end with zero error where it is: the same point as
+        // `offset_ray_origin` gives it (== treats a zero's sign as equal), and so the same ray.
+        let mut rng = Rng::new(23);
+        for scale in [1e-3f32, 1.0, 1e4] {
+            for _ in 0..20_000 {
+                let (a, b) = (rng.vec3(-10.0, 10.0) * scale, rng.vec3(-10.0, 10.0) * scale);
+                let (ea, na, nb) = (Vec3::splat(1e-6 * scale), rng.unit_vector(), rng.unit_vector());
+                let (ray, t) = spawn_ray_to(a, ea, na, b, Vec3::ZERO, nb);
+                let from = offset_ray_origin(a, ea, na, b - a);
+                assert_eq!(offset_ray_origin(b, Vec3::ZERO, nb, from - b), b);
+                assert_eq!((ray.o, ray.d, t), (from, b - from, 1.0 - SHADOW_EPSILON));
+            }
+        }
+        for b in [Vec3::ZERO, Vec3::new(-0.0, 0.0, -0.0), Vec3::new(0.0, -2.5, 0.0)] {
+            for nb in [Vec3::X, -Vec3::Y, Vec3::ZERO, Vec3::new(-0.0, 1.0, -0.0)] {
+                assert_eq!(offset_ray_origin(b, Vec3::ZERO, nb, Vec3::ONE), b);
+                assert_eq!(offset_ray_origin(b, Vec3::ZERO, nb, -Vec3::ONE), b);
+            }
+        }
     }
 }

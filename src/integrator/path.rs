@@ -271,7 +271,8 @@ impl PathIntegrator {
                 Hit::Surface(si) => si,
             };
             let material = &scene.materials[si.material as usize];
-            if !surface_present(material, si.uv, sampler) {
+            // An all-opaque scene has every surface present (no draw either way).
+            if !scene.all_opaque && !surface_present(material, si.uv, sampler) {
                 st.pass_throughs += 1;
                 if st.pass_throughs > MAX_PASS_THROUGHS {
                     return None;

@@ -1,7 +1,8 @@
 //! A spectrum tabulated at 1 nm over the simulated range, the storage for every measured
 //! curve (CIE observer, illuminants, reflectances, metal n and k).
 
-use super::{LAMBDA_MAX, LAMBDA_MIN};
+use super::{LAMBDA_MAX, LAMBDA_MIN, N_LAMBDA};
+use glam::{UVec4, Vec4};
 
 /// Number of 1 nm samples in [`LAMBDA_MIN`, `LAMBDA_MAX`].
 pub const DENSE_LEN: usize = (LAMBDA_MAX - LAMBDA_MIN) as usize + 1;
@@ -56,6 +57,25 @@ impl DenseSpectrum {
         self.values[i] * (1.0 - t) + self.values[i + 1] * t
     }
 
+    /// [`eval`](Self::eval) at a sample's four wavelengths, the same values bit for bit
+    /// (tested): the range test, the index, the weight and the interpolation four lanes at a
+    /// time, the two table reads per lane.
+    #[inline]
+    pub fn eval_lanes(&self, lambda: [f32; N_LAMBDA]) -> [f32; N_LAMBDA] {
+        let x = Vec4::from_array(lambda) - Vec4::splat(LAMBDA_MIN);
+        let last = Vec4::splat((DENSE_LEN - 1) as f32);
+        // `contains`: false for NaN; such lanes are read at index 0 and give 0.
+        let inside = x.cmpge(Vec4::ZERO) & x.cmple(last);
+        let x = Vec4::select(inside, x, Vec4::ZERO);
+        let i = x.as_uvec4().min(UVec4::splat(DENSE_LEN as u32 - 2));
+        let t = x - i.as_vec4();
+        let index = i.to_array().map(|k| k as usize);
+        let lo = Vec4::from_array(index.map(|k| self.values[k]));
+        let hi = Vec4::from_array(index.map(|k| self.values[k + 1]));
+        let v = lo * (Vec4::ONE - t) + hi * t;
+        Vec4::select(inside, v, Vec4::ZERO).to_array()
+    }
+
     /// ∫ self(λ) other(λ) dλ over the range by the trapezoidal rule on the 1 nm grid.
     pub fn inner_product(&self, other: &DenseSpectrum) -> f64 {
         let n = DENSE_LEN;
@@ -95,6 +115,30 @@ pub fn interpolate(samples: &[(f32, f32)], x: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lanes_are_the_scalar_evaluation_bit_for_bit() {
+        // Every integer nm, its neighbouring floats, points in between, the ends, outside the
+        // range, infinities and NaN, on a table with distinct values everywhere.
+        let d = DenseSpectrum::from_fn(|l| (l * 0.013).sin() * 3.0 + l * 1e-3);
+        let mut ls: Vec<f32> = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.0, 1e30];
+        for k in 0..DENSE_LEN + 2 {
+            let l = LAMBDA_MIN - 1.0 + k as f32;
+            ls.extend([l, l.next_up(), l.next_down(), l + 0.25, l + 0.5, l + 0.999]);
+        }
+        let mut x = 0x1234_5678u32;
+        for _ in 0..100_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            ls.push(LAMBDA_MIN - 5.0 + (LAMBDA_MAX - LAMBDA_MIN + 10.0) * (x as f32 / 4.3e9));
+        }
+        for w in ls.windows(N_LAMBDA) {
+            let lanes: [f32; N_LAMBDA] = w.try_into().unwrap();
+            let want = lanes.map(|l| d.eval(l).to_bits());
+            assert_eq!(d.eval_lanes(lanes).map(f32::to_bits), want, "{lanes:?}");
+        }
+    }
 
     #[test]
     fn resampling_is_linear_and_holds_ends() {

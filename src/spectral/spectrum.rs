@@ -45,7 +45,7 @@ impl Spectrum {
         match self {
             Spectrum::Constant(c) => SampledSpectrum::splat(*c),
             Spectrum::Dense { data, scale } => {
-                SampledSpectrum::from_fn(|i| data.eval(w.lambda[i]) * scale)
+                SampledSpectrum(data.eval_lanes(w.lambda).map(|v| v * scale))
             }
             _ => SampledSpectrum::from_fn(|i| self.eval(w.lambda[i])),
         }

@@ -9,17 +9,16 @@ use std::sync::OnceLock;
 /// the mean over lanes of L(λᵢ) x̄(λᵢ) / p(λᵢ) (lanes with pdf 0 contribute nothing).
 #[inline]
 pub fn sampled_to_xyz(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
-    let [xb, yb, zb] = data::cie_xyz();
+    let [xb, yb, zb] = data::cie_xyz().each_ref().map(|c| c.eval_lanes(w.lambda));
     let mut xyz = [0.0f32; 3];
     for i in 0..N_LAMBDA {
         if w.pdf[i] == 0.0 || l[i] == 0.0 {
             continue;
         }
         let v = l[i] / w.pdf[i];
-        let lambda = w.lambda[i];
-        xyz[0] += v * xb.eval(lambda);
-        xyz[1] += v * yb.eval(lambda);
-        xyz[2] += v * zb.eval(lambda);
+        xyz[0] += v * xb[i];
+        xyz[1] += v * yb[i];
+        xyz[2] += v * zb[i];
     }
     xyz.map(|c| c * K_M / N_LAMBDA as f32)
 }
