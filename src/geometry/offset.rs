@@ -337,14 +337,22 @@ mod tests {
         for scale in [1e-3f32, 1.0, 1e4] {
             for _ in 0..20_000 {
                 let (a, b) = (rng.vec3(-10.0, 10.0) * scale, rng.vec3(-10.0, 10.0) * scale);
-                let (ea, na, nb) = (Vec3::splat(1e-6 * scale), rng.unit_vector(), rng.unit_vector());
+                let (ea, na, nb) = (
+                    Vec3::splat(1e-6 * scale),
+                    rng.unit_vector(),
+                    rng.unit_vector(),
+                );
                 let (ray, t) = spawn_ray_to(a, ea, na, b, Vec3::ZERO, nb);
                 let from = offset_ray_origin(a, ea, na, b - a);
                 assert_eq!(offset_ray_origin(b, Vec3::ZERO, nb, from - b), b);
                 assert_eq!((ray.o, ray.d, t), (from, b - from, 1.0 - SHADOW_EPSILON));
             }
         }
-        for b in [Vec3::ZERO, Vec3::new(-0.0, 0.0, -0.0), Vec3::new(0.0, -2.5, 0.0)] {
+        for b in [
+            Vec3::ZERO,
+            Vec3::new(-0.0, 0.0, -0.0),
+            Vec3::new(0.0, -2.5, 0.0),
+        ] {
             for nb in [Vec3::X, -Vec3::Y, Vec3::ZERO, Vec3::new(-0.0, 1.0, -0.0)] {
                 assert_eq!(offset_ray_origin(b, Vec3::ZERO, nb, Vec3::ONE), b);
                 assert_eq!(offset_ray_origin(b, Vec3::ZERO, nb, -Vec3::ONE), b);

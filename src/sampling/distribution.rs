@@ -184,7 +184,13 @@ mod tests {
         for n in 1..=SHORT_TABLE {
             for _ in 0..200 {
                 let w: Vec<f32> = (0..n)
-                    .map(|_| if s.get_1d() < 0.3 { 0.0 } else { s.get_1d() * 10.0 })
+                    .map(|_| {
+                        if s.get_1d() < 0.3 {
+                            0.0
+                        } else {
+                            s.get_1d() * 10.0
+                        }
+                    })
                     .collect();
                 let d = Distribution1D::new(&w);
                 let search = |u: f32| {
