@@ -11,11 +11,11 @@
 //! For an isotropic distribution (αx = αy = α) φ drops out (cos²φ + sin²φ = 1), and the
 //! reflection pair has closed forms without the half vector's normalisation or any tangent
 //! (the same functions, rearranged; they differ from the general forms by float round-off):
-//! - D(ωm) = α² / (π (cos²θm + α² sin²θm)²), and with h = ωo + ωi unnormalised,
+//! - D(ωm) = α² / (π (α² cos²θm + sin²θm)²), and with h = ωo + ωi unnormalised,
 //!   cos²θm = h_z²/|h|², so D = α²/π · (|h|² / (h_x² + h_y² + α² h_z²))²  (eq. 9.16);
 //! - 1 + 2Λ(ω) = √(1 + α² tan²θ) = s(ω)/|cos θ| with s(ω) = √(cos²θ + α² sin²θ) (eq. 9.20), so
-//!   G/(4 |cos θo| |cos θi|) = 1 / (2 (|cos θi| s(ωo) + |cos θo| s(ωi)))  (eq. 9.26, 9.33:
-//!   Heitz 2014, "Understanding the Masking-Shadowing Function", §5.3's visibility term),
+//!   G/(4 |cos θo| |cos θi|) = 1 / (2 (|cos θi| s(ωo) + |cos θo| s(ωi)))  (eq. 9.26, 9.33;
+//!   the "visibility" form of the Smith term used by real-time renderers),
 //!   and the reflection pdf G1(ωo) D / (4 |cos θo|) = D / (2 (|cos θo| + s(ωo)))  (eq. 9.28:
 //!   ωo·ωm cancels).
 
