@@ -7,6 +7,17 @@
 //! - Λ(ω) = (√(1 + α² tan²θ) − 1) / 2 with α² = (αx cosφ)² + (αy sinφ)²  (eq. 9.20)
 //! - G1 = 1/(1 + Λ(ω)), G(ωo, ωi) = 1/(1 + Λ(ωo) + Λ(ωi))  (eq. 9.18, 9.26)
 //! - visible normals D_ω(ωm) = G1(ω)/|cos θ| · D(ωm) · max(0, ω·ωm)  (eq. 9.23)
+//!
+//! For an isotropic distribution (αx = αy = α) φ drops out (cos²φ + sin²φ = 1), and the
+//! reflection pair has closed forms without the half vector's normalisation or any tangent
+//! (the same functions, rearranged; they differ from the general forms by float round-off):
+//! - D(ωm) = α² / (π (α² cos²θm + sin²θm)²), and with h = ωo + ωi unnormalised,
+//!   cos²θm = h_z²/|h|², so D = α²/π · (|h|² / (h_x² + h_y² + α² h_z²))²  (eq. 9.16);
+//! - 1 + 2Λ(ω) = √(1 + α² tan²θ) = s(ω)/|cos θ| with s(ω) = √(cos²θ + α² sin²θ) (eq. 9.20), so
+//!   G/(4 |cos θo| |cos θi|) = 1 / (2 (|cos θi| s(ωo) + |cos θo| s(ωi)))  (eq. 9.26, 9.33;
+//!   the "visibility" form of the Smith term used by real-time renderers),
+//!   and the reflection pdf G1(ωo) D / (4 |cos θo|) = D / (2 (|cos θo| + s(ωo)))  (eq. 9.28:
+//!   ωo·ωm cancels).
 
 use crate::math::safe_sqrt;
 use glam::{Vec2, Vec3};
@@ -52,6 +63,12 @@ impl TrowbridgeReitz {
         TrowbridgeReitz::new(alpha, alpha)
     }
 
+    /// αx = αy: D and Λ do not depend on φ.
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha_x == self.alpha_y
+    }
+
     #[inline]
     pub fn effectively_smooth(&self) -> bool {
         self.alpha_x.max(self.alpha_y) < SMOOTH_ALPHA
@@ -66,8 +83,12 @@ impl TrowbridgeReitz {
             return 0.0;
         }
         let tan2 = sin2_theta(wm) / cos2;
-        let (c, s) = cos_sin_phi(wm);
-        let e = tan2 * ((c / self.alpha_x).powi(2) + (s / self.alpha_y).powi(2));
+        let e = if self.is_isotropic() {
+            tan2 / (self.alpha_x * self.alpha_x)
+        } else {
+            let (c, s) = cos_sin_phi(wm);
+            tan2 * ((c / self.alpha_x).powi(2) + (s / self.alpha_y).powi(2))
+        };
         1.0 / (PI * self.alpha_x * self.alpha_y * cos4 * (1.0 + e) * (1.0 + e))
     }
 
@@ -79,8 +100,12 @@ impl TrowbridgeReitz {
             return f32::INFINITY;
         }
         let tan2 = sin2_theta(w) / cos2;
-        let (c, s) = cos_sin_phi(w);
-        let alpha2 = (c * self.alpha_x).powi(2) + (s * self.alpha_y).powi(2);
+        let alpha2 = if self.is_isotropic() {
+            self.alpha_x * self.alpha_x
+        } else {
+            let (c, s) = cos_sin_phi(w);
+            (c * self.alpha_x).powi(2) + (s * self.alpha_y).powi(2)
+        };
         0.5 * ((1.0 + alpha2 * tan2).sqrt() - 1.0)
     }
 
@@ -152,24 +177,32 @@ pub struct ReflectionPair {
 /// D_ωo(ωm) / (4 |ωo·ωm|) (eq. 9.28). Every function accepts ωo on either side.
 impl TrowbridgeReitz {
     /// (ωm, D G / (4 |cos θo| |cos θi|)), or `None` when ωi is not a reflection of ωo.
+    /// The pair's terms ([`Self::reflection_eval_pair`]; once inlined, the pdfs are dropped).
     #[inline]
     pub fn reflection_eval(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32)> {
-        let (cos_o, cos_i) = (wo.z.abs(), wi.z.abs());
-        if wo.z * wi.z <= 0.0 || cos_o == 0.0 || cos_i == 0.0 {
-            return None;
-        }
-        let wm = (wo + wi).try_normalize()?;
-        Some((wm, self.d(wm) * self.g(wo, wi) / (4.0 * cos_o * cos_i)))
+        let r = self.reflection_eval_pair(wo, wi)?;
+        Some((r.wm, r.dg))
     }
 
     /// [`Self::reflection_eval`] of (ωo, ωi) with [`Self::reflection_pdf`] of (ωo, ωi) and of
     /// (ωi, ωo), bit for bit, sharing D(ωm) and Λ(ωo), Λ(ωi) (what a vertex merge needs,
     /// `BsdfEval`); `None` where `reflection_eval` has none (both pdfs are then 0).
-    #[inline]
+    #[inline(always)]
     pub fn reflection_eval_pair(&self, wo: Vec3, wi: Vec3) -> Option<ReflectionPair> {
         if wo.z * wi.z <= 0.0 {
             return None;
         }
+        if self.is_isotropic() {
+            self.isotropic_pair(wo, wi)
+        } else {
+            self.anisotropic_pair(wo, wi)
+        }
+    }
+
+    /// [`Self::reflection_eval_pair`] by the general formulas (out of line: the isotropic
+    /// closed forms, inlined, are what the callers run nearly always).
+    #[inline(never)]
+    fn anisotropic_pair(&self, wo: Vec3, wi: Vec3) -> Option<ReflectionPair> {
         let wm = (wo + wi).try_normalize()?;
         let (cos_o, cos_i) = (wo.z.abs(), wi.z.abs());
         let d = self.d(wm);
@@ -193,16 +226,54 @@ impl TrowbridgeReitz {
         })
     }
 
-    /// pdf per unit solid angle of ωi for [`Self::sample_reflection`].
+    /// The isotropic [`Self::reflection_eval_pair`] by the closed forms of the module's
+    /// header: two square roots for s(ωo), s(ωi), one for the Fresnel's ωo·ωm, no tangent.
+    #[inline(always)]
+    fn isotropic_pair(&self, wo: Vec3, wi: Vec3) -> Option<ReflectionPair> {
+        let h = wo + wi;
+        let (rho2, hz2) = (h.x * h.x + h.y * h.y, h.z * h.z);
+        let len2 = rho2 + hz2;
+        if !(len2 > 0.0 && len2.is_finite()) {
+            return None;
+        }
+        let wm = h * (1.0 / len2.sqrt());
+        let a2 = self.alpha_x * self.alpha_x;
+        // cos⁴θm < 10⁻¹⁶: D = 0, as `d` has it.
+        let d = if hz2 < 1e-8 * len2 {
+            0.0
+        } else {
+            let r = len2 / (rho2 + a2 * hz2);
+            a2 * (1.0 / PI) * (r * r)
+        };
+        let (cos_o, cos_i) = (wo.z.abs(), wi.z.abs());
+        let (s_o, s_i) = (self.smith_root(wo), self.smith_root(wi));
+        Some(ReflectionPair {
+            wm,
+            dg: d / (2.0 * (cos_i * s_o + cos_o * s_i)),
+            pdf_fwd: d / (2.0 * (cos_o + s_o)),
+            pdf_rev: d / (2.0 * (cos_i + s_i)),
+        })
+    }
+
+    /// s(ω) = √(cos²θ + α² sin²θ) = |cos θ| (1 + 2Λ(ω)) of an isotropic distribution.
+    #[inline]
+    fn smith_root(&self, w: Vec3) -> f32 {
+        let a2 = self.alpha_x * self.alpha_x;
+        (cos2_theta(w) + a2 * sin2_theta(w)).sqrt()
+    }
+
+    /// pdf per unit solid angle of ωi for [`Self::sample_reflection`]: the pair's forward pdf.
     #[inline]
     pub fn reflection_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z * wi.z <= 0.0 {
-            return 0.0;
+        self.reflection_eval_pair(wo, wi).map_or(0.0, |r| r.pdf_fwd)
+    }
+
+    /// The pdf of ωi = reflect(ωo, ωm) for a sampled visible normal ωm.
+    #[inline]
+    fn reflection_pdf_at(&self, wo: Vec3, wm: Vec3) -> f32 {
+        if self.is_isotropic() {
+            return self.d(wm) / (2.0 * (wo.z.abs() + self.smith_root(wo)));
         }
-        let Some(wm) = (wo + wi).try_normalize() else {
-            return 0.0;
-        };
-        let wm = if wm.z < 0.0 { -wm } else { wm };
         self.pdf(wo, wm) / (4.0 * wo.dot(wm).abs())
     }
 
@@ -214,7 +285,7 @@ impl TrowbridgeReitz {
         if wo.z * wi.z <= 0.0 {
             return None;
         }
-        let pdf = self.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
+        let pdf = self.reflection_pdf_at(wo, wm);
         let wm = if wm.dot(wo) < 0.0 { -wm } else { wm };
         Some((wi, pdf, wm))
     }
@@ -250,6 +321,51 @@ mod tests {
                 })
                 .sum();
             assert!((sum / n as f64 - 1.0).abs() < 0.01, "{}", sum / n as f64);
+        }
+    }
+
+    /// (D G / (4 cos θo cos θi), pdf(ωi | ωo), pdf(ωo | ωi)) of an isotropic GGX as PBR 4ed
+    /// eq. 9.16, 9.18, 9.20, 9.28 write them, in f64 (the reference for the closed forms).
+    fn reference_pair(alpha: f64, wo: Vec3, wi: Vec3) -> (f64, f64, f64) {
+        let (wo, wi) = (wo.as_dvec3(), wi.as_dvec3());
+        let wm = (wo + wi).normalize();
+        let wm = if wm.z < 0.0 { -wm } else { wm };
+        let tan2 = |w: glam::DVec3| (1.0 - w.z * w.z) / (w.z * w.z);
+        let e = tan2(wm) / (alpha * alpha);
+        let d = 1.0 / (std::f64::consts::PI * alpha * alpha * wm.z.powi(4) * (1.0 + e).powi(2));
+        let lambda = |w: glam::DVec3| 0.5 * ((1.0 + alpha * alpha * tan2(w)).sqrt() - 1.0);
+        let (lo, li) = (lambda(wo), lambda(wi));
+        let (co, ci) = (wo.z.abs(), wi.z.abs());
+        let dg = d / (1.0 + lo + li) / (4.0 * co * ci);
+        let pdf = |w: glam::DVec3, l: f64| {
+            d / (1.0 + l) / w.z.abs() * w.dot(wm).abs() / (4.0 * w.dot(wm).abs())
+        };
+        (dg, pdf(wo, lo), pdf(wi, li))
+    }
+
+    #[test]
+    fn isotropic_closed_forms_are_the_general_formulas() {
+        // The isotropic pair (module header) against the textbook formulas in f64, on pairs
+        // on either side of the surface, from a near-mirror to α > 1.
+        let mut s = Sampler::new(6, 0, 0);
+        for alpha in [0.002f32, 0.05, 0.3, 1.0, 1.7] {
+            let d = TrowbridgeReitz::isotropic(alpha);
+            let mut checked = 0;
+            for _ in 0..20_000 {
+                let (wo, wi) = (uniform_sphere(s.get_2d()), uniform_sphere(s.get_2d()));
+                let Some(r) = d.reflection_eval_pair(wo, wi) else {
+                    assert!(wo.z * wi.z <= 0.0, "{wo} {wi}");
+                    continue;
+                };
+                let (dg, fwd, rev) = reference_pair(alpha as f64, wo, wi);
+                let close = |a: f32, b: f64| (a as f64 - b).abs() <= 2e-6 * b.abs() + 1e-30;
+                assert!((r.wm - (wo + wi).normalize()).length() < 1e-6, "{alpha}");
+                assert!(close(r.dg, dg), "{alpha} {wo} {wi}: {} {dg}", r.dg);
+                assert!(close(r.pdf_fwd, fwd), "{alpha}: {} {fwd}", r.pdf_fwd);
+                assert!(close(r.pdf_rev, rev), "{alpha}: {} {rev}", r.pdf_rev);
+                checked += 1;
+            }
+            assert!(checked > 9_000, "{checked}");
         }
     }
 

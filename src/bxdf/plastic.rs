@@ -69,10 +69,16 @@ impl PlasticBxdf {
         fdr_internal: f32,
         t_avg: f32,
     ) -> PlasticBxdf {
-        let r_eff = r.map(|r| {
-            let r = r.clamp(0.0, 1.0);
-            r * (1.0 - fdr_internal) / (1.0 - r * fdr_internal)
-        });
+        let r_eff = if fdr_internal == 0.0 {
+            // The series without internal reflection: ρ itself (the same bits as the
+            // general form, whose factors are then exactly 1), without four divisions.
+            r.map(|r| r.clamp(0.0, 1.0))
+        } else {
+            r.map(|r| {
+                let r = r.clamp(0.0, 1.0);
+                r * (1.0 - fdr_internal) / (1.0 - r * fdr_internal)
+            })
+        };
         let diffuse = if t_avg > 0.0 {
             r_eff * (INV_PI / t_avg)
         } else {

@@ -64,9 +64,14 @@ impl Spectrum {
     /// Equal at every integer nm, so integrals on that grid (luminance, power) do not change;
     /// in between the table differs by the interpolation error, at most h²/8 · max |s''| with
     /// h = 1 nm (below 10⁻³ of the peak for the uplift's most saturated colours, tested; 7·10⁻⁵ for the
-    /// Cornell box's red wall).
+    /// Cornell box's red wall). A sigmoid whose polynomial is constant (c₀ = c₁ = 0: the
+    /// uplift's greys, black and white) is the constant it evaluates to, exactly, and
+    /// costs a splat per hit rather than four table lookups.
     pub fn tabulated(self) -> Spectrum {
         match self {
+            Spectrum::Sigmoid(s) if s.c[0] == 0.0 && s.c[1] == 0.0 => {
+                Spectrum::Constant(s.eval(super::LAMBDA_MIN))
+            }
             Spectrum::Sigmoid(_) | Spectrum::RgbIlluminant(_) => Spectrum::Dense {
                 data: Arc::new(self.to_dense()),
                 scale: 1.0,
@@ -142,6 +147,20 @@ mod tests {
             }
         }
         assert!(worst < 1e-3, "{worst}");
+    }
+
+    #[test]
+    fn grey_sigmoids_become_their_constant() {
+        for v in [0.0, 0.18, 0.5, 1.0] {
+            let s = Spectrum::Sigmoid(reflectance([v, v, v]));
+            let t = s.clone().tabulated();
+            assert!(matches!(t, Spectrum::Constant(_)), "{v}: {t:?}");
+            for l in [LAMBDA_MIN, 517.3, LAMBDA_MAX] {
+                assert_eq!(t.eval(l), s.eval(l), "{v} at {l} nm");
+            }
+        }
+        let coloured = Spectrum::Sigmoid(reflectance([0.2, 0.5, 0.1])).tabulated();
+        assert!(matches!(coloured, Spectrum::Dense { .. }));
     }
 
     #[test]
