@@ -1,4 +1,5 @@
 //! Ray acceleration structures. Only `bvh.rs` names obvhs.
 
 pub mod bvh;
+mod node;
 mod stack;
