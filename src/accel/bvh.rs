@@ -19,16 +19,15 @@
 //! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored in
 //!   BVH primitive order, 36 bytes each (no index indirection per test; a leaf of three
 //!   triangles is 108 contiguous bytes).
-//! - Child boxes are quantised to 8 bits per plane (the CWBVH's 80-byte node, Ylitie et al.
-//!   2017, §3.1; [`super::node`]) with each decoded plane checked at build to lie outside the
-//!   exact bound of the child's triangles, so a decoded box contains the exact one. The box
-//!   test is conservative in the spirit of PBR 4ed §6.8.2 ("Conservative Ray–Bounds
-//!   Intersections"; see `RayBoxes` in the source). A box the exact ray meets within
-//!   t ∈ [0, t_max] is never culled, in particular not one whose face holds a triangle (every
-//!   axis-aligned floor), and nothing is clipped at t = 1e-4 as in obvhs's own node test.
+//! - Child boxes are the exact bounds of their triangles (the CWBVH's 8-bit quantised boxes are
+//!   not used), and the box test is conservative in the spirit of PBR 4ed §6.8.2
+//!   ("Conservative Ray–Bounds Intersections"; see `RayBoxes` in the source). A box the exact
+//!   ray meets within t ∈ [0, t_max] is never culled, in particular not one whose face holds a
+//!   triangle (every axis-aligned floor), and nothing is clipped at t = 1e-4 as in obvhs's own
+//!   node test.
 //!
 //! Degenerate triangles (zero area, or a non-finite vertex) are left out of the tree: they can
-//! never be hit; so are triangles with a coordinate beyond ±2^64 (the scene allows ±1e9). `Bvh` is plain data (`Send + Sync`); queries allocate nothing (the traversal
+//! never be hit. `Bvh` is plain data (`Send + Sync`); queries allocate nothing (the traversal
 //! stack's first [`STACK_PLACES`] entries live on the call stack), except on pathologically
 //! deep trees (see [`super::stack`]).
 //!
@@ -54,7 +53,6 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::triangle::Triangle;
 
-use super::node::{Child, Node, MAX_COORDINATE};
 use super::stack::Stack;
 use crate::geometry::offset::gamma;
 use crate::geometry::ray::Ray;
@@ -73,13 +71,28 @@ pub struct BvhHit {
 /// An 8-wide BVH over triangles, with the triangles stored in BVH primitive order.
 pub struct Bvh {
     /// Node 0 is the root; empty for a BVH without hittable triangles.
-    nodes: Vec<Node>,
+    nodes: Vec<WideNode>,
     /// Triangles in BVH primitive order, as a row store for [`PackedTriangle::load`].
     rows: Vec<f32>,
     /// BVH primitive order → index into the slice given to `build`.
     input_index: Vec<u32>,
     input_count: usize,
     bounds: (Vec3, Vec3),
+}
+
+/// A node with up to eight children. Slot `s` is lane `s % 4` of half `s / 4`.
+#[derive(Clone, Copy, Debug)]
+struct WideNode {
+    /// `planes[h][2k]` / `planes[h][2k + 1]`: min / max along axis k of the children of half h.
+    planes: [[Vec4; 6]; 2],
+    /// Inner child: its node index; leaf child: its first triangle (BVH order).
+    child: [u32; 8],
+    /// Triangles of each leaf child (0 for inner children and empty slots).
+    count: [u8; 8],
+    /// Bit `s`: slot s holds a child.
+    present: u8,
+    /// Bit `s`: slot s holds a leaf.
+    leaves: u8,
 }
 
 /// A subtree waiting on the traversal stack, with the (widened) distance where the ray enters it.
@@ -132,8 +145,7 @@ impl Bvh {
         let kept: Vec<u32> = (0..triangles.len() as u32)
             .filter(|&i| {
                 let [p0, p1, p2] = triangles[i as usize];
-                let inside = |p: Vec3| p.abs().max_element() <= MAX_COORDINATE;
-                !is_degenerate(p0, p1, p2) && inside(p0) && inside(p1) && inside(p2)
+                !is_degenerate(p0, p1, p2)
             })
             .collect();
         if kept.is_empty() {
@@ -203,7 +215,7 @@ impl Bvh {
     /// Bytes held: `(nodes, triangles)`, the triangles with their index into the input.
     pub fn memory_bytes(&self) -> (usize, usize) {
         (
-            self.nodes.len() * std::mem::size_of::<Node>(),
+            self.nodes.len() * std::mem::size_of::<WideNode>(),
             self.rows.len() * std::mem::size_of::<f32>()
                 + self.input_index.len() * std::mem::size_of::<u32>(),
         )
@@ -283,19 +295,18 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[entry.node as usize];
-            let (hits, t_enter) = node_intersect(node, ray, *t_max);
-            let leaves = node.leaves();
-            let (slots, n) = by_entry(hits & leaves, &t_enter);
+            let (hits, t_enter) = node.intersect(ray, *t_max);
+            let (slots, n) = by_entry(hits & node.leaves as u32, &t_enter);
             for &slot in &slots[..n] {
-                let (first, count) = node.leaf(slot);
+                let (first, count) = (node.child[slot] as usize, node.count[slot] as usize);
                 if t_enter[slot] <= *t_max && leaf(first, count, t_max) {
                     return;
                 }
             }
-            let (slots, n) = by_entry(hits & !leaves, &t_enter);
+            let (slots, n) = by_entry(hits & !node.leaves as u32, &t_enter);
             for &slot in slots[..n].iter().rev() {
                 stack.push(Entry {
-                    node: node.inner(slot),
+                    node: node.child[slot],
                     t_enter: t_enter[slot],
                 });
             }
@@ -333,7 +344,7 @@ fn by_entry(mut mask: u32, t_enter: &[f32; 8]) -> ([usize; 8], usize) {
 /// constrains nothing: its near planes give 0 (entries are clamped at 0 anyway) and its far
 /// planes +∞, through the splatted terms below, so no NaN ever arises.
 struct RayBoxes {
-    /// Per axis: the plane row (see [`Node::planes`]) of the near and the far slab.
+    /// Per axis: the plane row (see [`WideNode::planes`]) of the near and the far slab.
     near: [usize; 3],
     far: [usize; 3],
     /// Per axis, splatted: near-plane distance = (plane − o_near)·inv_near, far likewise.
@@ -365,15 +376,34 @@ impl RayBoxes {
     }
 }
 
-/// Mask of the children (bit = slot) whose decoded boxes the ray meets within [0, t_max], and
-/// the widened entry distance of each slot.
-#[inline(always)]
-fn node_intersect(node: &Node, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
-    let (m0, t0) = slab_half(&node.planes(0), ray, t_max);
-    let (m1, t1) = slab_half(&node.planes(1), ray, t_max);
-    let (t0, t1) = (t0.to_array(), t1.to_array());
-    let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
-    ((m0 | m1 << 4) & node.present(), t_enter)
+impl WideNode {
+    const EMPTY: WideNode = WideNode {
+        planes: [[Vec4::ZERO; 6]; 2],
+        child: [0; 8],
+        count: [0; 8],
+        present: 0,
+        leaves: 0,
+    };
+
+    /// Mask of the children (bit = slot) whose boxes the ray meets within [0, t_max], and the
+    /// widened entry distance of each slot.
+    #[inline(always)]
+    fn intersect(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
+        let (m0, t0) = slab_half(&self.planes[0], ray, t_max);
+        let (m1, t1) = slab_half(&self.planes[1], ray, t_max);
+        let (t0, t1) = (t0.to_array(), t1.to_array());
+        let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
+        ((m0 | m1 << 4) & self.present as u32, t_enter)
+    }
+
+    fn set_box(&mut self, slot: usize, (lo, hi): (Vec3, Vec3)) {
+        let (half, lane) = (slot / 4, slot % 4);
+        for k in 0..3 {
+            self.planes[half][2 * k][lane] = lo[k];
+            self.planes[half][2 * k + 1][lane] = hi[k];
+        }
+        self.present |= 1 << slot;
+    }
 }
 
 /// The slab test of four children (PBR 4ed §6.1.2, widened as described at [`RayBoxes`]):
@@ -390,32 +420,34 @@ fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: f32) -> (u32, Vec4) {
     (t_enter.cmple(t_exit).bitmask(), t_enter)
 }
 
-/// Our nodes from obvhs's: same indices and slots, child boxes quantised from the exact ones
-/// ([`Node::new`]). obvhs appends a node's children after it, so one pass from the back sees
-/// every child's box before its parent's.
-fn wide_nodes(cw: &[CwBvhNode], triangles: &[[Vec3; 3]]) -> Vec<Node> {
-    let mut nodes = vec![Node::EMPTY; cw.len()];
+/// Our nodes from obvhs's: same indices and slots, exact child boxes. obvhs appends a node's
+/// children after it, so one pass from the back sees every child's box before its parent's.
+fn wide_nodes(cw: &[CwBvhNode], triangles: &[[Vec3; 3]]) -> Vec<WideNode> {
+    let mut nodes = vec![WideNode::EMPTY; cw.len()];
     let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); cw.len()];
     for n in (0..cw.len()).rev() {
-        let mut children = [None; 8];
+        let mut node = WideNode::EMPTY;
         let mut node_box = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         for slot in (0..8).filter(|&s| !cw[n].is_child_empty(s)) {
-            let (child_box, child) = if cw[n].is_leaf(slot) {
+            let child_box = if cw[n].is_leaf(slot) {
                 let (first, count) = cw[n].child_primitives(slot);
-                let tris = &triangles[first as usize..(first + count) as usize];
-                (bounds_of(tris), Child::Leaf { first, count })
+                node.child[slot] = first;
+                node.count[slot] = count as u8;
+                node.leaves |= 1 << slot;
+                bounds_of(&triangles[first as usize..(first + count) as usize])
             } else {
                 let child = cw[n].child_node_index(slot);
                 assert!(
                     child as usize > n,
                     "obvhs stores children after their parent"
                 );
-                (boxes[child as usize], Child::Inner { node: child })
+                node.child[slot] = child;
+                boxes[child as usize]
             };
-            children[slot] = Some((child_box, child));
+            node.set_box(slot, child_box);
             node_box = (node_box.0.min(child_box.0), node_box.1.max(child_box.1));
         }
-        (nodes[n], boxes[n]) = (Node::new(&children), node_box);
+        (nodes[n], boxes[n]) = (node, node_box);
     }
     nodes
 }
@@ -432,15 +464,15 @@ fn row_store(ordered: &[[Vec3; 3]]) -> Vec<f32> {
 
 /// Number of nodes on the longest root-to-leaf path.
 #[cfg(test)]
-fn tree_depth(nodes: &[Node]) -> usize {
+fn tree_depth(nodes: &[WideNode]) -> usize {
     let mut deepest = 0;
     let mut pending = vec![(0u32, 1usize)];
     while let Some((index, depth)) = pending.pop() {
         deepest = deepest.max(depth);
         let node = &nodes[index as usize];
         for slot in 0..8 {
-            if (node.present() & !node.leaves()) & (1 << slot) != 0 {
-                pending.push((node.inner(slot), depth + 1));
+            if (node.present & !node.leaves) & (1 << slot) != 0 {
+                pending.push((node.child[slot], depth + 1));
             }
         }
     }

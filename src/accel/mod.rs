@@ -1,5 +1,4 @@
 //! Ray acceleration structures. Only `bvh.rs` names obvhs.
 
 pub mod bvh;
-mod node;
 mod stack;
