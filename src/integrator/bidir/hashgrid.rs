@@ -249,19 +249,33 @@ mod tests {
         let mut rng = Rng::new(3);
         let points: Vec<Vec3> = (0..5000).map(|_| rng.vec3(-1.0, 1.0)).collect();
         let mut grid = HashGrid::default();
-        grid.build(points.len(), |i| GridPoint { p: points[i], key: 1 }, 0.01);
+        grid.build(
+            points.len(),
+            |i| GridPoint {
+                p: points[i],
+                key: 1,
+            },
+            0.01,
+        );
         for _ in 0..100 {
             let c = rng.vec3(-100.0, 100.0);
             let base = [2 * c.x as i64, 2 * c.y as i64, 2 * c.z as i64];
             let slots: Vec<usize> = (0..8)
                 .map(|k| {
-                    let cell = [base[0] + (k & 1), base[1] + ((k >> 1) & 1), base[2] + (k >> 2)];
+                    let cell = [
+                        base[0] + (k & 1),
+                        base[1] + ((k >> 1) & 1),
+                        base[2] + (k >> 2),
+                    ];
                     grid.slot_of(cell, 1)
                 })
                 .collect();
             let first = slots[0];
             assert_eq!(first % BLOCK_SLOTS, 0, "{slots:?}");
-            assert!(slots.iter().enumerate().all(|(k, &s)| s == first + k), "{slots:?}");
+            assert!(
+                slots.iter().enumerate().all(|(k, &s)| s == first + k),
+                "{slots:?}"
+            );
         }
     }
 
