@@ -14,9 +14,11 @@
 #   2. Per stage, ns per ray query of each integrator and its ratio to path's
 #      (examples/auto_pilot.rs), which `session::auto::cost_per_ray` rounds.
 #
-# Usage: tools/bench_auto.sh [SEEDS [SPP [REFERENCE_SPP [RESOLUTION [STAGE…]]]]]
+# Usage: [REFS=DIR] [COST=0] tools/bench_auto.sh [SEEDS [SPP [REFERENCE_SPP [RESOLUTION [STAGE…]]]]]
 #   (defaults 16, 64, 4096, 160x120, the six stages below)
-# Prints tables; writes references to a temporary directory, nothing in the repository.
+# Prints tables; writes references to a temporary directory, nothing in the repository, or
+# with REFS=DIR keeps them in DIR (named STAGE-RES-REFSPP.exr) and reuses them on the next
+# run; COST=0 leaves out part 2.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 SEEDS="${1:-16}"
@@ -30,8 +32,13 @@ STAGES=("$@")
 cargo build --release --quiet --manifest-path "$ROOT/Cargo.toml" --example equal_time --example auto_pilot
 EQ="$ROOT/target/release/examples/equal_time"
 PILOT="$ROOT/target/release/examples/auto_pilot"
-TMP="$(mktemp -d)"
-trap 'rm -rf "$TMP"' EXIT
+if [ -n "${REFS:-}" ]; then
+  mkdir -p "$REFS"
+  TMP="$REFS"
+else
+  TMP="$(mktemp -d)"
+  trap 'rm -rf "$TMP"' EXIT
+fi
 
 # On scenes/caustic.usda the lamp's glints through and on the ball (E S+ L, found by hitting
 # the lamp in every integrator) carry most of every integrator's error, where the ratio is
@@ -48,10 +55,11 @@ for s in "${STAGES[@]}"; do
   [[ "$s" == */caustic.usda ]] && read -r -a extra <<<"${CAUSTIC[$RES]:-}"
   echo "== $s ($RES, $SPP spp, seeds 1–$SEEDS, reference $ref $REF_SPP spp)"
   "$EQ" "$ROOT/$s" --resolution "$RES" --max-depth unlimited --threads 1 --spp "$SPP" \
-    --seeds "$SEEDS" --seed 1 --reference "$TMP/$(basename "$s" .usda).exr" \
+    --seeds "$SEEDS" --seed 1 --reference "$TMP/$(basename "$s" .usda)-$RES-$REF_SPP.exr" \
     --reference-spp "$REF_SPP" --reference-integrator "$ref" --integrators path,bdpt,vcm,auto \
     "${extra[@]}"
 done
+[ "${COST:-1}" = 0 ] && exit 0
 echo "== cost per ray query (8 spp at $RES)"
 for s in "${STAGES[@]}" scenes/materials.usda scenes/room.usda; do
   "$PILOT" "$ROOT/$s" --spp 8 --resolution "$RES"

@@ -14,8 +14,12 @@
 //! it is the same on every machine and under any load, so `auto` picks the same integrator
 //! for a given seed, and with `--spp` the image is bit-identical to that of the integrator it
 //! picked. A later candidate must be more than [`PREFERENCE`] times as efficient as an
-//! earlier one to be chosen: the candidates come in order of simplicity (path before bdpt
-//! before vcm), and the pilot's figures are estimates.
+//! earlier one to be chosen: the candidates come in the analysis's order of preference
+//! (path before bdpt by simplicity; vcm before bdpt for point-like caustics, where it is the
+//! robust one), and the pilot's figures are estimates. Where the first is the robust one
+//! (`Candidates::proof`) a later one must be *shown* so: the lower end of the 95 % interval of
+//! its efficiency ratio, from the pixel variances summed over blocks ([`efficiency_interval`]),
+//! above [`PREFERENCE`].
 //!
 //! **Pilot size.** Under `--spp N` each candidate takes max(2, N/32) samples per pixel in one
 //! pass (`step_to`), the same for all, rounded up to whole chunks of the splatting ones (so
@@ -75,6 +79,10 @@ pub struct PilotFigures {
     /// 1 / (variance × rays × [`cost_per_ray`]): higher is better (`inf` for a noiseless
     /// estimate).
     pub efficiency: f64,
+    /// For an image's later candidate that must be shown ahead (`Candidates::proof`), the
+    /// 95 % interval of its efficiency over that of the best candidate before it
+    /// ([`efficiency_interval`]); otherwise `None`.
+    pub interval: Option<[f64; 2]>,
 }
 
 /// What `auto` chose and why.
@@ -90,8 +98,8 @@ pub struct AutoReport {
 }
 
 impl AutoReport {
-    /// One line: `auto: bdpt (efficiency 3.1× path on a 3 % pilot)`, or the reason when
-    /// there was a single candidate.
+    /// One line: `auto: bdpt (efficiency 3.1× path, 95 % interval 2.0–4.5× on a 3 % pilot)`,
+    /// or the reason when there was a single candidate.
     pub fn summary(&self) -> String {
         let name = self.choice.name();
         let best = self.pilot.iter().find(|p| p.integrator == self.choice);
@@ -110,20 +118,25 @@ impl AutoReport {
         if self.pilot.iter().any(|p| p.variance.is_infinite()) {
             return format!(
                 "auto: {name} (a pilot found no light, so none was shown more efficient than \
-                 the simplest on a {} % pilot)",
+                 the first candidate on a {} % pilot)",
                 percent(self.pilot_share)
             );
         }
-        let behind = self.pilot.iter().any(|p| {
+        let ahead = self.pilot.iter().find(|p| {
             best.is_some_and(|b| p.integrator != self.choice && p.efficiency > b.efficiency)
         });
-        let kept = if behind {
-            format!(
-                ", kept as the simpler within {} %",
-                percent(PREFERENCE - 1.0)
-            )
-        } else {
-            String::new()
+        let kept = match ahead.and_then(|p| p.interval) {
+            Some([lo, hi]) => format!(
+                ", kept: {}'s lead not shown, its 95 % interval {}–{}×",
+                ahead.map_or("", |p| p.integrator.name()),
+                ratio_text(lo),
+                ratio_text(hi)
+            ),
+            _ if ahead.is_some() => format!(", kept within {} %", percent(PREFERENCE - 1.0)),
+            _ => match best.and_then(|b| b.interval) {
+                Some([lo, hi]) => format!(", 95 % interval {}–{}×", ratio_text(lo), ratio_text(hi)),
+                None => String::new(),
+            },
         };
         format!(
             "auto: {name} (efficiency {}{kept} on a {} % pilot)",
@@ -171,6 +184,7 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
     let Candidates {
         mut integrators,
         mut reasons,
+        proof,
     } = candidates(&scene.features, Target::Image, mis);
     let spp = opts.spp.map(u64::from).or(match opts.time_budget {
         Some(_) => None,
@@ -186,8 +200,7 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
         .map(|i| ImageSession::pause_quantum(i, scene, opts.max_depth))
         .max()
         .unwrap_or(1);
-    let mut best: Option<ImageSession<'a>> = None;
-    let mut best_efficiency = 0.0;
+    let mut best: Option<(ImageSession<'a>, Measured)> = None;
     // Whether a pilot so far found no light ([`found_light`]): then no later candidate is
     // chosen over the best so far.
     let mut blind = false;
@@ -198,6 +211,7 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
     } else {
         counted_pixels(scene)
     };
+    let width = scene.camera.width as usize;
     for integrator in integrators {
         let mut o = RenderOptions {
             integrator,
@@ -208,7 +222,7 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
         }
         let mut session = ImageSession::new(scene, &o)?;
         if single {
-            best = Some(session);
+            best = Some((session, Measured::default()));
             break;
         }
         let start = Instant::now();
@@ -216,32 +230,37 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
             Some(n) => session.step_to(pilot_spp(n, quantum)),
             None => timed_pilot(&mut session),
         };
+        let blocks = last
+            .as_ref()
+            .map_or_else(Vec::new, |s| block_sums(&s.variance, &counted, width));
         let variance = found_light(
             &session,
-            last.as_ref().map_or(f64::INFINITY, |s| {
-                s.variance
-                    .iter()
-                    .zip(counted.iter().chain(std::iter::repeat(&true)))
-                    .filter(|(_, c)| **c)
-                    .map(|(v, _)| v)
-                    .sum()
-            }),
+            last.as_ref().map_or(f64::INFINITY, |_| blocks.iter().sum()),
         );
-        let figures = figures(
+        let mut figures = figures(
             integrator,
             session.samples(),
             session.ray_queries(),
             start.elapsed().as_secs_f64(),
             variance,
         );
-        if best.is_none() || (!blind && figures.efficiency > best_efficiency * PREFERENCE) {
-            best_efficiency = figures.efficiency;
-            best = Some(session);
+        let measured = Measured {
+            cost: session.ray_queries() as f64 * cost_per_ray(&integrator),
+            blocks,
+        };
+        let wins = match &best {
+            None => true,
+            Some((_, b)) => !blind && challenge(b, &measured, &mut figures, proof),
+        };
+        if wins {
+            best = Some((session, measured));
         }
         blind |= figures.variance.is_infinite();
         pilot.push(figures);
     }
-    let mut session = best.ok_or_else(|| Error::option("auto found no candidate"))?;
+    let mut session = best
+        .map(|b| b.0)
+        .ok_or_else(|| Error::option("auto found no candidate"))?;
     let report = AutoReport {
         choice: session.integrator(),
         reasons,
@@ -250,6 +269,128 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
     };
     session.continue_after_pilot(opts.time_budget, clock, report);
     Ok(session)
+}
+
+/// Side of the square pixel blocks whose summed pilot variances are the sampling units of
+/// [`efficiency_interval`]: 108 blocks at the benchmark's 96 × 72, 20 at 40 × 30. The
+/// pixels' noise is independent, so any grouping estimates the same standard error; small
+/// blocks give the interval more degrees of freedom, and 8 × 8 keeps them above a few even
+/// on small images. A choice, not a derived value.
+const BLOCK_SIDE: usize = 8;
+
+/// The two-sided 95 % point of the standard normal distribution.
+const Z_95: f64 = 1.959_963_984_540_054;
+
+/// What [`efficiency_interval`] needs of a candidate's image pilot.
+#[derive(Clone, Debug, Default)]
+struct Measured {
+    /// Ray queries × [`cost_per_ray`].
+    cost: f64,
+    /// [`block_sums`] of its pilot's pixel variances.
+    blocks: Vec<f64>,
+}
+
+impl Measured {
+    fn variance(&self) -> f64 {
+        self.blocks.iter().sum()
+    }
+}
+
+/// The pilot variances `variance` of the pixels `counted` keeps (all where `counted` is
+/// shorter), summed over blocks of [`BLOCK_SIDE`]² pixels of an image `width` wide, in a fixed
+/// order; blocks without a counted pixel are left out, so that every candidate's blocks are
+/// the same pixels.
+fn block_sums(variance: &[f64], counted: &[bool], width: usize) -> Vec<f64> {
+    let width = width.max(1);
+    let across = width.div_ceil(BLOCK_SIDE);
+    let rows = variance.len().div_ceil(width).div_ceil(BLOCK_SIDE);
+    let mut sums = vec![0.0; across * rows];
+    let mut used = vec![false; across * rows];
+    for (i, v) in variance.iter().enumerate() {
+        if !counted.get(i).copied().unwrap_or(true) {
+            continue;
+        }
+        let b = (i / width / BLOCK_SIDE) * across + (i % width) / BLOCK_SIDE;
+        sums[b] += v;
+        used[b] = true;
+    }
+    sums.into_iter()
+        .zip(used)
+        .filter_map(|(s, u)| u.then_some(s))
+        .collect()
+}
+
+/// The 95 % interval of the efficiency of `challenger` over that of `best`, both image
+/// pilots over the same blocks: (V_b C_b) / (V_c C_c) with V the summed variance and C the
+/// cost. The costs are counted exactly; the uncertainty is in the ratio of the variance totals
+/// R = Σ b_k / Σ c_k over the K blocks, whose standard error is that of the ratio estimator
+/// of survey sampling, se² = K/(K−1) · Σ (b_k − R c_k)² / (Σ c_k)² (Cochran, *Sampling
+/// Techniques*, 3rd ed. 1977, §6.4, with the blocks as the sampling units and no finite-
+/// population correction),
+/// with Student's t at K − 1 degrees of freedom ([`t_95`]). Pairing the blocks removes what the
+/// two images share (where the scene is bright, both are noisy); what remains is how unevenly
+/// the variances are spread: where a few blocks carry most of either total (a caustic's rare,
+/// enormous samples), the interval is wide. Infinite when the challenger's variance is 0 (a
+/// noiseless estimate), (0, ∞) when there are fewer than 2 blocks.
+fn efficiency_interval(best: &Measured, challenger: &Measured) -> (f64, f64) {
+    let k = best.blocks.len().min(challenger.blocks.len());
+    let (sb, sc) = (best.variance(), challenger.variance());
+    if sc == 0.0 {
+        return (f64::INFINITY, f64::INFINITY);
+    }
+    if k < 2 || challenger.cost <= 0.0 || !(sb.is_finite() && sc.is_finite()) {
+        return (0.0, f64::INFINITY);
+    }
+    let r = sb / sc;
+    let squares: f64 = (best.blocks.iter().zip(&challenger.blocks))
+        .map(|(b, c)| (b - r * c).powi(2))
+        .sum();
+    let se = (k as f64 / (k as f64 - 1.0) * squares).sqrt() / sc;
+    let half = t_95(k as f64 - 1.0) * se;
+    let costs = best.cost / challenger.cost;
+    (costs * (r - half).max(0.0), costs * (r + half))
+}
+
+/// The two-sided 95 % point of Student's t at `nu` degrees of freedom, by the expansion of
+/// Abramowitz & Stegun 26.7.5 about the normal point, to the ν⁻³ term (0.7 % below the table
+/// at 3 degrees of freedom, 0.1 % at 5, less beyond).
+fn t_95(nu: f64) -> f64 {
+    let z = Z_95;
+    let (z3, z5, z7) = (z.powi(3), z.powi(5), z.powi(7));
+    let g1 = (z3 + z) / 4.0;
+    let g2 = (5.0 * z5 + 16.0 * z3 + 3.0 * z) / 96.0;
+    let g3 = (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / 384.0;
+    z + g1 / nu + g2 / (nu * nu) + g3 / (nu * nu * nu)
+}
+
+/// Whether a later candidate whose efficiency is `ratio` times the best before it, with a
+/// 95 % interval from `low`, is chosen: with `proof` ([`Candidates::proof`]) when it is shown
+/// more than [`PREFERENCE`] times as efficient (`low` above it: a one-sided test at 2.5 %),
+/// otherwise when it is estimated so (`ratio` above it). Else the earlier one is kept, the
+/// candidates' order being the static analysis's preference (`integrator::auto`).
+fn shown_ahead(ratio: f64, low: f64, proof: bool) -> bool {
+    if proof {
+        low > PREFERENCE
+    } else {
+        ratio > PREFERENCE
+    }
+}
+
+/// Whether a later candidate's image pilot (`measured`, `figures`) is chosen over the best
+/// before it ([`shown_ahead`], with or without `proof`); its efficiency interval goes into
+/// `figures`. A pilot that found no light (infinite variance) is never chosen.
+fn challenge(
+    best: &Measured,
+    measured: &Measured,
+    figures: &mut PilotFigures,
+    proof: bool,
+) -> bool {
+    let (lo, hi) = efficiency_interval(best, measured);
+    if proof {
+        figures.interval = Some([lo, hi]);
+    }
+    let ratio = figures.efficiency * best.variance() * best.cost;
+    figures.variance.is_finite() && shown_ahead(ratio, lo, proof)
 }
 
 /// The pixels whose pilot variance counts: all, or, where the camera sees specular surfaces
@@ -345,6 +486,7 @@ fn figures(
         rays,
         seconds,
         variance,
+        interval: None,
         efficiency: if cost > 0.0 {
             1.0 / cost
         } else if cost == 0.0 {
@@ -368,6 +510,7 @@ pub(super) fn meters<'a>(
     let Candidates {
         integrators,
         reasons,
+        ..
     } = candidates(&scene.features, Target::Meters, mis);
     let single = integrators.len() == 1;
     let mut runs = Vec::new();
@@ -444,4 +587,103 @@ fn pick_meters(runs: &[(MeterSession, Option<PassStats>, f64)]) -> (usize, Vec<P
         pilot.push(f);
     }
     (best.map_or(0, |b| b.0), pilot)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_sum_the_counted_pixels_of_each_square() {
+        // 10 × 9 pixels: 2 × 2 blocks of 8 (the right and bottom ones partial).
+        let variance: Vec<f64> = (0..90).map(|i| i as f64).collect();
+        let all = block_sums(&variance, &[], 10);
+        assert_eq!(all.len(), 4);
+        assert_eq!(all.iter().sum::<f64>(), variance.iter().sum::<f64>());
+        let top_left: f64 = (0..8)
+            .flat_map(|y| (0..8).map(move |x| (y * 10 + x) as f64))
+            .sum();
+        assert_eq!(all[0], top_left);
+        assert_eq!(all[3], 88.0 + 89.0);
+        // Leaving out the bottom row leaves out the bottom blocks.
+        let counted: Vec<bool> = (0..90).map(|i| i < 80).collect();
+        assert_eq!(block_sums(&variance, &counted, 10), all[..2]);
+    }
+
+    #[test]
+    fn t_matches_the_table() {
+        // Student's t, two-sided 95 %: 3.182, 2.571, 2.228, 2.093 (any table).
+        for (nu, t) in [(3.0, 3.1824), (5.0, 2.5706), (10.0, 2.2281), (19.0, 2.0930)] {
+            assert!((t_95(nu) / t - 1.0).abs() < 0.008, "{nu}: {}", t_95(nu));
+        }
+        assert!((t_95(1e9) - Z_95).abs() < 1e-6);
+    }
+
+    fn measured(cost: f64, blocks: &[f64]) -> Measured {
+        Measured {
+            cost,
+            blocks: blocks.to_vec(),
+        }
+    }
+
+    #[test]
+    fn the_interval_is_narrow_for_even_variances_and_wide_for_a_few_large_ones() {
+        // The challenger's variance is half the best's in every block, at equal cost: its
+        // efficiency is 2×, and nothing varies from block to block.
+        let best = measured(1.0, &[2.0; 100]);
+        let even = measured(1.0, &[1.0; 100]);
+        let (lo, hi) = efficiency_interval(&best, &even);
+        assert!(
+            (lo - 2.0).abs() < 1e-12 && (hi - 2.0).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        assert!(shown_ahead(2.0, lo, true));
+        // The cost enters as a plain factor.
+        let dear = measured(4.0, &[1.0; 100]);
+        let (lo, hi) = efficiency_interval(&best, &dear);
+        assert!(
+            (lo - 0.5).abs() < 1e-12 && (hi - 0.5).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        // The same totals, the best's carried by one block of 100: 2× as efficient on the
+        // point estimate, but a single block is no evidence.
+        let mut spiky = vec![100.0 / 99.0; 100];
+        spiky[37] = 100.0;
+        let spiky = measured(1.0, &spiky);
+        let r = spiky.variance() / even.variance();
+        assert!((r - 2.0).abs() < 1e-3, "{r}");
+        let (lo, hi) = efficiency_interval(&spiky, &even);
+        assert!(lo < 1.0 && hi > 3.0, "{lo} {hi}");
+        assert!(!shown_ahead(r, lo, true) && shown_ahead(r, lo, false));
+        // Independent noise: 100 blocks of exponential spread (standard deviation = mean)
+        // around 2 and 1: shown ahead (the interval's half-width is about 2 × 2 × 0.14).
+        let mut rng = crate::testing::rng::Rng::new(7);
+        let noisy = |mean: f64, rng: &mut crate::testing::rng::Rng| -> Vec<f64> {
+            (0..100)
+                .map(|_| -mean * (1.0 - f64::from(rng.f32())).ln())
+                .collect()
+        };
+        let b = measured(1.0, &noisy(2.0, &mut rng));
+        let c = measured(1.0, &noisy(1.0, &mut rng));
+        let (lo, hi) = efficiency_interval(&b, &c);
+        let r = b.variance() / c.variance();
+        assert!(lo < r && r < hi && lo > 1.0, "{lo} {r} {hi}");
+    }
+
+    #[test]
+    fn edge_cases_never_give_nan() {
+        let best = measured(1.0, &[1.0, 2.0]);
+        assert_eq!(
+            efficiency_interval(&best, &measured(1.0, &[0.0, 0.0])),
+            (f64::INFINITY, f64::INFINITY)
+        );
+        assert_eq!(
+            efficiency_interval(&best, &measured(1.0, &[1.0])),
+            (0.0, f64::INFINITY)
+        );
+        assert_eq!(
+            efficiency_interval(&measured(1.0, &[]), &measured(1.0, &[])),
+            (f64::INFINITY, f64::INFINITY)
+        );
+    }
 }
