@@ -1,6 +1,6 @@
 //! The Trowbridge–Reitz (GGX) microfacet distribution (PBR 4ed §9.6) with Smith's
-//! height-uncorrelated masking–shadowing and visible-normal sampling (Heitz 2018,
-//! "Sampling the GGX Distribution of Visible Normals", JCGT 7(4)).
+//! height-correlated masking–shadowing (G below; PBR 4ed §9.6.3) and visible-normal sampling
+//! (Heitz 2018, "Sampling the GGX Distribution of Visible Normals", JCGT 7(4)).
 //!
 //! All directions are in the local shading frame (normal +Z). Formulas:
 //! - D(ωm) = 1 / (π αx αy cos⁴θm (1 + tan²θm (cos²φm/αx² + sin²φm/αy²))²)  (PBR 4ed eq. 9.16)

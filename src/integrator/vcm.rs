@@ -17,10 +17,10 @@
 //!
 //! **Wavelengths.** A merge may only combine vertices that carry the same wavelengths, so an
 //! iteration shares one hero tuple, and the tuples of successive iterations are stratified:
-//! the hero of iteration k is drawn at the base-2 radical inverse of k (van der Corput),
-//! shifted by a hash of the seed — over all of [0, 1), since a path that terminates its
-//! secondary wavelengths (dispersion) keeps the hero alone. A light subpath that terminates its secondary wavelengths at a dispersive
-//! vertex stores its vertices as hero-only; a merge with one counts on the hero lane alone
+//! the hero of iteration k is drawn from a base-4 radical-inverse sequence of k
+//! (`stratified_u`, one tuple per value), shifted by a hash of the seed — over all of [0, 1),
+//! since a path that terminates its secondary wavelengths (dispersion) keeps the hero alone. A
+//! light subpath that terminates its secondary wavelengths at a dispersive vertex stores its vertices as hero-only; a merge with one counts on the hero lane alone
 //! (`SampleRecord::hero_only`).
 //!
 //! **Modes.** `vcm` connects and merges; `vm` merges only, plus emitters at the end of purely
