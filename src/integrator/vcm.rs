@@ -20,7 +20,8 @@
 //! the hero of iteration k is drawn from a base-4 radical-inverse sequence of k
 //! (`stratified_u`, one tuple per value), shifted by a hash of the seed — over all of [0, 1),
 //! since a path that terminates its secondary wavelengths (dispersion) keeps the hero alone. A
-//! light subpath that terminates its secondary wavelengths at a dispersive vertex stores its vertices as hero-only; a merge with one counts on the hero lane alone
+//! light subpath that terminates its secondary wavelengths at a dispersive vertex stores its
+//! vertices as hero-only; a merge with one counts on the hero lane alone
 //! (`SampleRecord::hero_only`).
 //!
 //! **Modes.** `vcm` connects and merges; `vm` merges only, plus emitters at the end of purely
