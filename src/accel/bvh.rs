@@ -296,15 +296,15 @@ impl Bvh {
             }
             let node = &self.nodes[entry.node as usize];
             let (hits, t_enter) = node.intersect(ray, *t_max);
-            let (order, n) = by_entry(hits & node.leaves as u32, &t_enter);
-            for slot in (0..n).map(|i| slot_at(order, i)) {
+            let (slots, n) = by_entry(hits & node.leaves as u32, &t_enter);
+            for &slot in &slots[..n] {
                 let (first, count) = (node.child[slot] as usize, node.count[slot] as usize);
                 if t_enter[slot] <= *t_max && leaf(first, count, t_max) {
                     return;
                 }
             }
-            let (order, n) = by_entry(hits & !node.leaves as u32, &t_enter);
-            for slot in (0..n).rev().map(|i| slot_at(order, i)) {
+            let (slots, n) = by_entry(hits & !node.leaves as u32, &t_enter);
+            for &slot in slots[..n].iter().rev() {
                 stack.push(Entry {
                     node: node.child[slot],
                     t_enter: t_enter[slot],
@@ -314,31 +314,23 @@ impl Bvh {
     }
 }
 
-/// The slots set in `mask` by increasing entry distance (ties in slot order), packed four bits
-/// each with the nearest in the low bits, and their number: an insertion sort of at most eight
-/// kept in one register (no array to clear and return per node). Read with [`slot_at`].
+/// The slots set in `mask` by increasing entry distance (insertion sort of at most 8; ties in
+/// slot order).
 #[inline(always)]
-fn by_entry(mut mask: u32, t_enter: &[f32; 8]) -> (u32, usize) {
-    let (mut order, mut n) = (0u32, 0);
+fn by_entry(mut mask: u32, t_enter: &[f32; 8]) -> ([usize; 8], usize) {
+    let (mut slots, mut n) = ([0; 8], 0);
     while mask != 0 {
-        let slot = mask.trailing_zeros() & 7;
+        let slot = mask.trailing_zeros() as usize & 7;
         mask &= mask - 1;
-        let t = t_enter[slot as usize];
         let mut k = n;
-        while k > 0 && t_enter[slot_at(order, k - 1)] > t {
+        while k > 0 && t_enter[slots[k - 1]] > t_enter[slot] {
+            slots[k] = slots[k - 1];
             k -= 1;
         }
-        let below = (1u32 << (4 * k)) - 1;
-        order = (order & below) | slot << (4 * k) | (order & !below) << 4;
+        slots[k] = slot;
         n += 1;
     }
-    (order, n)
-}
-
-/// The `i`-th slot of an order packed by [`by_entry`].
-#[inline(always)]
-fn slot_at(order: u32, i: usize) -> usize {
-    (order >> (4 * i) & 7) as usize
+    (slots, n)
 }
 
 /// Per-ray part of the box test. A slab distance is computed as fl(fl(p − o)·fl(1/d)), within
@@ -603,26 +595,6 @@ mod tests {
         match rng.below(3) {
             0 => f32::INFINITY,
             _ => rng.range(0.0, 3.0) * extent,
-        }
-    }
-
-    /// The packed order is the stable sort of the masked slots by entry distance, for every
-    /// mask, with ties (equal distances) kept in slot order.
-    #[test]
-    fn by_entry_is_a_stable_sort_of_the_masked_slots() {
-        let mut rng = Rng::new(9);
-        for k in 0..2000 {
-            let t_enter: [f32; 8] = std::array::from_fn(|_| match k % 3 {
-                0 => rng.f32(),
-                _ => rng.below(3) as f32,
-            });
-            for mask in 0..256u32 {
-                let mut expected: Vec<usize> = (0..8).filter(|s| mask >> s & 1 == 1).collect();
-                expected.sort_by(|&a, &b| t_enter[a].total_cmp(&t_enter[b]));
-                let (order, n) = by_entry(mask, &t_enter);
-                let got: Vec<usize> = (0..n).map(|i| slot_at(order, i)).collect();
-                assert_eq!(got, expected, "{mask:08b} {t_enter:?}");
-            }
         }
     }
 
