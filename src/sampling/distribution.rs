@@ -1,9 +1,5 @@
 //! Piecewise-constant 1D and 2D distributions (PBR 4ed §A.4.1 and §A.4.2).
 
-/// Tables of at most this many entries find their interval by counting instead of by a
-/// binary search (fewer instructions and no mispredicted branches for a few lights).
-const SHORT_TABLE: usize = 8;
-
 /// Sampling an index (or a continuous value) proportionally to non-negative weights.
 #[derive(Clone, Debug, Default)]
 pub struct Distribution1D {
@@ -106,14 +102,7 @@ impl Distribution1D {
     #[inline]
     fn find_interval(&self, u: f32) -> usize {
         let n = self.func.len();
-        // The cdf is non-decreasing, so the entries ≤ u are a prefix and its length is
-        // their count: for a short table (a few lights) a branch-free count, for a long
-        // one a binary search. Both give the same index (tested).
-        let i = if n <= SHORT_TABLE {
-            self.cdf.iter().map(|&c| usize::from(c <= u)).sum()
-        } else {
-            self.cdf.partition_point(|&c| c <= u)
-        };
+        let i = self.cdf.partition_point(|&c| c <= u);
         let mut i = i.saturating_sub(1).min(n - 1);
         // Skip zero-width cells so a zero-weight entry is never chosen.
         while i + 1 < n && self.cdf[i + 1] == self.cdf[i] {
@@ -175,40 +164,6 @@ impl Distribution2D {
 mod tests {
     use super::*;
     use crate::sampling::Sampler;
-
-    #[test]
-    fn short_tables_count_to_the_binary_search_index() {
-        // The count of a short table against the binary search of the same cdf, at random
-        // u, at every cdf entry and its neighbours, and at 0, 1 and NaN, with zero weights.
-        let mut s = Sampler::new(5, 0, 0);
-        for n in 1..=SHORT_TABLE {
-            for _ in 0..200 {
-                let w: Vec<f32> = (0..n)
-                    .map(|_| {
-                        if s.get_1d() < 0.3 {
-                            0.0
-                        } else {
-                            s.get_1d() * 10.0
-                        }
-                    })
-                    .collect();
-                let d = Distribution1D::new(&w);
-                let search = |u: f32| {
-                    let i = d.cdf.partition_point(|&c| c <= u);
-                    let mut i = i.saturating_sub(1).min(n - 1);
-                    while i + 1 < n && d.cdf[i + 1] == d.cdf[i] {
-                        i += 1;
-                    }
-                    i
-                };
-                let edges = d.cdf.iter().flat_map(|&c| [c, c.next_up(), c.next_down()]);
-                let us = (0..64).map(|_| s.get_1d()).chain(edges);
-                for u in us.chain([0.0, 1.0, 1.0f32.next_down(), f32::NAN]) {
-                    assert_eq!(d.find_interval(u), search(u), "{w:?} u {u}");
-                }
-            }
-        }
-    }
 
     #[test]
     fn discrete_frequencies_follow_weights() {

@@ -37,10 +37,6 @@ pub const UNKNOWN_SPP_LOG2: u32 = 16;
 pub struct ZSobol {
     seed: u64,
     log2: u32,
-    /// The two replicates' keys in epoch 0 with no index bits above 32 (every sample of a
-    /// run under 2^L samples per replicate on an image below 2^(32−L) Morton codes): hashed
-    /// once per run instead of four SplitMix64 per sample, the same bits.
-    first_keys: [u64; 2],
 }
 
 impl ZSobol {
@@ -50,11 +46,7 @@ impl ZSobol {
             Some(n) => (n.div_ceil(2).max(1).next_power_of_two().trailing_zeros()).min(MAX_LOG2),
             None => UNKNOWN_SPP_LOG2,
         };
-        ZSobol {
-            seed,
-            log2,
-            first_keys: [0, 1].map(|r| key(seed, r, 0, 0)),
-        }
+        ZSobol { seed, log2 }
     }
 
     /// The stream of sample `s` of pixel (x, y).
@@ -66,23 +58,13 @@ impl ZSobol {
         // The index bits above 32 select a scramble of their own, like an epoch.
         let high = m >> (32 - l);
         let low = ((m << l) | (j & ((1 << l) - 1))) as u32;
-        let key = if epoch == 0 && high == 0 {
-            self.first_keys[r as usize]
-        } else {
-            key(self.seed, r, epoch, high)
-        };
+        let key = mix64(self.seed ^ mix64(r ^ mix64(epoch ^ mix64(high))));
         Stream {
             key,
             index_reversed: low.reverse_bits(),
             dim: 0,
         }
     }
-}
-
-/// The scramble key of replicate `r`, epoch `epoch` and index bits `high` above 32 of a run.
-#[inline]
-fn key(seed: u64, r: u64, epoch: u64, high: u64) -> u64 {
-    mix64(seed ^ mix64(r ^ mix64(epoch ^ mix64(high))))
 }
 
 /// One sample's draws from the sequence: dimension `dim` next. The index is kept with its
@@ -189,25 +171,6 @@ mod tests {
                 q.set_dimension(d);
                 assert_eq!(q.next_1d(), want[0], "pixel ({x}, {y}) sample {s} dim {d}");
             }
-        }
-    }
-
-    #[test]
-    fn first_keys_are_the_hashed_keys() {
-        // The cached keys against the hash, and a stream past them (a later epoch, high
-        // index bits) hashing its own.
-        for seed in [0u64, 1, 0xdead_beef] {
-            let z = ZSobol::new(seed, Some(64));
-            for (x, y, s) in [(0, 0, 0), (3, 5, 17), (255, 255, 63)] {
-                let want = key(seed, s & 1, 0, morton(x, y) >> (32 - z.log2));
-                assert_eq!(z.stream(x, y, s).key, want);
-                assert_eq!(want, z.first_keys[(s & 1) as usize]);
-            }
-            let later = z.stream(1, 2, 64 + 3);
-            assert_eq!(later.key, key(seed, 1, 1, 0));
-            let far = z.stream(1 << 14, 0, 2);
-            assert_eq!(far.key, key(seed, 0, 0, morton(1 << 14, 0) >> 27));
-            assert_ne!(far.key, z.first_keys[0]);
         }
     }
 
