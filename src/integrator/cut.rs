@@ -10,9 +10,8 @@
 //! plus [`SAFETY_DEPTH`]): Russian roulette with survival probability q (PBR 4ed §13.4.1,
 //! "Russian roulette"), applied once, at the cap.
 //!
-//! The drivers report the fraction cut, cut / (capped + cut), as a ratio estimate (Cochran
-//! 1977, "Sampling Techniques", §6.3–6.4: the ratio estimator R = ȳ/x̄ and its variance
-//! s²(y − R x) / (n x̄²)) from paired sums: per sample for meters ([`RatioSums`]), per batch of
+//! The drivers report the fraction cut, cut / (capped + cut), as a ratio estimate
+//! (`math::ratio`, Cochran 1977 §6.3–6.4) from paired sums: per sample for meters ([`RatioSums`]), per batch of
 //! samples for images ([`BatchedRatio`]: a sample's pixel is not random, so the batches — all
 //! pixels' samples of one residue of the sample index — are the independent observations).
 //!
@@ -20,8 +19,8 @@
 //! the path tracer (every path longer than the cap has such a camera prefix), light tracing
 //! its light subpath, connecting each further vertex to the sensor.
 
+pub use crate::math::ratio::RatioSums;
 use crate::sampling::Sampler;
-use crate::sensor::meter::stats::Z95;
 use crate::spectral::SampledSpectrum;
 
 /// The depth cap when none is given: Russian roulette ends paths long before it in any scene
@@ -76,61 +75,6 @@ impl CutSample {
     pub fn add(&mut self, l: SampledSpectrum, k: f32, limited: bool) {
         self.light += l * (k / Q);
         self.limited += u32::from(limited);
-    }
-}
-
-/// Paired sums of per-observation values (c: the cut, t: capped + cut) for the ratio
-/// R = Σc / Σt and its interval.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RatioSums {
-    pub n: u64,
-    pub c: f64,
-    pub t: f64,
-    pub cc: f64,
-    pub ct: f64,
-    pub tt: f64,
-}
-
-impl RatioSums {
-    #[inline]
-    pub fn push(&mut self, c: f64, t: f64) {
-        self.n += 1;
-        self.c += c;
-        self.t += t;
-        self.cc += c * c;
-        self.ct += c * t;
-        self.tt += t * t;
-    }
-
-    pub fn merge(&mut self, o: &RatioSums) {
-        self.n += o.n;
-        self.c += o.c;
-        self.t += o.t;
-        self.cc += o.cc;
-        self.ct += o.ct;
-        self.tt += o.tt;
-    }
-
-    /// R = Σc / Σt (0 when nothing was measured).
-    pub fn ratio(&self) -> f64 {
-        if self.t != 0.0 {
-            self.c / self.t
-        } else {
-            0.0
-        }
-    }
-
-    /// The 95 % half-width of R: 1.96 √(s²(c − R t) / (n t̄²)) (Cochran 1977, eq. 6.9);
-    /// infinite with fewer than two observations.
-    pub fn ci95(&self) -> f64 {
-        if self.n < 2 || self.t == 0.0 {
-            return f64::INFINITY;
-        }
-        let r = self.ratio();
-        let n = self.n as f64;
-        let s2 = ((self.cc - 2.0 * r * self.ct + r * r * self.tt) / (n - 1.0)).max(0.0);
-        let t_mean = self.t / n;
-        Z95 * (s2 / n).sqrt() / t_mean.abs()
     }
 }
 
@@ -199,21 +143,5 @@ mod tests {
         // Binomial(n, 1/8): σ = √(n q (1 − q)) ≈ 94.
         let expected = n as f64 * Q as f64;
         assert!((hits as f64 - expected).abs() < 5.0 * 94.0, "{hits}");
-    }
-
-    #[test]
-    fn the_ratio_interval_covers_a_known_fraction() {
-        // c = 0.3 t + noise: R → 0.3; the interval shrinks as 1/√n.
-        let mut s = Sampler::new(9, 0, 0);
-        let mut r = RatioSums::default();
-        for _ in 0..10_000 {
-            let t = 1.0 + s.get_1d() as f64;
-            let c = 0.3 * t + 0.2 * (s.get_1d() as f64 - 0.5);
-            r.push(c, t);
-        }
-        let (ratio, h) = (r.ratio(), r.ci95());
-        assert!((ratio - 0.3).abs() < h, "{ratio} ± {h}");
-        assert!(h > 0.0 && h < 0.01, "{h}");
-        assert!(RatioSums::default().ci95().is_infinite());
     }
 }

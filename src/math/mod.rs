@@ -8,6 +8,7 @@
 //! - `lambda: &SampledWavelengths` is the wavelength tuple a path carries.
 
 pub mod frame;
+pub mod ratio;
 
 pub use frame::Frame;
 
@@ -25,6 +26,10 @@ pub fn safe_sqrt(x: f32) -> f32 {
 pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
     -wo + 2.0 * wo.dot(n) * n
 }
+
+/// The two-sided 95 % point of the standard normal distribution, Φ⁻¹(0.975) (any table, e.g.
+/// Abramowitz & Stegun 26.2.23's tabulated value).
+pub const Z95: f64 = 1.959_963_984_540_054;
 
 pub const INV_PI: f32 = 1.0 / PI;
 pub const INV_2PI: f32 = 0.5 / PI;

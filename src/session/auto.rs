@@ -38,6 +38,8 @@ use super::{PassStats, Progressive};
 use crate::error::{Error, Result};
 use crate::integrator::auto::{candidates, Candidates, Target, SDS_DECIDES};
 use crate::integrator::Integrator;
+use crate::math::ratio::RatioSums;
+use crate::math::Z95;
 use crate::scene::analysis::specular_pixels;
 use crate::scene::Scene;
 use crate::sensor::meter::Meter;
@@ -278,9 +280,6 @@ pub(super) fn image<'a>(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageS
 /// on small images. A choice, not a derived value.
 const BLOCK_SIDE: usize = 8;
 
-/// The two-sided 95 % point of the standard normal distribution.
-const Z_95: f64 = 1.959_963_984_540_054;
-
 /// What [`efficiency_interval`] needs of a candidate's image pilot.
 #[derive(Clone, Debug, Default)]
 struct Measured {
@@ -324,29 +323,24 @@ fn block_sums(variance: &[f64], counted: &[bool], width: usize) -> Vec<f64> {
 /// pilots over the same blocks: (V_b C_b) / (V_c C_c) with V the summed variance and C the
 /// cost. The costs are counted exactly; the uncertainty is in the ratio of the variance totals
 /// R = Σ b_k / Σ c_k over the K blocks, whose standard error is that of the ratio estimator
-/// of survey sampling, se² = K/(K−1) · Σ (b_k − R c_k)² / (Σ c_k)² (Cochran, *Sampling
-/// Techniques*, 3rd ed. 1977, §6.4, with the blocks as the sampling units and no finite-
-/// population correction),
-/// with Student's t at K − 1 degrees of freedom ([`t_95`]). Pairing the blocks removes what the
-/// two images share (where the scene is bright, both are noisy); what remains is how unevenly
-/// the variances are spread: where a few blocks carry most of either total (a caustic's rare,
-/// enormous samples), the interval is wide. Infinite when the challenger's variance is 0 (a
-/// noiseless estimate), (0, ∞) when there are fewer than 2 blocks.
+/// of survey sampling (`math::ratio`, Cochran 1977 §6.4, with the blocks as the sampling
+/// units), with Student's t at K − 1 degrees of freedom ([`t_95`]). Pairing the blocks removes
+/// what the two images share (where the scene is bright, both are noisy); what remains is how
+/// unevenly the variances are spread: where a few blocks carry most of either total (a
+/// caustic's rare, enormous samples), the interval is wide. Infinite when the challenger's
+/// variance is 0 (a noiseless estimate), (0, ∞) when there are fewer than 2 blocks.
 fn efficiency_interval(best: &Measured, challenger: &Measured) -> (f64, f64) {
-    let k = best.blocks.len().min(challenger.blocks.len());
+    let mut sums = RatioSums::default();
+    (best.blocks.iter().zip(&challenger.blocks)).for_each(|(&b, &c)| sums.push(b, c));
     let (sb, sc) = (best.variance(), challenger.variance());
     if sc == 0.0 {
         return (f64::INFINITY, f64::INFINITY);
     }
-    if k < 2 || challenger.cost <= 0.0 || !(sb.is_finite() && sc.is_finite()) {
+    if sums.n < 2 || challenger.cost <= 0.0 || !(sb.is_finite() && sc.is_finite()) {
         return (0.0, f64::INFINITY);
     }
     let r = sb / sc;
-    let squares: f64 = (best.blocks.iter().zip(&challenger.blocks))
-        .map(|(b, c)| (b - r * c).powi(2))
-        .sum();
-    let se = (k as f64 / (k as f64 - 1.0) * squares).sqrt() / sc;
-    let half = t_95(k as f64 - 1.0) * se;
+    let half = t_95(sums.n as f64 - 1.0) * sums.standard_error();
     let costs = best.cost / challenger.cost;
     (costs * (r - half).max(0.0), costs * (r + half))
 }
@@ -355,7 +349,7 @@ fn efficiency_interval(best: &Measured, challenger: &Measured) -> (f64, f64) {
 /// Abramowitz & Stegun 26.7.5 about the normal point, to the ν⁻³ term (0.7 % below the table
 /// at 3 degrees of freedom, 0.1 % at 5, less beyond).
 fn t_95(nu: f64) -> f64 {
-    let z = Z_95;
+    let z = Z95;
     let (z3, z5, z7) = (z.powi(3), z.powi(5), z.powi(7));
     let g1 = (z3 + z) / 4.0;
     let g2 = (5.0 * z5 + 16.0 * z3 + 3.0 * z) / 96.0;
@@ -616,7 +610,7 @@ mod tests {
         for (nu, t) in [(3.0, 3.1824), (5.0, 2.5706), (10.0, 2.2281), (19.0, 2.0930)] {
             assert!((t_95(nu) / t - 1.0).abs() < 0.008, "{nu}: {}", t_95(nu));
         }
-        assert!((t_95(1e9) - Z_95).abs() < 1e-6);
+        assert!((t_95(1e9) - Z95).abs() < 1e-6);
     }
 
     fn measured(cost: f64, blocks: &[f64]) -> Measured {

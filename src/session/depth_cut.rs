@@ -3,7 +3,7 @@
 //! reports one whenever a path reached the cap — the user's `max_depth`, or the safety cap
 //! `SAFETY_DEPTH` of an unlimited run.
 
-use crate::integrator::cut::RatioSums;
+use crate::math::ratio::RatioSums;
 
 /// The cut of a depth cap that was reached.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -14,8 +14,7 @@ pub struct Stats {
     pub m2: f64,
 }
 
-/// The 0.975 quantile of the standard normal distribution: a 95% two-sided interval.
-pub const Z95: f64 = 1.96;
+pub use crate::math::Z95;
 
 impl Stats {
     /// Adds one sample (Welford).
@@ -102,7 +101,7 @@ mod tests {
             assert!((s.mean - mean).abs() < 1e-9 * mean);
             assert!((s.variance() / var - 1.0).abs() < 1e-9);
         }
-        assert!((all.ci95() - 1.96 * (var / 1000.0).sqrt()).abs() < 1e-9);
+        assert!((all.ci95() - Z95 * (var / 1000.0).sqrt()).abs() < 1e-9);
     }
 
     #[test]
