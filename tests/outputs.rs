@@ -205,13 +205,8 @@ fn the_exr_says_how_it_was_made_in_typed_attributes() {
         "{integrator}"
     );
     assert_eq!(img.attributes[exr::MIS_ATTRIBUTE], "power");
-    // The path tracer draws from the default zsobol, bdpt from independent numbers.
-    let sampler = if integrator == "auto→path" {
-        "zsobol"
-    } else {
-        "independent"
-    };
-    assert_eq!(img.attributes[exr::SAMPLER_ATTRIBUTE], sampler);
+    // Path and bdpt both draw from the default zsobol.
+    assert_eq!(img.attributes[exr::SAMPLER_ATTRIBUTE], "zsobol");
     for (name, ty) in [
         ("whiteLuminance", "float"),
         (exr::EXPOSURE_ATTRIBUTE, "float"),
@@ -230,14 +225,17 @@ fn the_exr_says_how_it_was_made_in_typed_attributes() {
 fn the_exr_names_the_sampler_its_samples_drew_from() {
     let dir = temp_dir("sampler-attribute");
     let stage = stage();
-    // (integrator, --sampler or none, the sampler named): --sampler steers the path tracer;
-    // light tracing and BDPT draw independent numbers whatever it says.
+    // (integrator, --sampler or none, the sampler named): --sampler steers the path tracer and
+    // BDPT's and VCM's camera subpaths; light tracing draws independent numbers whatever it says.
     for (k, (integrator, asked, named)) in [
         ("path", None, "zsobol"),
         ("path", Some("independent"), "independent"),
         ("path", Some("zsobol"), "zsobol"),
         ("light", Some("zsobol"), "independent"),
-        ("bdpt", None, "independent"),
+        ("bdpt", None, "zsobol"),
+        ("bdpt", Some("independent"), "independent"),
+        ("vcm", None, "zsobol"),
+        ("light", None, "independent"),
     ]
     .into_iter()
     .enumerate()
