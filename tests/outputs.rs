@@ -267,11 +267,16 @@ fn the_exr_names_the_sampler_its_samples_drew_from() {
     }
 }
 
-/// A render of the Cornell box at 16 × 16 on one thread, with a checkpoint after every pass.
+/// A render of the Cornell box at 16 × 16 on one thread, with a checkpoint after every pass,
+/// on independent numbers: the first k samples of a zsobol run depend on its sample count
+/// (the sequence's block, `sampling/zsobol.rs`), so an interrupted run's image equals a run of
+/// k samples only with the independent sampler.
 fn spawn_render(dir: &Path, spp: u32, extra: &[&str]) -> Child {
     bin()
         .args([
             &stage(),
+            "--sampler",
+            "independent",
             "--resolution",
             "16x16",
             "--threads",
@@ -334,6 +339,8 @@ fn reference(spp: u32) -> Vec<u32> {
     let out = spectral_render(
         &[
             &stage(),
+            "--sampler",
+            "independent",
             "--resolution",
             "16x16",
             "--spp",
@@ -367,6 +374,8 @@ fn sigint_writes_the_image_so_far_and_its_checkpoint_resumes_bit_for_bit() {
     let out = spectral_render(
         &[
             &stage(),
+            "--sampler",
+            "independent",
             "--resolution",
             "16x16",
             "--spp",
