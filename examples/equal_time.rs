@@ -87,7 +87,10 @@ type Config = (Integrator, SamplerKind);
 /// `NAME[@SAMPLER]`: the integrator `NAME` ([`integrator`]) on `SAMPLER` (default zsobol).
 fn config(name: &str) -> Result<Config, String> {
     let (n, sampler) = match name.split_once('@') {
-        Some((n, s)) => (n, SamplerKind::from_name(s).ok_or(format!("unknown sampler {s}"))?),
+        Some((n, s)) => (
+            n,
+            SamplerKind::from_name(s).ok_or(format!("unknown sampler {s}"))?,
+        ),
         None => (name, SamplerKind::default()),
     };
     Ok((integrator(n)?, sampler))

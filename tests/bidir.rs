@@ -864,7 +864,10 @@ fn vcm_agrees_with_bdpt_per_pixel() {
             3000,
         );
         // VCM's camera subpaths draw from the default sequence, or from independent numbers.
-        for (sampler, base) in [(SamplerKind::ZSobol, 4000), (SamplerKind::Independent, 6000)] {
+        for (sampler, base) in [
+            (SamplerKind::ZSobol, 4000),
+            (SamplerKind::Independent, 6000),
+        ] {
             let label = format!("VCM({})-BDPT, {}", sampler.name(), case.name);
             let v = batches_sampled(
                 &scene,
