@@ -3,7 +3,7 @@
 //! ```text
 //! cargo run --release --example equal_time -- STAGE [--time S | --spp N] [--seeds N]
 //!     [--reference-time S | --reference-spp N] [--resolution WxH] [--max-depth N|unlimited]
-//!     [--reference REF.exr] [--threads N] [--integrators path,bdpt,vcm,vcm:bins=B,auto]
+//!     [--reference REF.exr] [--threads N] [--integrators path,bdpt,vcm,vcm:bins=B,auto,…]
 //!     [--reference-integrator bdpt|vcm|path] [--region NAME=X0,Y0,X1,Y1]...
 //!     [--exclude X0,Y0,X1,Y1]... [--seed N] [--keep DIR]
 //! ```
@@ -48,11 +48,16 @@
 //! `--keep DIR` also writes each timed render to DIR/NAME.exr (colour included; two runs with
 //! different `--seed`s give each integrator's colour noise without a reference).
 //!
+//! An integrator's name may end in `@independent` or `@zsobol`: its samples' numbers
+//! (`--sampler`; default zsobol, the reference's too), e.g. `bdpt,bdpt@independent` for the
+//! variance the low-discrepancy sequence saves BDPT at the same sample count.
+//!
 //! `vcm:bins=B` is VCM with per-sample wavelength tuples and merges within B hero bins
 //! (`VcmWavelengths::PerSample`), the measured alternative to one tuple per iteration.
 
 use spectral_render::integrator::vcm::{VcmParams, VcmWavelengths};
 use spectral_render::output::exr;
+use spectral_render::sampling::SamplerKind;
 use spectral_render::session::{self, RenderOptions};
 use spectral_render::{Integrator, MisHeuristic};
 use std::path::PathBuf;
@@ -68,12 +73,27 @@ struct Args {
     seeds: u64,
     reference: Option<PathBuf>,
     threads: Option<usize>,
-    integrators: Vec<(String, Integrator)>,
+    integrators: Vec<(String, Config)>,
     reference_integrator: Integrator,
     regions: Vec<(String, [usize; 4])>,
     exclude: Vec<[usize; 4]>,
     seed: u64,
     keep: Option<PathBuf>,
+}
+
+/// An integrator and the sampler its samples draw from.
+type Config = (Integrator, SamplerKind);
+
+/// `NAME[@SAMPLER]`: the integrator `NAME` ([`integrator`]) on `SAMPLER` (default zsobol).
+fn config(name: &str) -> Result<Config, String> {
+    let (n, sampler) = match name.split_once('@') {
+        Some((n, s)) => (
+            n,
+            SamplerKind::from_name(s).ok_or(format!("unknown sampler {s}"))?,
+        ),
+        None => (name, SamplerKind::default()),
+    };
+    Ok((integrator(n)?, sampler))
 }
 
 fn integrator(name: &str) -> Result<Integrator, String> {
@@ -118,12 +138,15 @@ fn parse() -> Result<Args, String> {
         reference: None,
         threads: None,
         integrators: vec![
-            ("path".into(), Integrator::Path),
+            ("path".into(), (Integrator::Path, SamplerKind::default())),
             (
                 "bdpt".into(),
-                Integrator::Bdpt {
-                    mis: MisHeuristic::Power,
-                },
+                (
+                    Integrator::Bdpt {
+                        mis: MisHeuristic::Power,
+                    },
+                    SamplerKind::default(),
+                ),
             ),
         ],
         reference_integrator: Integrator::Bdpt {
@@ -154,7 +177,7 @@ fn parse() -> Result<Args, String> {
             "--integrators" => {
                 a.integrators = value()?
                     .split(',')
-                    .map(|n| Ok((n.to_string(), integrator(n)?)))
+                    .map(|n| Ok((n.to_string(), config(n)?)))
                     .collect::<Result<_, String>>()?
             }
             "--region" => {
@@ -218,7 +241,7 @@ struct Render {
 fn render_y(
     scene: &spectral_render::scene::Scene,
     args: &Args,
-    integrator: Integrator,
+    (integrator, sampler): Config,
     (seconds, spp): (f64, Option<u32>),
     seed: u64,
     keep: Option<PathBuf>,
@@ -231,6 +254,7 @@ fn render_y(
         threads: args.threads,
         max_depth: args.max_depth,
         integrator,
+        sampler,
         ..Default::default()
     };
     let out = session::render(scene, &opts).expect("render");
@@ -289,8 +313,9 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
         args.reference_spp.map(|n| n.div_ceil(2)),
     );
     let kind = args.reference_integrator;
-    let a = render_y(scene, args, kind, half, 1001, None);
-    let b = render_y(scene, args, kind, half, 1002, None);
+    let config = (kind, SamplerKind::default());
+    let a = render_y(scene, args, config, half, 1001, None);
+    let b = render_y(scene, args, config, half, 1002, None);
     let (sa, sb, ta, tb) = (a.spp, b.spp, a.wall, b.wall);
     let (a, b) = (a.y, b.y);
     eprintln!(

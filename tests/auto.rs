@@ -117,10 +117,11 @@ fn the_prism_disperses_and_casts_a_caustic() {
     assert_eq!(piloted(&doc), 2, "{doc}");
     // Glass scatters all it receives: no bound on what a cap cuts.
     assert!(doc["max_depth"]["bound_cut"].is_null(), "{doc}");
-    // At 96 × 72 and seed 1 path's 2-spp pilot finds no light and bdpt's draws a few samples
+    // At 96 × 72 and seed 2 path's 2-spp pilot finds no light and bdpt's draws a few samples
     // of the beam: nothing shows bdpt ahead, and path, the simpler, is kept (over 8 seeds path's
-    // MSE × CPU time is 0.45× bdpt's).
-    let small = ["--resolution", "96x72", "--spp", "32", "--seed", "1"];
+    // MSE × CPU time is 0.45× bdpt's). Since bdpt's camera subpaths draw from the zsobol
+    // sequence (session 27) seed 1's bdpt pilot finds no light either; seeds 1–8 all keep path.
+    let small = ["--resolution", "96x72", "--spp", "32", "--seed", "2"];
     let doc = info_with(&stage("prism.usda"), &small);
     let pilot = |name: &str| {
         let reasons = doc["integrator"]["reasons"].as_array().unwrap();

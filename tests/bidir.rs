@@ -548,11 +548,20 @@ fn path_light_and_bdpt_agree_per_pixel() {
             4000,
         );
         let lt = run(Integrator::Light, 2000);
-        let bd = run(
-            Integrator::Bdpt {
-                mis: MisHeuristic::Power,
-            },
-            3000,
+        let bdpt = Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        };
+        let bd = run(bdpt, 3000);
+        // BDPT's camera subpaths draw from the sequence too; its independent numbers are
+        // tested as well.
+        let bd_independent = batches_sampled(
+            &scene,
+            bdpt,
+            SamplerKind::Independent,
+            case.batches,
+            case.spp,
+            case.max_depth,
+            5000,
         );
         for (label, a, b) in [
             ("PT-LT", &pt, &lt),
@@ -560,6 +569,8 @@ fn path_light_and_bdpt_agree_per_pixel() {
             ("LT-BDPT", &lt, &bd),
             ("PT(independent)-BDPT", &pt_independent, &bd),
             ("PT(zsobol)-PT(independent)", &pt, &pt_independent),
+            ("PT-BDPT(independent)", &pt, &bd_independent),
+            ("BDPT(zsobol)-BDPT(independent)", &bd, &bd_independent),
         ] {
             let z = z_test(a, b, alpha);
             let (wp, wc) = z.worst;
@@ -686,8 +697,8 @@ fn image_means(
     let means = (0..case.batches)
         .map(|i| {
             // Independent numbers for every integrator: this compares estimators, not
-            // samplers (the path tracer's default low-discrepancy sequence lowers its
-            // variance further; the bidirectional ones draw independent numbers).
+            // samplers (the default low-discrepancy sequence lowers the variance of the path
+            // tracer and of BDPT's camera subpaths further).
             let out = render_sampled(
                 scene,
                 integrator,
@@ -792,7 +803,8 @@ fn vcm(mode: VcmMode, radius: Option<f32>) -> Integrator {
     })
 }
 
-/// `vc` is BDPT: the same estimator, bit for bit, for the same seed and samples.
+/// `vc` is BDPT: the same estimator, bit for bit, for the same seed and samples, with either
+/// sampler (the two samplers' images differ).
 #[test]
 fn vcm_without_merging_is_bdpt_bit_for_bit() {
     let scene = scene::load(&cbox_path(), Some((16, 16))).unwrap();
@@ -804,15 +816,21 @@ fn vcm_without_merging_is_bdpt_bit_for_bit() {
         mis: MisHeuristic::Balance,
         ..VcmParams::default()
     });
-    let bits = |k| {
-        let out = render_with(&scene, k, 8, 11, 7);
+    let bits = |k, sampler| {
+        let out = render_sampled(&scene, k, sampler, 8, 11, 7);
         out.xyz
             .iter()
             .flatten()
             .map(|v| v.to_bits())
             .collect::<Vec<_>>()
     };
-    assert_eq!(bits(bdpt), bits(vc));
+    for sampler in SamplerKind::ALL {
+        assert_eq!(bits(bdpt, sampler), bits(vc, sampler), "{sampler:?}");
+    }
+    assert_ne!(
+        bits(bdpt, SamplerKind::ZSobol),
+        bits(bdpt, SamplerKind::Independent)
+    );
 }
 
 /// VCM (connections and merges) agrees with BDPT per pixel on the Cornell box and on the
@@ -845,26 +863,40 @@ fn vcm_agrees_with_bdpt_per_pixel() {
             },
             3000,
         );
-        let label = format!("VCM-BDPT, {}", case.name);
-        let v = run(vcm(VcmMode::Vcm, Some(0.01)), 4000);
-        let z = z_test(&v, &bd, 0.01);
-        let (wp, wc) = z.worst;
-        eprintln!(
-            "{label}: max |z| {:.2} (pixel {wp} channel {wc}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}), min p {:.2e}, Šidák {:.2e}; image Y {:.5} ± {:.5} vs {:.5} ± {:.5}",
-            z.max_abs_z,
-            v.mean[wp][wc],
-            v.var_mean[wp][wc].sqrt(),
-            bd.mean[wp][wc],
-            bd.var_mean[wp][wc].sqrt(),
-            z.min_p,
-            z.sidak_alpha,
-            v.image_y.0,
-            v.image_y.1,
-            bd.image_y.0,
-            bd.image_y.1
-        );
-        assert!(z.min_p > z.sidak_alpha, "{label} differ per pixel: {z:?}");
-        assert!(z.image_z.abs() < 3.3, "{label} image means differ: {z:?}");
+        // VCM's camera subpaths draw from the default sequence, or from independent numbers.
+        for (sampler, base) in [
+            (SamplerKind::ZSobol, 4000),
+            (SamplerKind::Independent, 6000),
+        ] {
+            let label = format!("VCM({})-BDPT, {}", sampler.name(), case.name);
+            let v = batches_sampled(
+                &scene,
+                vcm(VcmMode::Vcm, Some(0.01)),
+                sampler,
+                case.batches,
+                spp,
+                case.max_depth,
+                base,
+            );
+            let z = z_test(&v, &bd, 0.01);
+            let (wp, wc) = z.worst;
+            eprintln!(
+                "{label}: max |z| {:.2} (pixel {wp} channel {wc}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}), min p {:.2e}, Šidák {:.2e}; image Y {:.5} ± {:.5} vs {:.5} ± {:.5}",
+                z.max_abs_z,
+                v.mean[wp][wc],
+                v.var_mean[wp][wc].sqrt(),
+                bd.mean[wp][wc],
+                bd.var_mean[wp][wc].sqrt(),
+                z.min_p,
+                z.sidak_alpha,
+                v.image_y.0,
+                v.image_y.1,
+                bd.image_y.0,
+                bd.image_y.1
+            );
+            assert!(z.min_p > z.sidak_alpha, "{label} differ per pixel: {z:?}");
+            assert!(z.image_z.abs() < 3.3, "{label} image means differ: {z:?}");
+        }
     }
 }
 

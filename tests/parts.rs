@@ -102,10 +102,10 @@ fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
         assert_eq!(s.attributes.get(key), m.attributes.get(key), "{key}");
     }
     // The merge names the sampler from the parts' identity, as the single render does.
-    let sampler = if integrator == "path" {
-        "zsobol"
-    } else {
+    let sampler = if integrator == "light" {
         "independent"
+    } else {
+        "zsobol"
     };
     assert_eq!(m.attributes[exr::SAMPLER_ATTRIBUTE], sampler);
     assert!(dir.join("merged.png").is_file());

@@ -63,8 +63,9 @@ impl ValueEnum for SamplerKind {
     fn to_possible_value(&self) -> Option<PossibleValue> {
         let help = match self {
             SamplerKind::ZSobol => {
-                "Owen-scrambled Sobol' points in Morton order over the image (path; the \
-                 bidirectional integrators draw independent numbers)"
+                "Owen-scrambled Sobol' points in Morton order over the image (path, and the \
+                 camera subpaths of bdpt and vcm; light tracing and meters draw independent \
+                 numbers)"
             }
             SamplerKind::Independent => "independent uniform numbers (PCG32)",
         };

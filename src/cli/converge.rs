@@ -100,9 +100,9 @@ struct ConvergeArgs {
     /// Maximum number of scattering events (default: unlimited, as for rendering).
     #[arg(long = "max-depth")]
     max_depth: Option<u32>,
-    /// Sampler of the path tracer's configurations and of its reference: zsobol
-    /// (Owen-scrambled Sobol' in Morton order) or independent; the others always draw
-    /// independent numbers.
+    /// Sampler of the path tracer's, BDPT's and VCM's configurations and of their reference:
+    /// zsobol (Owen-scrambled Sobol' in Morton order) or independent; light tracing always
+    /// draws independent numbers.
     #[arg(long, default_value = "zsobol", value_parser = named::<SamplerKind>("sampler"))]
     sampler: SamplerKind,
     /// MIS heuristic of bdpt and vcm.

@@ -24,6 +24,7 @@ use super::path::PathIntegrator;
 use super::{Estimator, Settings};
 use crate::bxdf::TransportMode;
 use crate::light::LightHit;
+use crate::sampling::dimensions::{self, LIGHT};
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::meter::MeterSensor;
@@ -175,6 +176,8 @@ impl BdptIntegrator {
         ws: &mut Workspace,
     ) {
         let t = z.depth + 1;
+        // The path tracer's next-event dimensions of this bounce (`sampling::dimensions`).
+        sampler.set_dimension(dimensions::bounce(z.depth - 1, LIGHT));
         if let Some(c) = next_event(ctx, z, lambda, sampler) {
             ws.record.add_camera(1, t, c);
         }

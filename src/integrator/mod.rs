@@ -103,15 +103,20 @@ impl Integrator {
         },
     ];
 
-    /// The name the CLI and the EXR metadata use.
     /// The estimator draws its camera path's numbers at fixed dimensions
-    /// (`sampling::dimensions`), so the low-discrepancy sampler may feed it (`--sampler`).
-    /// The bidirectional ones draw a number of dimensions that depends on both subpaths'
-    /// lengths and keep the independent sampler.
+    /// (`sampling::dimensions`), so the low-discrepancy sampler may feed it (`--sampler`):
+    /// the path tracer, and BDPT's and VCM's camera subpaths, whose light subpaths, splats
+    /// and continuations draw from the sample's independent stream
+    /// (`Sampler::detached`, `Sampler::fork`). Light tracing draws only numbers whose count
+    /// varies and keeps the independent sampler.
     pub fn low_discrepancy(&self) -> bool {
-        matches!(self, Integrator::Path)
+        matches!(
+            self,
+            Integrator::Path | Integrator::Bdpt { .. } | Integrator::Vcm(_)
+        )
     }
 
+    /// The name the CLI and the EXR metadata use.
     pub fn name(&self) -> &'static str {
         match self {
             Integrator::Path => "path",

@@ -23,7 +23,7 @@
 //! | `spectralRender:exposure` | float | the camera's exposure in stops |
 //! | `spectralRender:integrator` | string | integrator name |
 //! | `spectralRender:mis` | string | the MIS heuristic (`power`, `balance`), for integrators that combine techniques |
-//! | `spectralRender:sampler` | string | the sampler the samples drew from (`zsobol`, `independent`; `--sampler` applies to the path tracer, the others draw independent numbers), when known |
+//! | `spectralRender:sampler` | string | the sampler the samples drew from (`zsobol`, `independent`; `--sampler` applies to the path tracer and to the camera subpaths of BDPT and VCM; light tracing draws independent numbers), when known |
 //! | `spectralRender:wallTime` | double | render wall-clock time in seconds |
 //! | `spectralRender:version` | string | renderer version |
 //! | `spectralRender:scene` | string | the scene file, UTF-8 |

@@ -4,6 +4,10 @@
 //! rather than shifting the ones after it). The camera's come first, then a block per
 //! bounce; the sequence pads every dimension beyond by hashing (`zsobol.rs`), so depth is
 //! unbounded. The independent sampler ignores the layout and draws in order.
+//!
+//! BDPT's and VCM's camera subpaths take the same blocks (their s = 1 connection at `LIGHT`,
+//! the BSDF at `BSDF`, roulette at `ROULETTE`); their light subpaths and splats draw from
+//! the sample's independent stream (`Sampler::detached`), outside the layout.
 
 /// The hero wavelength's u (1D).
 pub const WAVELENGTH: u32 = 0;

@@ -7,8 +7,8 @@ use super::zsobol::ZSobol;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SamplerKind {
     /// Owen-scrambled Sobol' points in Morton order over the image (`zsobol.rs`), for the
-    /// estimators that keep the dimension layout (`Integrator::low_discrepancy`); the others
-    /// draw independent numbers.
+    /// estimators that keep the dimension layout (`Integrator::low_discrepancy`: path, and
+    /// BDPT's and VCM's camera subpaths); light tracing draws independent numbers.
     #[default]
     ZSobol,
     /// Independent uniform numbers (PCG32) for every sample.

@@ -93,6 +93,19 @@ impl Sampler {
         unit(self.next_u32())
     }
 
+    /// Runs `f` with the low-discrepancy stream set aside: every number `f` draws comes from
+    /// PCG32, as [`get_1d_free`](Self::get_1d_free), and the sequence's dimensions are left
+    /// as they were. For the parts of a sample whose count of draws varies outside the
+    /// dimension layout (a bidirectional sample's light subpath and its splats). For the
+    /// independent sampler it is `f(self)`: the same numbers in the same order.
+    #[inline]
+    pub fn detached<R>(&mut self, f: impl FnOnce(&mut Sampler) -> R) -> R {
+        let lds = self.lds.take();
+        let r = f(self);
+        self.lds = lds;
+        r
+    }
+
     /// A stream of its own, derived from this one's current state and `stream` without
     /// advancing this one: what this sampler draws next does not change.
     pub fn fork(&self, stream: u64) -> Sampler {
@@ -157,6 +170,27 @@ mod tests {
         let fork: Vec<f32> = (0..4).map(|_| f.get_1d()).collect();
         assert_ne!(parent, fork);
         assert_ne!(a.fork(8).get_1d(), a.fork(7).get_1d());
+    }
+
+    #[test]
+    fn detached_draws_are_the_free_stream_and_leave_the_sequence_alone() {
+        let z = super::super::zsobol::ZSobol::new(3, Some(16));
+        let lds = || Sampler::low_discrepancy(3, 9, 5, z.stream(9, 0, 5));
+        // The sequence's draws do not depend on what ran detached in between.
+        let (mut a, mut b) = (lds(), lds());
+        a.get_1d();
+        b.get_1d();
+        let inner: Vec<f32> = a.detached(|s| (0..5).map(|_| s.get_1d()).collect());
+        assert_eq!(a.get_2d(), b.get_2d());
+        // Detached draws are the PCG32 stream of (seed, index, sample), in order.
+        let mut free = Sampler::new(3, 9, 5);
+        let want: Vec<f32> = (0..5).map(|_| free.get_1d()).collect();
+        assert_eq!(inner, want);
+        // For the independent sampler detaching changes nothing.
+        let (mut c, mut d) = (Sampler::new(3, 9, 5), Sampler::new(3, 9, 5));
+        let x: Vec<f32> = (0..4).map(|_| c.detached(|s| s.get_1d())).collect();
+        let y: Vec<f32> = (0..4).map(|_| d.get_1d()).collect();
+        assert_eq!(x, y);
     }
 
     #[test]

@@ -10,8 +10,21 @@ use crate::spectral::SampledWavelengths;
 
 /// Connects `ws.light` to the sensor of `ctx`, recording the contributions in `ws.record`
 /// (strategy (s, 1) for a vertex of depth s − 1). One 2D sample per connection attempt, so
-/// the sampler's stream does not depend on which connections succeed.
+/// the sampler's stream does not depend on which connections succeed; as many as the light
+/// subpath has vertices, so they come from the sampler's independent stream
+/// ([`Sampler::detached`]), never from the camera's dimensions.
 pub fn splat_light_subpath(
+    ctx: &BidirContext,
+    lambda: &SampledWavelengths,
+    sampler: &mut Sampler,
+    ws: &mut Workspace,
+    use_mis: bool,
+) {
+    sampler.detached(|s| splat_detached(ctx, lambda, s, ws, use_mis));
+}
+
+/// [`splat_light_subpath`] on a sampler without a low-discrepancy stream.
+fn splat_detached(
     ctx: &BidirContext,
     lambda: &SampledWavelengths,
     sampler: &mut Sampler,

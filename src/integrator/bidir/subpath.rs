@@ -14,6 +14,7 @@ use crate::geometry::offset::spawn_ray;
 use crate::geometry::Ray;
 use crate::light::emit::{LightLeSample, SceneSphere};
 use crate::light::{LightHit, LightSampleContext};
+use crate::sampling::dimensions::{self, BSDF, ROULETTE};
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::{Sensor, SensorRay};
@@ -168,7 +169,10 @@ impl Walk {
     }
 
     /// Samples the next direction at vertex `v` and moves on ([`Walk::advance`]), then
-    /// Russian roulette. False when the walk ends.
+    /// Russian roulette. False when the walk ends. A camera walk draws both at the
+    /// dimensions of bounce depth − 1 (`sampling::dimensions`, the path tracer's: the camera
+    /// ray's first hit z_1 is bounce 0); light walks run detached from the sequence
+    /// ([`trace_light_subpath`]), where setting a dimension does nothing.
     pub fn scatter(
         &mut self,
         mis: &Mis,
@@ -176,11 +180,14 @@ impl Walk {
         mode: TransportMode,
         sampler: &mut Sampler,
     ) -> bool {
+        let bounce = self.depth.saturating_sub(1);
+        sampler.set_dimension(dimensions::bounce(bounce, BSDF));
         let (uc, u) = (sampler.get_1d(), sampler.get_2d());
         let Some(bs) = v.bsdf.sample_f(v.wo, uc, u, mode) else {
             return false;
         };
         self.advance(mis, v, bs, mode);
+        sampler.set_dimension(dimensions::bounce(bounce, ROULETTE));
         self.roulette(sampler)
     }
 
@@ -250,8 +257,20 @@ pub fn direct_pdf_w(
 
 /// Traces a light subpath into `path` (cleared first): a light chosen by power, an emitted
 /// ray, then BSDF sampling in importance mode up to y_{max_depth}. Analytic light shapes
-/// absorb light paths; escaping paths end.
+/// absorb light paths; escaping paths end. Its numbers come from the sampler's independent
+/// stream ([`Sampler::detached`]): their count depends on the subpath's length, so drawing
+/// them from the low-discrepancy sequence would shift the camera subpath's dimensions.
 pub fn trace_light_subpath(
+    ctx: &BidirContext,
+    lambda: &mut SampledWavelengths,
+    sampler: &mut Sampler,
+    path: &mut LightSubpath,
+) {
+    sampler.detached(|s| trace_detached(ctx, lambda, s, path));
+}
+
+/// [`trace_light_subpath`] on a sampler without a low-discrepancy stream.
+fn trace_detached(
     ctx: &BidirContext,
     lambda: &mut SampledWavelengths,
     sampler: &mut Sampler,
