@@ -45,7 +45,7 @@ pub use dielectric::DielectricBxdf;
 pub use diffuse::DiffuseBxdf;
 pub use microfacet::TrowbridgeReitz;
 pub use oren_nayar::OrenNayarBxdf;
-pub use plastic::PlasticBxdf;
+pub use plastic::{PlasticBase, PlasticBxdf};
 pub use preview::PreviewBxdf;
 pub use thin_dielectric::ThinDielectricBxdf;
 

@@ -46,6 +46,44 @@ pub struct PlasticBxdf {
     pub diffuse_albedo: f32,
 }
 
+/// The diffuse base of a plastic under its coat: what depends on ρ, F_dr,int and T̄ alone
+/// (not on the hit), so that a material can compute it once per wavelength tuple.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PlasticBase {
+    /// ρ_eff / (π T̄).
+    pub diffuse: SampledSpectrum,
+    /// ρ_eff averaged over the wavelengths.
+    pub diffuse_albedo: f32,
+}
+
+impl PlasticBase {
+    /// ρ_eff = ρ (1 − F_dr,int) / (1 − ρ F_dr,int) of reflectance `r` (clamped to [0, 1])
+    /// under a coat of internal diffuse reflectance `fdr_internal` and average transmittance
+    /// `t_avg` (the module header).
+    #[inline]
+    pub fn new(r: SampledSpectrum, fdr_internal: f32, t_avg: f32) -> PlasticBase {
+        let r_eff = if fdr_internal == 0.0 {
+            // The series without internal reflection: ρ itself (the same bits as the
+            // general form, whose factors are then exactly 1), without four divisions.
+            r.map(|r| r.clamp(0.0, 1.0))
+        } else {
+            r.map(|r| {
+                let r = r.clamp(0.0, 1.0);
+                r * (1.0 - fdr_internal) / (1.0 - r * fdr_internal)
+            })
+        };
+        let diffuse = if t_avg > 0.0 {
+            r_eff * (INV_PI / t_avg)
+        } else {
+            SampledSpectrum::ZERO
+        };
+        PlasticBase {
+            diffuse,
+            diffuse_albedo: r_eff.average(),
+        }
+    }
+}
+
 impl PlasticBxdf {
     /// A plastic of base reflectance `r` under a coat of relative IOR `eta` and GGX `alpha`.
     /// Builds the coat's albedo table: call once per material, not per hit.
@@ -69,26 +107,18 @@ impl PlasticBxdf {
         fdr_internal: f32,
         t_avg: f32,
     ) -> PlasticBxdf {
-        let r_eff = if fdr_internal == 0.0 {
-            // The series without internal reflection: ρ itself (the same bits as the
-            // general form, whose factors are then exactly 1), without four divisions.
-            r.map(|r| r.clamp(0.0, 1.0))
-        } else {
-            r.map(|r| {
-                let r = r.clamp(0.0, 1.0);
-                r * (1.0 - fdr_internal) / (1.0 - r * fdr_internal)
-            })
-        };
-        let diffuse = if t_avg > 0.0 {
-            r_eff * (INV_PI / t_avg)
-        } else {
-            SampledSpectrum::ZERO
-        };
+        PlasticBxdf::with_base(coat, albedo, PlasticBase::new(r, fdr_internal, t_avg))
+    }
+
+    /// From a prepared coat and the diffuse base under it ([`PlasticBase`], which a material
+    /// whose ρ and coat are constant computes once per wavelength tuple).
+    #[inline]
+    pub fn with_base(coat: SpecularCoat, albedo: CoatAlbedo, base: PlasticBase) -> PlasticBxdf {
         PlasticBxdf {
             coat,
             albedo,
-            diffuse,
-            diffuse_albedo: r_eff.average(),
+            diffuse: base.diffuse,
+            diffuse_albedo: base.diffuse_albedo,
         }
     }
 

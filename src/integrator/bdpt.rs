@@ -14,7 +14,7 @@
 
 use super::bidir::connect::{connect, emitter_hit, escaped, next_event};
 use super::bidir::merge::MergeParams;
-use super::bidir::vertex::bsdf_at;
+use super::bidir::vertex::cached_bsdf_at;
 use super::bidir::{
     splat_light_subpath, trace_light_subpath, BidirContext, LightVertexStore, Mis, MisHeuristic,
     PathVertex, Walk, Workspace,
@@ -113,6 +113,7 @@ impl BdptIntegrator {
         ws: &mut Workspace,
     ) {
         let mut specular_only = true;
+        ws.light.spectra.begin(&ctx.scene.materials, lambda);
         loop {
             // s = 0: escaped rays and analytic emitters end the walk.
             let si = match ctx.scene.intersect(&walk.ray, walk.t_max) {
@@ -145,7 +146,7 @@ impl BdptIntegrator {
                 continue_past_cap(ctx, &walk, &si, lambda, sampler, ws);
                 return;
             }
-            let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
+            let bsdf = cached_bsdf_at(ctx.scene, &si, ctx.filter, lambda, &mut ws.light.spectra);
             let z = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
             if !bsdf.is_specular() {
                 specular_only = false;
@@ -214,7 +215,9 @@ fn continue_past_cap(
         filter: ctx.filter,
     };
     let depth = walk.depth - 1;
-    let (l, limited) = pt.continue_from_vertex(ctx.scene, si, -walk.ray.d, depth, lambda, &mut ext);
+    let spectra = &mut ws.light.spectra;
+    let wo = -walk.ray.d;
+    let (l, limited) = pt.continue_from_vertex(ctx.scene, si, wo, depth, lambda, &mut ext, spectra);
     ws.record.cut.add(walk.beta * l, 1.0, limited);
 }
 

@@ -18,7 +18,7 @@
 //! direction, cannot be estimated by light tracing at all (`Capabilities::luminance_meters`).
 
 use super::bidir::connect::vertex_to_sensor;
-use super::bidir::vertex::bsdf_at;
+use super::bidir::vertex::cached_bsdf_at;
 use super::bidir::{
     splat_light_subpath, trace_light_subpath, BidirContext, CappedSubpath, Mis, PathVertex, Walk,
     Workspace,
@@ -26,6 +26,7 @@ use super::bidir::{
 use super::cut::{continuation, continuation_limit};
 use super::{Estimator, MisHeuristic, Settings};
 use crate::bxdf::TransportMode;
+use crate::material::SpectraCache;
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene, SurfaceHit};
 use crate::sensor::meter::MeterSensor;
@@ -51,7 +52,8 @@ impl LightTracer {
         if let Some(capped) = ws.light.capped {
             ws.record.cut.capped += 1;
             if let Some(mut ext) = continuation(sampler) {
-                let (l, limited) = continue_past_cap(ctx, &capped, lambda, &mut ext);
+                let spectra = &mut ws.light.spectra;
+                let (l, limited) = continue_past_cap(ctx, &capped, lambda, &mut ext, spectra);
                 ws.record.cut.add(l, 1.0, limited);
             }
         }
@@ -61,12 +63,13 @@ impl LightTracer {
 /// The light a light subpath stopped by the depth cap at `capped` would have brought to the
 /// sensor beyond it: the walk continued on `ext`, each vertex beyond the cap connected to the
 /// sensor (`cut.rs`). Relative to `lambda`'s pdfs; true when the continuation reached its own
-/// limit.
+/// limit. `spectra` holds the materials' spectra at `lambda` (the subpath's).
 fn continue_past_cap(
     ctx: &BidirContext,
     capped: &CappedSubpath,
     lambda: &SampledWavelengths,
     ext: &mut Sampler,
+    spectra: &mut SpectraCache,
 ) -> (SampledSpectrum, bool) {
     let mut lambda_ext = *lambda;
     let mut walk = capped.walk;
@@ -81,6 +84,7 @@ fn continue_past_cap(
         ext,
         connect,
         &mut sum,
+        spectra,
     );
     let limited = loop {
         if walk.depth >= limit {
@@ -93,13 +97,23 @@ fn continue_past_cap(
             break false;
         };
         walk.arrive(&ctx.mis, si.p, si.ng);
-        v = vertex_at(ctx, &si, &walk, &mut lambda_ext, ext, true, &mut sum);
+        v = vertex_at(
+            ctx,
+            &si,
+            &walk,
+            &mut lambda_ext,
+            ext,
+            true,
+            &mut sum,
+            spectra,
+        );
     };
     (lambda.rebase(sum, &lambda_ext), limited)
 }
 
 /// The light subpath's vertex at `si` (the walk arrived there); with `connect`, its
 /// connection to the sensor is added to `sum` unless it is specular.
+#[allow(clippy::too_many_arguments)]
 fn vertex_at(
     ctx: &BidirContext,
     si: &SurfaceHit,
@@ -108,8 +122,9 @@ fn vertex_at(
     sampler: &mut Sampler,
     connect: bool,
     sum: &mut SampledSpectrum,
+    spectra: &mut SpectraCache,
 ) -> PathVertex {
-    let bsdf = bsdf_at(ctx.scene, si, ctx.filter, lambda);
+    let bsdf = cached_bsdf_at(ctx.scene, si, ctx.filter, lambda, spectra);
     let v = PathVertex::new(si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
     if connect && !bsdf.is_specular() {
         if let Some(sc) = vertex_to_sensor(ctx, &v, sampler.get_2d(), false) {

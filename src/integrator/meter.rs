@@ -29,6 +29,7 @@
 
 use super::cut::CutSample;
 use super::path::{transmittance, PathIntegrator, Previous};
+use super::Workspace;
 use crate::geometry::offset::spawn_ray;
 use crate::light::LightSampleContext;
 use crate::math::{Frame, INV_PI};
@@ -47,7 +48,8 @@ pub struct MeterIntegrator {
 
 impl MeterIntegrator {
     /// One sample of the irradiance (W·m⁻²·nm⁻¹ per lane) at `p` on a surface facing the unit
-    /// normal `n`; `p_error` bounds the error of `p` per axis.
+    /// normal `n`; `p_error` bounds the error of `p` per axis. The light beyond the depth cap
+    /// goes to `ws.record.cut`; the materials' spectra come from `ws.light.spectra`.
     #[allow(clippy::too_many_arguments)]
     pub fn irradiance(
         &self,
@@ -57,7 +59,7 @@ impl MeterIntegrator {
         n: Vec3,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
-        cut: &mut CutSample,
+        ws: &mut Workspace,
     ) -> SampledSpectrum {
         let ctx = LightSampleContext { p, n };
         let direct = light_sample(scene, &ctx, p_error, lambda, sampler);
@@ -81,7 +83,9 @@ impl MeterIntegrator {
             lambda,
             sampler,
             Some(&mut beyond),
+            &mut ws.light.spectra,
         );
+        let cut = &mut ws.record.cut;
         // L cos θ / (cos θ / π) = π L.
         cut.light += beyond.light * PI;
         cut.capped += beyond.capped;
@@ -100,11 +104,20 @@ impl MeterIntegrator {
         dir: Vec3,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
-        cut: &mut CutSample,
+        ws: &mut Workspace,
     ) -> SampledSpectrum {
         let ray = spawn_ray(p, p_error, dir, dir);
-        self.path
-            .li_from(scene, ray, f32::INFINITY, None, lambda, sampler, Some(cut))
+        let (cut, spectra) = (&mut ws.record.cut, &mut ws.light.spectra);
+        self.path.li_from(
+            scene,
+            ray,
+            f32::INFINITY,
+            None,
+            lambda,
+            sampler,
+            Some(cut),
+            spectra,
+        )
     }
 }
 

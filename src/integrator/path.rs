@@ -28,7 +28,7 @@ use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
 use crate::geometry::Ray;
 use crate::light::emission_layers::LayerSource;
 use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
-use crate::material::Material;
+use crate::material::{Material, SpectraCache};
 use crate::sampling::dimensions::{self, BSDF, LIGHT, ROULETTE};
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{Hit, Scene, SurfaceHit};
@@ -99,7 +99,8 @@ impl PathIntegrator {
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
     ) -> SampledSpectrum {
-        self.li_from(scene, ray, t_max, None, lambda, sampler, None)
+        let mut spectra = SpectraCache::default();
+        self.li_from(scene, ray, t_max, None, lambda, sampler, None, &mut spectra)
     }
 
     /// [`li`](Self::li) that also continues a capped path past the cap into `cut`.
@@ -113,7 +114,17 @@ impl PathIntegrator {
         sampler: &mut Sampler,
         cut: &mut CutSample,
     ) -> SampledSpectrum {
-        self.li_from(scene, ray, t_max, None, lambda, sampler, Some(cut))
+        let mut spectra = SpectraCache::default();
+        self.li_from(
+            scene,
+            ray,
+            t_max,
+            None,
+            lambda,
+            sampler,
+            Some(cut),
+            &mut spectra,
+        )
     }
 
     /// [`li`](Self::li) for a ray whose direction was sampled at vertex `prev` (None: a camera
@@ -121,7 +132,8 @@ impl PathIntegrator {
     /// The light meters (`integrator::meter`) start paths here from their sensor point. With
     /// `cut`, a path that reaches the cap is counted there and continued past it with
     /// probability q (`cut.rs`), its light added to `cut` (relative to `lambda_in`, as the
-    /// returned estimate).
+    /// returned estimate). `spectra` is the thread's cache of the materials' spectra
+    /// (`material::spectra`), begun here at `lambda_in`.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn li_from(
         &self,
@@ -132,9 +144,12 @@ impl PathIntegrator {
         lambda_in: &SampledWavelengths,
         sampler: &mut Sampler,
         cut: Option<&mut CutSample>,
+        spectra: &mut SpectraCache,
     ) -> SampledSpectrum {
         let mut g = Gathered::plain();
-        self.li_gather(scene, ray, t_max, prev, lambda_in, sampler, cut, &mut g);
+        self.li_gather(
+            scene, ray, t_max, prev, lambda_in, sampler, cut, &mut g, spectra,
+        );
         g.l
     }
 
@@ -152,18 +167,22 @@ impl PathIntegrator {
         sampler: &mut Sampler,
         cut: Option<&mut CutSample>,
         g: &mut Gathered,
+        spectra: &mut SpectraCache,
     ) {
         let mut lambda = *lambda_in;
         let mut st = PathState::new(ray, t_max, prev);
+        spectra.begin(&scene.materials, lambda_in);
+        let (depth, s) = (self.max_depth, &mut *spectra);
         let capped = if scene.dispersive {
-            self.walk::<true>(scene, &mut st, self.max_depth, &mut lambda, sampler, g)
+            self.walk::<true>(scene, &mut st, depth, &mut lambda, sampler, g, s)
         } else {
-            self.walk::<false>(scene, &mut st, self.max_depth, &mut lambda, sampler, g)
+            self.walk::<false>(scene, &mut st, depth, &mut lambda, sampler, g, s)
         };
         if let (Some(si), Some(cut)) = (capped, cut) {
             cut.capped += 1;
             if let Some(mut ext) = continuation(sampler) {
-                let (c, limited) = self.continue_past_cap(scene, &si, &st, &lambda, &mut ext);
+                let (c, limited) =
+                    self.continue_past_cap(scene, &si, &st, &lambda, &mut ext, spectra);
                 cut.add(lambda_in.rebase(c, &lambda), 1.0, limited);
             }
         }
@@ -176,6 +195,7 @@ impl PathIntegrator {
     /// The light a path capped at vertex `si` (its state `st`, its wavelengths `lambda`) would
     /// have found beyond the cap, on the continuation's sampler `ext`, relative to `lambda`'s
     /// pdfs; true when the continuation reached its own limit (`cut::continuation_limit`).
+    /// `spectra` holds the materials' spectra at `lambda` (the path's).
     fn continue_past_cap(
         &self,
         scene: &Scene,
@@ -183,20 +203,21 @@ impl PathIntegrator {
         st: &PathState,
         lambda: &SampledWavelengths,
         ext: &mut Sampler,
+        spectra: &mut SpectraCache,
     ) -> (SampledSpectrum, bool) {
         let mut st = *st;
         let mut g = Gathered::plain();
         let mut lambda_ext = *lambda;
-        let limit = continuation_limit(self.max_depth);
+        let (limit, s) = (continuation_limit(self.max_depth), spectra);
         let limited = if scene.dispersive {
-            self.scatter::<true>(scene, si, &mut st, &mut lambda_ext, ext, &mut g)
+            self.scatter::<true>(scene, si, &mut st, &mut lambda_ext, ext, &mut g, s)
                 && self
-                    .walk::<true>(scene, &mut st, limit, &mut lambda_ext, ext, &mut g)
+                    .walk::<true>(scene, &mut st, limit, &mut lambda_ext, ext, &mut g, s)
                     .is_some()
         } else {
-            self.scatter::<false>(scene, si, &mut st, &mut lambda_ext, ext, &mut g)
+            self.scatter::<false>(scene, si, &mut st, &mut lambda_ext, ext, &mut g, s)
                 && self
-                    .walk::<false>(scene, &mut st, limit, &mut lambda_ext, ext, &mut g)
+                    .walk::<false>(scene, &mut st, limit, &mut lambda_ext, ext, &mut g, s)
                     .is_some()
         };
         (lambda.rebase(g.l, &lambda_ext), limited)
@@ -205,7 +226,9 @@ impl PathIntegrator {
     /// The light beyond the cap of a path capped at vertex `si`, reached along `-wo` with
     /// `depth` scattering events before it, per unit throughput: the path tracer continued
     /// from there on `ext` (BDPT's and VCM's camera subpaths, `cut.rs`). Relative to
-    /// `lambda`'s pdfs; true when it reached its own limit.
+    /// `lambda`'s pdfs; true when it reached its own limit. `spectra`: the thread's cache of
+    /// the materials' spectra, begun here at `lambda`.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn continue_from_vertex(
         &self,
         scene: &Scene,
@@ -214,11 +237,13 @@ impl PathIntegrator {
         depth: u32,
         lambda: &SampledWavelengths,
         ext: &mut Sampler,
+        spectra: &mut SpectraCache,
     ) -> (SampledSpectrum, bool) {
         // Only the arriving ray's direction is read at `si` (wo = −d).
         let mut st = PathState::new(Ray::new(si.p + wo, -wo), f32::INFINITY, None);
         st.depth = depth;
-        self.continue_past_cap(scene, si, &st, lambda, ext)
+        spectra.begin(&scene.materials, lambda);
+        self.continue_past_cap(scene, si, &st, lambda, ext, spectra)
     }
 
     /// The path-tracing loop from `st` until the path ends (None) or reaches a vertex at
@@ -226,6 +251,7 @@ impl PathIntegrator {
     /// `DISPERSION` (the scene has a dispersive material) each vertex checks whether to
     /// terminate the secondary wavelengths of `lambda`; without, no check runs.
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn walk<const DISPERSION: bool>(
         &self,
         scene: &Scene,
@@ -234,13 +260,14 @@ impl PathIntegrator {
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
         g: &mut Gathered,
+        spectra: &mut SpectraCache,
     ) -> Option<SurfaceHit> {
         loop {
             let si = self.next_vertex(scene, st, lambda, sampler, g)?;
             if st.depth == limit {
                 return Some(si);
             }
-            if !self.scatter::<DISPERSION>(scene, &si, st, lambda, sampler, g) {
+            if !self.scatter::<DISPERSION>(scene, &si, st, lambda, sampler, g, spectra) {
                 return None;
             }
         }
@@ -296,6 +323,7 @@ impl PathIntegrator {
     /// One scattering event at `si`: next-event estimation into `l`, a BSDF-sampled
     /// direction and Russian roulette; false when the path ends.
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn scatter<const DISPERSION: bool>(
         &self,
         scene: &Scene,
@@ -304,16 +332,19 @@ impl PathIntegrator {
         lambda: &mut SampledWavelengths,
         sampler: &mut Sampler,
         g: &mut Gathered,
+        spectra: &mut SpectraCache,
     ) -> bool {
         // Each decision draws from its own dimensions of this bounce (`dimensions.rs`).
         let bounce = st.depth;
         st.depth += 1;
         let wo = -st.ray.d;
-        let material = &scene.materials[si.material as usize];
+        let index = si.material as usize;
+        let material = &scene.materials[index];
         if DISPERSION && material.is_dispersive() {
             lambda.terminate_secondary();
         }
-        let bsdf = material.bsdf(scene.tex_coord(si, self.filter), si.ns, lambda);
+        let tc = scene.tex_coord(si, self.filter);
+        let bsdf = spectra.bsdf(material, index, tc, si.ns, lambda);
         if !bsdf.is_specular() {
             sampler.set_dimension(dimensions::bounce(bounce, LIGHT));
             self.sample_ld(scene, si, &bsdf, wo, lambda, sampler, st.beta, g);
@@ -679,8 +710,10 @@ impl Estimator for PathEstimator<'_> {
             sums: &mut rec.layers,
         };
         let cut = Some(&mut rec.cut);
-        self.pt
-            .li_gather(self.scene, ray, t_max, None, lambda, sampler, cut, &mut g);
+        let spectra = &mut ws.light.spectra;
+        self.pt.li_gather(
+            self.scene, ray, t_max, None, lambda, sampler, cut, &mut g, spectra,
+        );
         rec.camera = Contribution::new(g.l, 1.0);
     }
 
@@ -692,13 +725,12 @@ impl Estimator for PathEstimator<'_> {
         ws: &mut Workspace,
     ) -> SampledSpectrum {
         let meter = MeterIntegrator { path: self.pt };
-        let cut = &mut ws.record.cut;
         match m.kind {
             MeterKind::Illuminance => {
-                meter.irradiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler, cut)
+                meter.irradiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler, ws)
             }
             MeterKind::Luminance => {
-                meter.radiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler, cut)
+                meter.radiance(self.scene, m.p, m.p_error, m.dir, lambda, sampler, ws)
             }
         }
     }

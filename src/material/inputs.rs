@@ -24,17 +24,33 @@ impl ColorInput {
         matches!(self, ColorInput::Texture(_))
     }
 
-    /// The reflectance at `tc` for the path's wavelengths, clamped to [0, 1].
+    /// The constant's reflectance at the path's wavelengths, clamped to [0, 1]; zero for a
+    /// texture (`material::spectra`).
     #[inline]
-    pub fn reflectance(&self, tc: TexCoord, lambda: &SampledWavelengths) -> SampledSpectrum {
-        let s = match self {
-            ColorInput::Constant(s) => s.sample(lambda),
+    pub fn constant(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
+        match self {
+            ColorInput::Constant(s) => s.sample(lambda).map(|v| v.clamp(0.0, 1.0)),
+            ColorInput::Texture(_) => SampledSpectrum::ZERO,
+        }
+    }
+
+    /// The reflectance at `tc` for the path's wavelengths, clamped to [0, 1], given the
+    /// constant's, [`Self::constant`] at `lambda`.
+    #[inline]
+    pub fn reflectance_with(
+        &self,
+        tc: TexCoord,
+        lambda: &SampledWavelengths,
+        constant: SampledSpectrum,
+    ) -> SampledSpectrum {
+        match self {
+            ColorInput::Constant(_) => constant,
             ColorInput::Texture(t) => {
                 let sigmoid = reflectance_lookup(t.rgb(tc));
                 SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]))
+                    .map(|v| v.clamp(0.0, 1.0))
             }
-        };
-        s.map(|v| v.clamp(0.0, 1.0))
+        }
     }
 }
 

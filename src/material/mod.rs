@@ -3,7 +3,10 @@
 //!
 //! Everything that does not depend on the wavelengths or the hit (albedo tables of rough
 //! coats, diffuse Fresnel integrals, uplifted spectra) is computed once when the scene is
-//! built; [`Material::bsdf`] only evaluates spectra and fills plain `Copy` data.
+//! built; [`Material::bsdf`] only evaluates spectra and fills plain `Copy` data. The spectra
+//! that do not depend on the hit are [`Material::constant_spectra`], which the integrators
+//! take from a per-thread [`SpectraCache`] once per material and wavelength tuple
+//! (`spectra.rs`) and pass to [`Material::bsdf_with`].
 //!
 //! **Dispersion.** A dielectric whose IOR varies with λ refracts each wavelength in its own
 //! direction. [`Material::is_dispersive`] says so; the integrator then terminates the
@@ -30,12 +33,13 @@ pub mod coat_levels;
 pub mod inputs;
 pub mod normal_map;
 pub mod preview;
+pub mod spectra;
 
 use crate::bxdf::coat::ScalarFresnel;
 use crate::bxdf::fresnel::diffuse_fresnel;
 use crate::bxdf::{
     Bsdf, Bxdf, CoatAlbedo, CoatFresnel, ConductorBxdf, DielectricBxdf, DiffuseBxdf, OrenNayarBxdf,
-    PlasticBxdf, SpecularCoat, ThinDielectricBxdf, TrowbridgeReitz,
+    PlasticBase, PlasticBxdf, SpecularCoat, ThinDielectricBxdf, TrowbridgeReitz,
 };
 use crate::spectral::sellmeier::Sellmeier;
 use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum};
@@ -46,6 +50,7 @@ use std::sync::Arc;
 
 pub use inputs::{AlphaTexture, ColorInput, FloatInput};
 pub use preview::PreviewMaterial;
+pub use spectra::{MaterialSpectra, SpectraCache};
 
 #[derive(Clone, Debug)]
 pub enum Material {
@@ -143,11 +148,40 @@ impl PlasticMaterial {
         }
     }
 
-    fn bxdf(&self, tc: TexCoord, lambda: &SampledWavelengths) -> PlasticBxdf {
+    /// The reflectance and, when ρ and the coat are both constant, the diffuse base
+    /// ([`MaterialSpectra`]).
+    #[inline]
+    fn constant_spectra(&self, lambda: &SampledWavelengths) -> MaterialSpectra {
+        let s0 = self.reflectance.constant(lambda);
+        let base = if self.has_constant_base() {
+            PlasticBase::new(s0, self.fdr_internal, self.t_avg)
+        } else {
+            PlasticBase::default()
+        };
+        MaterialSpectra {
+            s0,
+            base,
+            ..MaterialSpectra::default()
+        }
+    }
+
+    /// True when neither ρ nor the coat's roughness is textured.
+    #[inline]
+    fn has_constant_base(&self) -> bool {
+        !self.reflectance.is_textured() && self.roughness.is_none()
+    }
+
+    #[inline]
+    fn bxdf(&self, tc: TexCoord, lambda: &SampledWavelengths, c: &MaterialSpectra) -> PlasticBxdf {
         let (distrib, albedo, t_avg) = self.coat(tc);
         let coat = SpecularCoat::new(distrib, CoatFresnel::Dielectric { eta: self.eta });
-        let r = self.reflectance.reflectance(tc, lambda);
-        PlasticBxdf::with_coat(coat, albedo, r, self.fdr_internal, t_avg)
+        let base = if self.has_constant_base() {
+            c.base
+        } else {
+            let r = self.reflectance.reflectance_with(tc, lambda, c.s0);
+            PlasticBase::new(r, self.fdr_internal, t_avg)
+        };
+        PlasticBxdf::with_base(coat, albedo, base)
     }
 }
 
@@ -156,39 +190,81 @@ impl Material {
     /// [`Material::is_textured`]) and shading normal `ns`.
     #[inline]
     pub fn bsdf(&self, tc: TexCoord, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
+        self.bsdf_with(tc, ns, lambda, &self.constant_spectra(lambda))
+    }
+
+    /// The spectra of this material that do not depend on the hit, at `lambda`:
+    ///
+    /// | model | `s0` | `s1` | `base` |
+    /// |---|---|---|---|
+    /// | diffuse, Oren–Nayar | constant ρ | – | – |
+    /// | conductor | η | k | – |
+    /// | dielectric | IOR at the hero (lane 0) | – | – |
+    /// | thin dielectric | IOR per lane | – | – |
+    /// | plastic | constant ρ | – | constant ρ and coat |
+    /// | UsdPreviewSurface | constant `diffuseColor` | constant `specularColor` | constant ρ and base coat |
+    ///
+    /// (– and textured inputs: zero, unused.)
+    #[inline]
+    pub fn constant_spectra(&self, lambda: &SampledWavelengths) -> MaterialSpectra {
+        let (s0, s1) = match self {
+            Material::Diffuse { reflectance } | Material::OrenNayar { reflectance, .. } => {
+                (reflectance.constant(lambda), SampledSpectrum::ZERO)
+            }
+            Material::Conductor { eta, k, .. } => (eta.sample(lambda), k.sample(lambda)),
+            Material::Dielectric { ior, .. } => {
+                let mut s0 = SampledSpectrum::ZERO;
+                s0[0] = ior.ior(lambda.lambda[0]);
+                (s0, SampledSpectrum::ZERO)
+            }
+            Material::ThinDielectric { ior } => (
+                SampledSpectrum::from_fn(|i| ior.ior(lambda.lambda[i])),
+                SampledSpectrum::ZERO,
+            ),
+            Material::Plastic(p) => return p.constant_spectra(lambda),
+            Material::Preview(p) => return p.constant_spectra(lambda),
+        };
+        MaterialSpectra {
+            s0,
+            s1,
+            base: PlasticBase::default(),
+        }
+    }
+
+    /// [`Material::bsdf`] with this material's [`Material::constant_spectra`] at `lambda`
+    /// given (from a [`SpectraCache`]): only textured inputs are evaluated here.
+    #[inline]
+    pub fn bsdf_with(
+        &self,
+        tc: TexCoord,
+        ns: Vec3,
+        lambda: &SampledWavelengths,
+        c: &MaterialSpectra,
+    ) -> Bsdf {
         let bxdf = match self {
             Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf {
-                r: reflectance.reflectance(tc, lambda),
+                r: reflectance.reflectance_with(tc, lambda, c.s0),
             }),
             Material::OrenNayar { reflectance, sigma } => Bxdf::OrenNayar(OrenNayarBxdf::new(
-                reflectance.reflectance(tc, lambda),
+                reflectance.reflectance_with(tc, lambda, c.s0),
                 sigma.eval(tc),
             )),
             Material::Conductor {
-                eta,
-                k,
-                distrib,
-                roughness,
+                distrib, roughness, ..
             } => Bxdf::Conductor(ConductorBxdf::new(
                 AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
-                eta.sample(lambda),
-                k.sample(lambda),
+                c.s0,
+                c.s1,
             )),
             Material::Dielectric {
-                ior,
-                distrib,
-                roughness,
+                distrib, roughness, ..
             } => Bxdf::Dielectric(DielectricBxdf::new(
                 AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
-                ior.ior(lambda.lambda[0]),
+                c.s0[0],
             )),
-            Material::ThinDielectric { ior } => {
-                Bxdf::ThinDielectric(ThinDielectricBxdf::new(SampledSpectrum::from_fn(|i| {
-                    ior.ior(lambda.lambda[i])
-                })))
-            }
-            Material::Plastic(p) => Bxdf::Plastic(p.bxdf(tc, lambda)),
-            Material::Preview(p) => return p.bsdf(tc, ns, lambda),
+            Material::ThinDielectric { .. } => Bxdf::ThinDielectric(ThinDielectricBxdf::new(c.s0)),
+            Material::Plastic(p) => Bxdf::Plastic(p.bxdf(tc, lambda, c)),
+            Material::Preview(p) => return p.bsdf_with(tc, ns, lambda, c),
         };
         Bsdf::new(bxdf, ns)
     }

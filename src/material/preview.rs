@@ -40,11 +40,12 @@
 
 use super::coat_levels::{CoatLevels, SchlickLevels};
 use super::normal_map;
+use super::MaterialSpectra;
 use crate::bxdf::coat::ScalarFresnel;
 use crate::bxdf::fresnel::diffuse_fresnel;
 use crate::bxdf::{
-    Bsdf, Bxdf, CoatAlbedo, CoatFresnel, DiffuseBxdf, PlasticBxdf, PreviewBxdf, SpecularCoat,
-    TrowbridgeReitz,
+    Bsdf, Bxdf, CoatAlbedo, CoatFresnel, DiffuseBxdf, PlasticBase, PlasticBxdf, PreviewBxdf,
+    SpecularCoat, TrowbridgeReitz,
 };
 use crate::desc::PreviewSurfaceDesc;
 use crate::spectral::uplift::reflectance_lookup;
@@ -295,10 +296,15 @@ impl PreviewMaterial {
     /// The plastic coat's Fresnel at `tc` and, for a textured `specularColor`, the
     /// scalar bound of its F0 (the albedo's; 0 otherwise).
     #[inline]
-    fn base_fresnel(&self, tc: TexCoord, lambda: &SampledWavelengths) -> (CoatFresnel, f32) {
-        let Some(s) = &self.specular else {
+    fn base_fresnel(
+        &self,
+        tc: TexCoord,
+        lambda: &SampledWavelengths,
+        c: &MaterialSpectra,
+    ) -> (CoatFresnel, f32) {
+        if self.specular.is_none() {
             return (CoatFresnel::Dielectric { eta: self.ior }, 0.0);
-        };
+        }
         match &self.textures.specular {
             Some(t) => {
                 let sigmoid = reflectance_lookup(t.rgb(tc));
@@ -307,10 +313,7 @@ impl PreviewMaterial {
                 let bound = sigmoid.max_value().clamp(0.0, 1.0);
                 (CoatFresnel::Schlick { f0 }, bound)
             }
-            None => {
-                let f0 = s.sample(lambda).map(|v| v.clamp(0.0, 1.0));
-                (CoatFresnel::Schlick { f0 }, 0.0)
-            }
+            None => (CoatFresnel::Schlick { f0: c.s1 }, 0.0),
         }
     }
 
@@ -328,17 +331,51 @@ impl PreviewMaterial {
         self.textures.opacity.is_none() && self.opacity >= 1.0
     }
 
-    /// The diffuse reflectance at `tc`, clamped to [0, 1].
+    /// The diffuse reflectance at `tc`, clamped to [0, 1] (`c.s0` when constant).
     #[inline]
-    fn rho(&self, tc: TexCoord, lambda: &SampledWavelengths) -> SampledSpectrum {
-        let s = match &self.textures.diffuse {
+    fn rho(
+        &self,
+        tc: TexCoord,
+        lambda: &SampledWavelengths,
+        c: &MaterialSpectra,
+    ) -> SampledSpectrum {
+        match &self.textures.diffuse {
             Some(t) => {
                 let sigmoid = reflectance_lookup(t.rgb(tc));
                 SampledSpectrum::from_fn(|i| sigmoid.eval(lambda.lambda[i]))
+                    .map(|v| v.clamp(0.0, 1.0))
             }
-            None => self.diffuse.sample(lambda),
+            None => c.s0,
+        }
+    }
+
+    /// The spectra of [`crate::material::Material::constant_spectra`]: `diffuseColor` and
+    /// `specularColor` where constant, clamped to [0, 1], and the plastic base when ρ and the
+    /// base coat are constant.
+    #[inline]
+    pub fn constant_spectra(&self, lambda: &SampledWavelengths) -> MaterialSpectra {
+        let clamped = |s: &Spectrum| s.sample(lambda).map(|v| v.clamp(0.0, 1.0));
+        let s0 = match &self.textures.diffuse {
+            Some(_) => SampledSpectrum::ZERO,
+            None => clamped(&self.diffuse),
         };
-        s.map(|v| v.clamp(0.0, 1.0))
+        let s1 = match (&self.specular, &self.textures.specular) {
+            (Some(s), None) => clamped(s),
+            _ => SampledSpectrum::ZERO,
+        };
+        let base = if self.has_constant_base() && self.lobes != PreviewLobes::Lambert {
+            PlasticBase::new(s0, self.base_fdr_internal, self.base_t_avg)
+        } else {
+            PlasticBase::default()
+        };
+        MaterialSpectra { s0, s1, base }
+    }
+
+    /// True when the plastic base depends on no texture: a constant `diffuseColor` and a
+    /// base coat of one roughness and Fresnel (no [`PreviewTextures::base_coats`]).
+    #[inline]
+    fn has_constant_base(&self) -> bool {
+        self.textures.diffuse.is_none() && self.textures.base_coats.is_none()
     }
 
     /// A scalar input: the texture's float output at `tc` or the constant, clamped to [0, 1].
@@ -361,11 +398,23 @@ impl PreviewMaterial {
     /// [`PreviewMaterial::lobes`].
     #[inline]
     pub fn bsdf(&self, tc: TexCoord, ns: Vec3, lambda: &SampledWavelengths) -> Bsdf {
-        let rho = self.rho(tc, lambda);
+        self.bsdf_with(tc, ns, lambda, &self.constant_spectra(lambda))
+    }
+
+    /// [`Self::bsdf`] given [`Self::constant_spectra`] at `lambda`.
+    #[inline]
+    pub fn bsdf_with(
+        &self,
+        tc: TexCoord,
+        ns: Vec3,
+        lambda: &SampledWavelengths,
+        c: &MaterialSpectra,
+    ) -> Bsdf {
+        let rho = self.rho(tc, lambda, c);
         let bxdf = match self.lobes {
             PreviewLobes::Lambert => Bxdf::Diffuse(DiffuseBxdf { r: rho }),
-            PreviewLobes::Plastic => Bxdf::Plastic(self.plastic(tc, rho, lambda)),
-            PreviewLobes::Full => Bxdf::Preview(self.composite(tc, rho, lambda)),
+            PreviewLobes::Plastic => Bxdf::Plastic(self.plastic(tc, rho, lambda, c)),
+            PreviewLobes::Full => Bxdf::Preview(self.composite(tc, rho, lambda, c)),
         };
         Bsdf::new(bxdf, ns)
     }
@@ -377,16 +426,16 @@ impl PreviewMaterial {
         tc: TexCoord,
         rho: SampledSpectrum,
         lambda: &SampledWavelengths,
+        c: &MaterialSpectra,
     ) -> PlasticBxdf {
-        let (fresnel, f0_bound) = self.base_fresnel(tc, lambda);
+        let (fresnel, f0_bound) = self.base_fresnel(tc, lambda, c);
         let (distrib, albedo, t_avg) = self.base_coat(tc, f0_bound);
-        PlasticBxdf::with_coat(
-            SpecularCoat::new(distrib, fresnel),
-            albedo,
-            rho,
-            self.base_fdr_internal,
-            t_avg,
-        )
+        let base = if self.has_constant_base() {
+            c.base
+        } else {
+            PlasticBase::new(rho, self.base_fdr_internal, t_avg)
+        };
+        PlasticBxdf::with_base(SpecularCoat::new(distrib, fresnel), albedo, base)
     }
 
     /// Every lobe: clearcoat over the metallic blend of metal and plastic.
@@ -396,6 +445,7 @@ impl PreviewMaterial {
         tc: TexCoord,
         rho: SampledSpectrum,
         lambda: &SampledWavelengths,
+        c: &MaterialSpectra,
     ) -> PreviewBxdf {
         let metallic = if self.specular.is_some() {
             0.0
@@ -403,7 +453,7 @@ impl PreviewMaterial {
             Self::scalar(self.textures.metallic.as_ref(), self.metallic, tc)
         };
         let clearcoat = Self::scalar(self.textures.clearcoat.as_ref(), self.clearcoat, tc);
-        let base = self.plastic(tc, rho, lambda);
+        let base = self.plastic(tc, rho, lambda, c);
         let (cc_distrib, cc_albedo) = self.clearcoat_coat(tc);
         PreviewBxdf {
             base,

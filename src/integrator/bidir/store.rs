@@ -6,9 +6,10 @@
 //! sample serves both connections and merges.
 //!
 //! BSDFs are not kept (a [`crate::bxdf::Bsdf`] is a few hundred bytes): a subpath's vertices
-//! are rebuilt from their surface hits with the same wavelengths ([`bsdf_at`]), the same
-//! vertices bit for bit, at a fraction of the cost of tracing the subpath again (no rays, no
-//! sampling). Per light vertex the store holds a [`MergeVertex`] twice (its batch's, and a
+//! are rebuilt from their surface hits with the same wavelengths ([`cached_bsdf_at`]), the
+//! same vertices bit for bit, at a fraction of the cost of tracing the subpath again (no rays,
+//! no sampling; the materials' spectra at the iteration's wavelengths come from the thread's
+//! cache, `material::spectra`). Per light vertex the store holds a [`MergeVertex`] twice (its batch's, and a
 //! copy in the grid's slot order, so that a merge reads the records of a cell's candidates
 //! contiguously), its surface hit and dVC ([`VertexHit`]), its key and the grid's 24 bytes
 //! (its position and key in slot order, its index, its slot); per subpath its origin. The
@@ -19,7 +20,7 @@
 use super::hashgrid::{GridPoint, HashGrid};
 use super::mis::SubpathMis;
 use super::subpath::LightSubpath;
-use super::vertex::{bsdf_at, LightOrigin, PathVertex};
+use super::vertex::{cached_bsdf_at, LightOrigin, PathVertex};
 use super::MergeVertex;
 use crate::scene::{Scene, SurfaceHit};
 use crate::spectral::SampledWavelengths;
@@ -221,6 +222,7 @@ impl LightVertexStore {
         let Some((b, i)) = self.locate(j) else {
             return;
         };
+        out.spectra.begin(&scene.materials, lambda);
         let batch = &self.batches[b];
         let start = if i == 0 { 0 } else { batch.paths[i - 1].end };
         let path = &batch.paths[i];
@@ -232,7 +234,7 @@ impl LightVertexStore {
                 dvc: h.dvc,
                 dvm: m.dvm,
             };
-            let bsdf = bsdf_at(scene, &h.hit, filter, lambda);
+            let bsdf = cached_bsdf_at(scene, &h.hit, filter, lambda, &mut out.spectra);
             out.vertices
                 .push(PathVertex::new(&h.hit, m.wo, bsdf, m.beta, mis, m.depth));
             out.hits.push(h.hit);

@@ -8,12 +8,13 @@
 //! y_{max_depth} and camera subpaths at z_{max_depth+1}.
 
 use super::mis::{Mis, SubpathMis};
-use super::vertex::{bsdf_at, shading_correction, LightOrigin, PathVertex};
+use super::vertex::{cached_bsdf_at, shading_correction, LightOrigin, PathVertex};
 use crate::bxdf::{BsdfSample, TransportMode};
 use crate::geometry::offset::spawn_ray;
 use crate::geometry::Ray;
 use crate::light::emit::{LightLeSample, SceneSphere};
 use crate::light::{LightHit, LightSampleContext};
+use crate::material::SpectraCache;
 use crate::sampling::dimensions::{self, BSDF, ROULETTE};
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene, SurfaceHit};
@@ -72,6 +73,10 @@ pub struct LightSubpath {
     pub vertices: Vec<PathVertex>,
     pub hits: Vec<SurfaceHit>,
     pub capped: Option<CappedSubpath>,
+    /// The materials' constant spectra at the wavelengths of the sample it belongs to
+    /// (`material::spectra`): a per-thread cache that outlives [`Self::clear`], which the
+    /// sample's camera subpath (through the [`super::Workspace`]) shares.
+    pub spectra: SpectraCache,
 }
 
 impl LightSubpath {
@@ -277,6 +282,7 @@ fn trace_detached(
     path: &mut LightSubpath,
 ) {
     path.clear();
+    path.spectra.begin(&ctx.scene.materials, lambda);
     let (u_light, u_pos, u_dir) = (sampler.get_1d(), sampler.get_2d(), sampler.get_2d());
     let Some((index, pmf)) = ctx.scene.light_sampler.sample(u_light) else {
         return;
@@ -312,7 +318,7 @@ fn trace_detached(
             });
             return;
         }
-        let bsdf = bsdf_at(ctx.scene, &si, ctx.filter, lambda);
+        let bsdf = cached_bsdf_at(ctx.scene, &si, ctx.filter, lambda, &mut path.spectra);
         let v = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
         if !bsdf.is_specular() {
             path.vertices.push(v);

@@ -5,6 +5,7 @@
 use super::mis::SubpathMis;
 use crate::bxdf::{Bsdf, TransportMode};
 use crate::light::LightHit;
+use crate::material::{Material, SpectraCache};
 use crate::scene::{Scene, SurfaceHit};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use crate::texture::TextureFilter;
@@ -144,7 +145,23 @@ pub fn shading_correction(ns: Vec3, ng: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 /// `lambda` is the tuple shared by both subpaths of a sample, mutable so that a dispersive
 /// material can terminate the secondary wavelengths here, for the whole path. Textures are
 /// filtered per `filter` with the camera's footprint at the point, on light subpaths too
-/// (as pbrt-v4's BDPT), so both subpaths see the same filtered surface.
+/// (as pbrt-v4's BDPT), so both subpaths see the same filtered surface. The material's
+/// constant spectra come from `spectra`, which the walk has begun at `lambda`
+/// ([`SpectraCache::begin`]).
+#[inline]
+pub fn cached_bsdf_at(
+    scene: &Scene,
+    si: &SurfaceHit,
+    filter: TextureFilter,
+    lambda: &mut SampledWavelengths,
+    spectra: &mut SpectraCache,
+) -> Bsdf {
+    let (index, material) = material_at(scene, si, lambda);
+    spectra.bsdf(material, index, scene.tex_coord(si, filter), si.ns, lambda)
+}
+
+/// [`cached_bsdf_at`] with the material's spectra sampled here (one-off BSDFs: VCM's
+/// radius probe, tests).
 #[inline]
 pub fn bsdf_at(
     scene: &Scene,
@@ -152,11 +169,24 @@ pub fn bsdf_at(
     filter: TextureFilter,
     lambda: &mut SampledWavelengths,
 ) -> Bsdf {
-    let material = &scene.materials[si.material as usize];
+    let (_, material) = material_at(scene, si, lambda);
+    material.bsdf(scene.tex_coord(si, filter), si.ns, lambda)
+}
+
+/// The material at `si` (its index and itself), the secondary wavelengths of `lambda`
+/// terminated first if it is dispersive.
+#[inline]
+fn material_at<'s>(
+    scene: &'s Scene,
+    si: &SurfaceHit,
+    lambda: &mut SampledWavelengths,
+) -> (usize, &'s Material) {
+    let index = si.material as usize;
+    let material = &scene.materials[index];
     if scene.dispersive && material.is_dispersive() {
         lambda.terminate_secondary();
     }
-    material.bsdf(scene.tex_coord(si, filter), si.ns, lambda)
+    (index, material)
 }
 
 /// Area density at `p_to` (geometric normal `n_to`) of a direction density `pdf_w` at
