@@ -1,16 +1,20 @@
 //! The collapse of a binary BVH into the 8-wide tree the traversal walks, with leaves of up to
 //! four triangles (one four-lane block, [`super::leaf4`]).
 //!
-//! Which subtrees become leaves is decided bottom-up by the surface area heuristic (Goldsmith,
-//! Salmon 1987; MacDonald, Booth 1990; PBR 4ed §7.3.2), with Embree's cost of a leaf: one
-//! intersection cost per block of four triangles, whatever its fill (Wald et al. 2014, "Embree:
-//! A Kernel Framework for Efficient CPU Ray Tracing", §4.1, `sahBlockSize` 4). For a subtree n
-//! with surface area A(n), cost(n) = min(leaf: [`LEAF_COST`]·A(n) if n holds ≤ 4 triangles,
-//! inner: [`STEP_COST`]·A(n) + cost(left) + cost(right)); the ratio of the two costs is all
-//! that matters. The 8-wide nodes are then formed top-down as Wald, Benthin, Boulos 2008
-//! ("Getting Rid of Packets", §3.2) and Embree's BVH8 builder do: starting from a node's two
-//! children, the inner child of largest surface area is replaced by its two children until
-//! there are eight or only leaves are left.
+//! The wide tree is the one of least SAH cost (Goldsmith, Salmon 1987; MacDonald, Booth 1990;
+//! PBR 4ed §7.3.2) among those made by keeping a subset of the binary nodes, found by the dynamic
+//! programme of Ylitie, Karras, Laine 2017 ("Efficient Incoherent Ray Traversal on GPUs Through
+//! Compressed Wide BVHs", §4.1, equations 1–3): C(n, i) is the least cost of the subtree at n
+//! spread over at most i slots of its wide parent,
+//! - C(n, 1) = min(leaf: [`LEAF_COST`]·A(n) if n holds ≤ 4 triangles,
+//!   wide node: [`NODE_COST`]·A(n) + D(n, 8)),
+//! - C(n, i) = min(C(n, i − 1), D(n, i)) for i = 2..8,
+//! - D(n, j) = min over k = 1..j − 1 of C(left, k) + C(right, j − k),
+//!
+//! with A(n) the surface area of n's box. The leaf cost is Embree's: one intersection cost per
+//! block of four triangles, whatever its fill (Wald et al. 2014, "Embree: A Kernel Framework
+//! for Efficient CPU Ray Tracing", §4.1, `sahBlockSize` 4), where Ylitie et al. count each
+//! triangle; a leaf of 1 to 4 costs one four-lane pass here.
 
 /// A node of the binary BVH: its box's half surface area, and its children or its triangle.
 #[derive(Clone, Copy, Debug)]
@@ -48,35 +52,48 @@ pub(super) struct Collapsed {
 const WIDTH: usize = 8;
 /// Triangles per leaf (one four-lane block).
 const LEAF_MAX: u32 = 4;
-/// SAH cost of testing one leaf block (the unit).
+/// SAH cost of one leaf block test (a four-lane watertight pass).
 const LEAF_COST: f32 = 1.0;
-/// SAH cost of one binary level inside a wide node: an 8-wide node test (two four-lane slab
-/// passes, about two leaf passes) shared by the about seven binary nodes it absorbs.
-const STEP_COST: f32 = 0.3;
+/// SAH cost of one wide node (an 8-child box test, the entry sort and a stack entry), taken
+/// equal to a leaf pass: both are about the same number of SSE instructions.
+const NODE_COST: f32 = 1.0;
+
+/// The best choice for each binary node and each number of slots (see the module docs).
+#[derive(Clone, Copy)]
+struct Choice {
+    /// `cost[i − 1]` = C(n, i).
+    cost: [f32; WIDTH],
+    /// `take[0]`: 0 for a leaf, 1 for a wide node. `take[i − 1]` for i ≥ 2: 0 to use i − 1
+    /// slots, else the k of D(n, i) (slots given to the left child).
+    take: [u8; WIDTH],
+    /// The k of D(n, 8): how a wide node made of n shares its slots between its children.
+    wide_k: u8,
+}
 
 /// Collapses the binary BVH rooted at node 0 (which must not be empty).
 pub(super) fn collapse(binary: &[BinaryNode]) -> Collapsed {
-    let is_leaf = leaf_decisions(binary);
+    let choice = choices(binary);
     let mut out = Collapsed {
         nodes: vec![Vec::new()],
         leaves: Vec::new(),
     };
-    if is_leaf[0] {
-        out.nodes[0].push(Child::Leaf(0));
-        out.leaves.push(gather(binary, 0));
-        return out;
-    }
-    let mut pending = vec![(0u32, 0u32)];
-    while let Some((wide, n)) = pending.pop() {
-        for c in widen(binary, &is_leaf, n) {
-            let child = if is_leaf[c as usize] {
-                out.leaves.push(gather(binary, c));
-                Child::Leaf(out.leaves.len() as u32 - 1)
-            } else {
-                out.nodes.push(Vec::new());
-                let index = out.nodes.len() as u32 - 1;
-                pending.push((index, c));
-                Child::Node(index)
+    let mut pending = vec![(0u32, slots(binary, &choice, 0, WIDTH))];
+    while let Some((wide, children)) = pending.pop() {
+        for c in children {
+            let child = match binary[c as usize].kind {
+                BinaryKind::Inner([l, r]) if choice[c as usize].take[0] != 0 => {
+                    out.nodes.push(Vec::new());
+                    let index = out.nodes.len() as u32 - 1;
+                    let k = choice[c as usize].wide_k as usize;
+                    let mut grand = slots(binary, &choice, l, k);
+                    grand.extend(slots(binary, &choice, r, WIDTH - k));
+                    pending.push((index, grand));
+                    Child::Node(index)
+                }
+                _ => {
+                    out.leaves.push(gather(binary, c));
+                    Child::Leaf(out.leaves.len() as u32 - 1)
+                }
             };
             out.nodes[wide as usize].push(child);
         }
@@ -84,26 +101,93 @@ pub(super) fn collapse(binary: &[BinaryNode]) -> Collapsed {
     out
 }
 
-/// Per binary node: whether the SAH makes its subtree one leaf (see the module docs).
-fn leaf_decisions(binary: &[BinaryNode]) -> Vec<bool> {
+/// The binary nodes that fill at most `i` slots for the subtree at `n` (C(n, i)'s choice).
+fn slots(binary: &[BinaryNode], choice: &[Choice], n: u32, i: usize) -> Vec<u32> {
+    let (mut out, mut pending) = (Vec::new(), vec![(n, i)]);
+    while let Some((n, i)) = pending.pop() {
+        let take = choice[n as usize].take[i - 1] as usize;
+        match binary[n as usize].kind {
+            BinaryKind::Inner([l, r]) if i > 1 && take > 0 => {
+                pending.extend([(r, i - take), (l, take)]);
+            }
+            _ if i > 1 => pending.push((n, i - 1)),
+            _ => out.push(n),
+        }
+    }
+    out
+}
+
+/// C(n, i) for every node, children before parents, areas relative to the root's.
+fn choices(binary: &[BinaryNode]) -> Vec<Choice> {
+    let empty = Choice {
+        cost: [0.0; WIDTH],
+        take: [0; WIDTH],
+        wide_k: 0,
+    };
+    let mut choice = vec![empty; binary.len()];
     let mut count = vec![0u32; binary.len()];
-    let mut cost = vec![0f32; binary.len()];
-    let mut is_leaf = vec![false; binary.len()];
+    let root_area = binary[0].half_area;
+    let scale = if root_area > 0.0 {
+        1.0 / root_area
+    } else {
+        1.0
+    };
     for n in post_order(binary) {
-        let area = binary[n].half_area;
-        let leaf_cost = LEAF_COST * area;
-        (count[n], cost[n], is_leaf[n]) = match binary[n].kind {
-            BinaryKind::Prim(_) => (1, leaf_cost, true),
+        let area = binary[n].half_area * scale;
+        let leaf = LEAF_COST * area;
+        (count[n], choice[n]) = match binary[n].kind {
+            BinaryKind::Prim(_) => (
+                1,
+                Choice {
+                    cost: [leaf; WIDTH],
+                    ..empty
+                },
+            ),
             BinaryKind::Inner([l, r]) => {
                 let (l, r) = (l as usize, r as usize);
                 let n_count = count[l] + count[r];
-                let split = STEP_COST * area + cost[l] + cost[r];
-                let leaf = n_count <= LEAF_MAX && leaf_cost <= split;
-                (n_count, if leaf { leaf_cost } else { split }, leaf)
+                (
+                    n_count,
+                    choose(&choice[l], &choice[r], area, n_count <= LEAF_MAX),
+                )
             }
         };
     }
-    is_leaf
+    choice
+}
+
+/// C(n, ·) of an inner node from its children's.
+fn choose(left: &Choice, right: &Choice, area: f32, leaf_ok: bool) -> Choice {
+    let distribute = |j: usize| {
+        (1..j)
+            .map(|k| (left.cost[k - 1] + right.cost[j - k - 1], k as u8))
+            .fold(
+                (f32::INFINITY, 0),
+                |best, c| if c.0 < best.0 { c } else { best },
+            )
+    };
+    let (wide_cost, wide_k) = distribute(WIDTH);
+    let wide_cost = NODE_COST * area + wide_cost;
+    let leaf_cost = LEAF_COST * area;
+    let mut c = Choice {
+        cost: [0.0; WIDTH],
+        take: [0; WIDTH],
+        wide_k,
+    };
+    (c.cost[0], c.take[0]) = if leaf_ok && leaf_cost <= wide_cost {
+        (leaf_cost, 0)
+    } else {
+        (wide_cost, 1)
+    };
+    for i in 2..=WIDTH {
+        let (d, k) = distribute(i);
+        (c.cost[i - 1], c.take[i - 1]) = if c.cost[i - 2] <= d {
+            (c.cost[i - 2], 0)
+        } else {
+            (d, k)
+        };
+    }
+    c
 }
 
 /// Node indices in post order (children before parents) from the root 0.
@@ -118,30 +202,6 @@ fn post_order(binary: &[BinaryNode]) -> Vec<usize> {
     }
     order.reverse();
     order
-}
-
-/// The children of a wide node made from inner binary node `n`: its two children, then the
-/// inner one of largest area opened until there are [`WIDTH`].
-fn widen(binary: &[BinaryNode], is_leaf: &[bool], n: u32) -> Vec<u32> {
-    let mut children = match binary[n as usize].kind {
-        BinaryKind::Inner([l, r]) => vec![l, r],
-        BinaryKind::Prim(_) => vec![n],
-    };
-    while children.len() < WIDTH {
-        let largest = (0..children.len())
-            .filter(|&i| !is_leaf[children[i] as usize])
-            .max_by(|&i, &j| {
-                let area = |k: usize| binary[children[k] as usize].half_area;
-                area(i).total_cmp(&area(j))
-            });
-        let Some(i) = largest else { break };
-        let BinaryKind::Inner([l, r]) = binary[children[i] as usize].kind else {
-            break;
-        };
-        children[i] = l;
-        children.insert(i + 1, r);
-    }
-    children
 }
 
 /// The triangles of the subtree at `n`, left to right.
@@ -218,11 +278,13 @@ mod tests {
                 assert_eq!(c.nodes, vec![vec![Child::Leaf(0)]]);
             }
         }
-        // 32 triangles whose areas halve per level: eight leaves of four under the root (a
-        // leaf of 4 costs 1·A, its two halves 0.3·A + 2·(A/2)).
+        // 32 triangles whose areas halve per level: eight leaves of four under the root.
         let c = collapse(&balanced(32));
         assert_eq!(c.nodes.len(), 1);
         assert_eq!(c.leaves.len(), 8);
+        // 64: sixteen leaves of four, under the root and at most two more nodes.
+        let c = collapse(&balanced(64));
+        assert!(c.nodes.len() <= 3, "{}", c.nodes.len());
     }
 
     /// Children much smaller than their parent are split off rather than merged into one leaf.
@@ -233,7 +295,7 @@ mod tests {
         nodes[0].half_area = 100.0;
         let c = collapse(&nodes);
         check(&c, 4);
-        assert_eq!(c.leaves.len(), 2);
+        assert!(c.leaves.len() >= 2);
     }
 
     /// A chain (each inner node with one triangle and one subtree) 500 deep.

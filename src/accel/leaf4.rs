@@ -19,7 +19,7 @@
 //! **Padding.** A leaf of fewer than four triangles repeats its last triangle in the spare
 //! lanes; those lanes are masked out of every result.
 
-use glam::{Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 
 use crate::geometry::ray::Ray;
 use crate::geometry::triangle::{
@@ -115,7 +115,7 @@ impl<'a> Ray4<'a> {
     pub fn closest(&self, leaf: &Leaf4, count: usize, t_max: f32) -> Option<(usize, TriangleHit)> {
         let pass = self.pass(leaf, t_max, lane_mask(count));
         if pass.undecided != 0 {
-            return self.closest_one_by_one(leaf, count, t_max);
+            return self.closest_with_undecided(leaf, &pass, t_max);
         }
         let t = pass.t.to_array();
         let mut lanes = pass.hits;
@@ -131,16 +131,7 @@ impl<'a> Ray4<'a> {
                 best = lane;
             }
         }
-        let b = [0, 1, 2].map(|k| pass.e[k][best] / pass.det[best]);
-        Some((
-            best,
-            TriangleHit {
-                t: t[best],
-                b0: b[0],
-                b1: b[1],
-                b2: b[2],
-            },
-        ))
+        Some((best, pass.hit(best)))
     }
 
     /// Whether any of the first `count` lanes is hit with t in (0, t_max).
@@ -166,42 +157,62 @@ impl<'a> Ray4<'a> {
             x[2] * y[0] - y[2] * x[0],
             x[0] * y[1] - y[0] * x[1],
         ];
-        let neg = e.map(|e| e.cmplt(zero).bitmask());
-        let pos = e.map(|e| e.cmpgt(zero).bitmask());
-        let outside = (neg[0] | neg[1] | neg[2]) & (pos[0] | pos[1] | pos[2]);
-        let signed = (neg[0] | pos[0]) & (neg[1] | pos[1]) & (neg[2] | pos[2]);
+        // Lane masks stay in SIMD registers; one movemask per result.
+        let any = |m: [BVec4A; 3]| m[0] | m[1] | m[2];
+        let all = |m: [BVec4A; 3]| m[0] & m[1] & m[2];
+        let neg = e.map(|e| e.cmplt(zero));
+        let pos = e.map(|e| e.cmpgt(zero));
+        let outside = any(neg) & any(pos);
+        if valid & !outside.bitmask() == 0 {
+            // Every lane certainly missed (the common case): nothing more to compute.
+            return Pass {
+                t: zero,
+                e,
+                det: zero,
+                hits: 0,
+                undecided: 0,
+            };
+        }
+        let signed = all([0, 1, 2].map(|k| neg[k] | pos[k]));
         let det = (e[0] + e[1]) + e[2];
-        let det_finite = det.is_finite_mask().bitmask();
-        let in_front = z.map(|z| z.cmpgt(zero).bitmask());
-        let behind = z.map(|z| z.cmple(zero).bitmask());
         let t = ((e[0] * z[0] + e[1] * z[1]) + e[2] * z[2]) / det;
-        let t_ok = t.cmpgt(zero).bitmask() & t.cmplt(Vec4::splat(f32::INFINITY)).bitmask();
-        let woop = in_front[0] & in_front[1] & in_front[2] & t_ok;
-        let missed = behind[0] & behind[1] & behind[2];
-        let f32_path = signed & det_finite & valid & !outside;
-        let below = t.cmplt(Vec4::splat(t_max)).bitmask();
+        let t_ok = t.cmpgt(zero) & t.cmplt(Vec4::splat(f32::INFINITY));
+        let woop = all(z.map(|z| z.cmpgt(zero))) & t_ok;
+        let missed = all(z.map(|z| z.cmple(zero)));
+        let f32_path = (signed & det.is_finite_mask() & !outside).bitmask() & valid;
+        let below = t.cmplt(Vec4::splat(t_max));
+        let (woop, missed) = (woop.bitmask(), missed.bitmask());
         Pass {
             t,
             e,
             det,
-            hits: f32_path & woop & below,
-            undecided: (valid & !outside & !f32_path) | (f32_path & !woop & !missed),
+            hits: f32_path & woop & below.bitmask(),
+            undecided: (valid & !outside.bitmask() & !f32_path) | (f32_path & !woop & !missed),
         }
     }
 
-    /// The one-triangle test on each lane in order (lanes the f32 pass left undecided).
+    /// The closest hit when some lanes are left to the one-triangle test: the lanes in order,
+    /// lowering `t_max` on each hit, as the one-triangle test on every lane would.
     #[cold]
     #[inline(never)]
-    fn closest_one_by_one(
+    fn closest_with_undecided(
         &self,
         leaf: &Leaf4,
-        count: usize,
+        pass: &Pass,
         mut t_max: f32,
     ) -> Option<(usize, TriangleHit)> {
         let ray = WatertightRay::new(self.ray)?;
         let mut best = None;
-        for lane in 0..count.min(LANES) {
-            if let Some(hit) = intersect_packed(&ray, &leaf.packed(lane), t_max) {
+        let mut lanes = pass.hits | pass.undecided;
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let hit = if pass.hits >> lane & 1 == 1 {
+                Some(pass.hit(lane)).filter(|h| h.t < t_max)
+            } else {
+                intersect_packed(&ray, &leaf.packed(lane), t_max)
+            };
+            if let Some(hit) = hit {
                 t_max = hit.t;
                 best = Some((lane, hit));
             }
@@ -223,6 +234,20 @@ impl<'a> Ray4<'a> {
             }
         }
         false
+    }
+}
+
+impl Pass {
+    /// The hit of a lane the f32 pass decided: its t, and barycentrics eᵢ / det.
+    #[inline(always)]
+    fn hit(&self, lane: usize) -> TriangleHit {
+        let b = [0, 1, 2].map(|k| self.e[k][lane] / self.det[lane]);
+        TriangleHit {
+            t: self.t[lane],
+            b0: b[0],
+            b1: b[1],
+            b2: b[2],
+        }
     }
 }
 
