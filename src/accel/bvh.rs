@@ -47,16 +47,19 @@
 
 use glam::{Vec3, Vec3A, Vec4};
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::bvh2::Bvh2;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::cwbvh::node::CwBvhNode;
+use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::triangle::Triangle;
 
-use super::collapse::{collapse, BinaryKind, BinaryNode, Child, Collapsed};
-use super::leaf4::{Leaf4, Ray4, LANES};
 use super::stack::Stack;
 use crate::geometry::offset::gamma;
 use crate::geometry::ray::Ray;
-use crate::geometry::triangle::{is_degenerate, TriangleHit};
+use crate::geometry::triangle::{
+    intersect_packed, is_degenerate, PackedTriangle, TriangleHit, WatertightRay, ROW_FLOATS,
+    ROW_PADDING,
+};
 
 /// A hit found by the BVH: `prim` indexes the slice given to [`Bvh::build`].
 #[derive(Clone, Copy, Debug)]
@@ -69,10 +72,9 @@ pub struct BvhHit {
 pub struct Bvh {
     /// Node 0 is the root; empty for a BVH without hittable triangles.
     nodes: Vec<WideNode>,
-    /// The leaves' triangles, one four-lane block per leaf.
-    leaves: Vec<Leaf4>,
-    /// `input_index[LANES·leaf + lane]`: index into the slice given to `build` (padding lanes
-    /// repeat the leaf's last triangle).
+    /// Triangles in BVH primitive order, as a row store for [`PackedTriangle::load`].
+    rows: Vec<f32>,
+    /// BVH primitive order → index into the slice given to `build`.
     input_index: Vec<u32>,
     input_count: usize,
     bounds: (Vec3, Vec3),
@@ -83,9 +85,9 @@ pub struct Bvh {
 struct WideNode {
     /// `planes[h][2k]` / `planes[h][2k + 1]`: min / max along axis k of the children of half h.
     planes: [[Vec4; 6]; 2],
-    /// Inner child: its node index; leaf child: its leaf block.
+    /// Inner child: its node index; leaf child: its first triangle (BVH order).
     child: [u32; 8],
-    /// Triangles of each leaf child, 1 to 4 (0 for inner children and empty slots).
+    /// Triangles of each leaf child (0 for inner children and empty slots).
     count: [u8; 8],
     /// Bit `s`: slot s holds a child.
     present: u8,
@@ -105,18 +107,24 @@ struct Entry {
 /// ≤ 8 children on the stack, the node pushes at most 8) is far above what rays meet.
 const STACK_PLACES: usize = 32;
 
-/// Nodes reinserted at least (all of them in smaller trees): see [`build_bvh2`].
+/// Triangles per leaf (the CWBVH maximum).
+const LEAF_SIZE: u32 = 3;
+
+/// Nodes reinserted at least (all of them in smaller trees): see [`build_cwbvh`].
 const REINSERTION_NODES: f32 = 4096.0;
 
-/// Builds the binary BVH with the settings of obvhs's `medium_build` preset: PLOC with search
-/// radius 14 (`PlocSearchDistance::Medium`, `search_depth_threshold` 3, 64-bit Morton codes),
-/// one triangle per leaf, then reinsertion over 5% of the nodes but at least
-/// [`REINSERTION_NODES`] (on small scenes the full pass costs little and the tree shape matters
-/// most: on the Cornell box it saves 12% of the traversal instructions, while 20% instead of 5%
-/// on 50k-triangle scenes saves nothing and costs 37% more build). No spatial pre-splits: a
-/// leaf's box must bound its whole triangles, which the conservative box test relies on for
-/// watertightness at leaf boundaries.
-fn build_bvh2(triangles: &[Triangle]) -> Bvh2 {
+/// Builds the CWBVH with the settings of obvhs's `medium_build` preset: PLOC with search radius
+/// 14 (`PlocSearchDistance::Medium`, `search_depth_threshold` 3, 64-bit Morton codes),
+/// reinsertion over 5% of the nodes but at least [`REINSERTION_NODES`] (on small scenes the full
+/// pass costs little and the tree shape matters most: on the Cornell box it saves 12% of the
+/// traversal instructions, while 20% instead of 5% on 50k-triangle scenes saves nothing and
+/// costs 37% more build), then collapse to 8-wide nodes with up to [`LEAF_SIZE`]
+/// triangles per leaf. No spatial pre-splits: a leaf's box must
+/// bound its whole triangles, which the conservative box test relies on for watertightness at
+/// leaf boundaries.
+/// (The body of obvhs's `build_cwbvh_from_tris`, minus its debug-build validation, which asserts
+/// a depth below 32 and absolute 1e-5 box tolerances that large scenes exceed.)
+fn build_cwbvh(triangles: &[Triangle]) -> CwBvh {
     let indices = (0..triangles.len() as u32).collect();
     let mut bvh2 = PlocBuilder::with_capacity(triangles.len()).build(
         PlocSearchDistance::Medium,
@@ -127,48 +135,7 @@ fn build_bvh2(triangles: &[Triangle]) -> Bvh2 {
     );
     let ratio = (REINSERTION_NODES / bvh2.nodes.len() as f32).clamp(0.05, 1.0);
     ReinsertionOptimizer::default().run(&mut bvh2, ratio, None);
-    bvh2
-}
-
-/// obvhs's binary BVH as plain [`BinaryNode`]s, same indices (the two children of an inner
-/// node are `first_index` and the one after it); a leaf of several triangles (PLOC makes none)
-/// becomes a chain of inner nodes appended at the end, one triangle each.
-fn binary_nodes(bvh2: &Bvh2) -> Vec<BinaryNode> {
-    let mut out: Vec<BinaryNode> = bvh2
-        .nodes
-        .iter()
-        .map(|n| BinaryNode {
-            half_area: n.aabb.half_area(),
-            kind: BinaryKind::Inner([n.first_index, n.first_index + 1]),
-        })
-        .collect();
-    for (i, n) in bvh2.nodes.iter().enumerate() {
-        if !n.is_leaf() {
-            continue;
-        }
-        let first = n.first_index as usize;
-        let prims = &bvh2.primitive_indices[first..first + n.prim_count as usize];
-        let Some((last, rest)) = prims.split_last() else {
-            continue;
-        };
-        let mut at = i;
-        for &p in rest {
-            let area = out[at].half_area;
-            let base = out.len() as u32;
-            out[at].kind = BinaryKind::Inner([base, base + 1]);
-            out.push(BinaryNode {
-                half_area: area,
-                kind: BinaryKind::Prim(p),
-            });
-            out.push(BinaryNode {
-                half_area: area,
-                kind: BinaryKind::Prim(*last),
-            });
-            at = base as usize + 1;
-        }
-        out[at].kind = BinaryKind::Prim(*last);
-    }
-    out
+    bvh2_to_cwbvh(&bvh2, LEAF_SIZE, false, false)
 }
 
 impl Bvh {
@@ -191,25 +158,18 @@ impl Bvh {
                 Triangle { v0, v1, v2 }
             })
             .collect();
-        let tree = collapse(&binary_nodes(&build_bvh2(&prims)));
-        let leaf_triangles: Vec<Vec<[Vec3; 3]>> = tree
-            .leaves
+        let cwbvh = build_cwbvh(&prims);
+        let input_index: Vec<u32> = cwbvh
+            .primitive_indices
             .iter()
-            .map(|leaf| {
-                leaf.iter()
-                    .map(|&k| triangles[kept[k as usize] as usize])
-                    .collect()
-            })
+            .map(|&k| kept[k as usize])
             .collect();
-        let input_index = tree
-            .leaves
-            .iter()
-            .flat_map(|leaf| (0..LANES).map(|l| kept[leaf[l.min(leaf.len() - 1)] as usize]))
-            .collect();
+        let ordered: Vec<[Vec3; 3]> = input_index.iter().map(|&i| triangles[i as usize]).collect();
+        let nodes = wide_nodes(&cwbvh.nodes, &ordered);
         Bvh {
-            nodes: wide_nodes(&tree, &leaf_triangles),
-            leaves: leaf_triangles.iter().map(|t| Leaf4::new(t)).collect(),
-            bounds: bounds_of(&leaf_triangles.concat()),
+            rows: row_store(&ordered),
+            nodes,
+            bounds: bounds_of(&ordered),
             input_index,
             input_count: triangles.len(),
         }
@@ -218,7 +178,7 @@ impl Bvh {
     fn empty(input_count: usize) -> Bvh {
         Bvh {
             nodes: Vec::new(),
-            leaves: Vec::new(),
+            rows: Vec::new(),
             input_index: Vec::new(),
             input_count,
             bounds: (Vec3::ZERO, Vec3::ZERO),
@@ -230,7 +190,7 @@ impl Bvh {
         if !self.may_hit(t_max) {
             return None;
         }
-        let query = (&Ray4::new(ray)?, &RayBoxes::new(ray));
+        let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
         let (prim, hit) = self.closest(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max)?;
         Some(BvhHit { prim, hit })
     }
@@ -240,7 +200,7 @@ impl Bvh {
         if !self.may_hit(t_max) {
             return false;
         }
-        let Some(triangle) = Ray4::new(ray) else {
+        let Some(triangle) = WatertightRay::new(ray) else {
             return false;
         };
         let query = (&triangle, &RayBoxes::new(ray));
@@ -252,12 +212,11 @@ impl Bvh {
         self.input_count
     }
 
-    /// Bytes held: `(nodes, triangles)`, the triangles (leaf blocks, padding lanes included)
-    /// with their index into the input.
+    /// Bytes held: `(nodes, triangles)`, the triangles with their index into the input.
     pub fn memory_bytes(&self) -> (usize, usize) {
         (
             self.nodes.len() * std::mem::size_of::<WideNode>(),
-            self.leaves.len() * std::mem::size_of::<Leaf4>()
+            self.rows.len() * std::mem::size_of::<f32>()
                 + self.input_index.len() * std::mem::size_of::<u32>(),
         )
     }
@@ -275,23 +234,26 @@ impl Bvh {
 
     /// Per-ray setup, or None when nothing can be hit.
     #[cfg(test)]
-    fn query<'a>(&self, ray: &'a Ray, t_max: f32) -> Option<(Ray4<'a>, RayBoxes)> {
+    fn query(&self, ray: &Ray, t_max: f32) -> Option<(WatertightRay, RayBoxes)> {
         self.may_hit(t_max).then_some(())?;
-        Some((Ray4::new(ray)?, RayBoxes::new(ray)))
+        Some((WatertightRay::new(ray)?, RayBoxes::new(ray)))
     }
 
     /// Closest-hit traversal: the input index and the hit.
     fn closest<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
-        (triangle, boxes): (&Ray4, &RayBoxes),
+        (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
     ) -> Option<(u32, TriangleHit)> {
         let mut best: Option<(usize, TriangleHit)> = None;
-        self.traverse(stack, boxes, &mut t_max, |leaf, count, t_max| {
-            if let Some((lane, hit)) = triangle.closest(&self.leaves[leaf], count, *t_max) {
-                *t_max = hit.t;
-                best = Some((LANES * leaf + lane, hit));
+        self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
+            for i in first..first + count {
+                let tri = PackedTriangle::load(&self.rows, i);
+                if let Some(hit) = intersect_packed(triangle, &tri, *t_max) {
+                    *t_max = hit.t;
+                    best = Some((i, hit));
+                }
             }
             false
         });
@@ -303,18 +265,21 @@ impl Bvh {
     fn any<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
-        (triangle, boxes): (&Ray4, &RayBoxes),
+        (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
     ) -> bool {
         let mut hit = false;
-        self.traverse(stack, boxes, &mut t_max, |leaf, count, t_max| {
-            hit = triangle.occluded(&self.leaves[leaf], count, *t_max);
+        self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
+            hit = (first..first + count).any(|i| {
+                let tri = PackedTriangle::load(&self.rows, i);
+                intersect_packed(triangle, &tri, *t_max).is_some()
+            });
             hit
         });
         hit
     }
 
-    /// Calls `leaf(block, count, t_max)` for the leaves whose boxes the ray meets before
+    /// Calls `leaf(first, count, t_max)` for the leaves whose boxes the ray meets before
     /// `t_max`, near to far within each node; `leaf` may lower `t_max` and returns true to stop.
     #[inline(always)]
     fn traverse<const N: usize>(
@@ -455,27 +420,29 @@ fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: f32) -> (u32, Vec4) {
     (t_enter.cmple(t_exit).bitmask(), t_enter)
 }
 
-/// The wide nodes of the collapsed tree, with the exact boxes of their children. Children come
-/// after their parents, so one pass from the back sees every child's box before its parent's.
-fn wide_nodes(tree: &Collapsed, leaf_triangles: &[Vec<[Vec3; 3]>]) -> Vec<WideNode> {
-    let mut nodes = vec![WideNode::EMPTY; tree.nodes.len()];
-    let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); tree.nodes.len()];
-    for n in (0..tree.nodes.len()).rev() {
+/// Our nodes from obvhs's: same indices and slots, exact child boxes. obvhs appends a node's
+/// children after it, so one pass from the back sees every child's box before its parent's.
+fn wide_nodes(cw: &[CwBvhNode], triangles: &[[Vec3; 3]]) -> Vec<WideNode> {
+    let mut nodes = vec![WideNode::EMPTY; cw.len()];
+    let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); cw.len()];
+    for n in (0..cw.len()).rev() {
         let mut node = WideNode::EMPTY;
         let mut node_box = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for (slot, &child) in tree.nodes[n].iter().enumerate().take(8) {
-            let child_box = match child {
-                Child::Leaf(leaf) => {
-                    let triangles = &leaf_triangles[leaf as usize];
-                    node.child[slot] = leaf;
-                    node.count[slot] = triangles.len() as u8;
-                    node.leaves |= 1 << slot;
-                    bounds_of(triangles)
-                }
-                Child::Node(child) => {
-                    node.child[slot] = child;
-                    boxes[child as usize]
-                }
+        for slot in (0..8).filter(|&s| !cw[n].is_child_empty(s)) {
+            let child_box = if cw[n].is_leaf(slot) {
+                let (first, count) = cw[n].child_primitives(slot);
+                node.child[slot] = first;
+                node.count[slot] = count as u8;
+                node.leaves |= 1 << slot;
+                bounds_of(&triangles[first as usize..(first + count) as usize])
+            } else {
+                let child = cw[n].child_node_index(slot);
+                assert!(
+                    child as usize > n,
+                    "obvhs stores children after their parent"
+                );
+                node.child[slot] = child;
+                boxes[child as usize]
             };
             node.set_box(slot, child_box);
             node_box = (node_box.0.min(child_box.0), node_box.1.max(child_box.1));
@@ -483,6 +450,16 @@ fn wide_nodes(tree: &Collapsed, leaf_triangles: &[Vec<[Vec3; 3]>]) -> Vec<WideNo
         (nodes[n], boxes[n]) = (node, node_box);
     }
     nodes
+}
+
+/// The triangles' row store for [`PackedTriangle::load`], in BVH primitive order.
+fn row_store(ordered: &[[Vec3; 3]]) -> Vec<f32> {
+    let mut rows = Vec::with_capacity(ROW_FLOATS * ordered.len() + ROW_PADDING);
+    for &tri in ordered {
+        PackedTriangle::push_rows(&mut rows, tri);
+    }
+    rows.extend([0.0; ROW_PADDING]);
+    rows
 }
 
 /// Number of nodes on the longest root-to-leaf path.

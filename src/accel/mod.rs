@@ -1,7 +1,4 @@
-//! Ray acceleration structures. Only `bvh.rs` names obvhs (its binary BVH builder);
-//! `collapse.rs` makes the 8-wide tree from it, `leaf4.rs` holds the four-triangle leaves.
+//! Ray acceleration structures. Only `bvh.rs` names obvhs.
 
 pub mod bvh;
-mod collapse;
-mod leaf4;
 mod stack;

@@ -69,7 +69,7 @@ pub(crate) struct PackedTriangle {
     rows: [Vec4; 3],
 }
 
-/// Floats per triangle in a row store: x, y, z of p0, p1, p2, by coordinate (36 bytes).
+/// Floats per triangle in a row store ([`PackedTriangle::push_rows`]).
 pub(crate) const ROW_FLOATS: usize = 9;
 /// Floats that end a row store, so the last row's four-lane load stays inside it.
 pub(crate) const ROW_PADDING: usize = 1;
@@ -84,7 +84,14 @@ impl PackedTriangle {
         }
     }
 
-    /// Triangle `i` of a row store (rows of [`ROW_FLOATS`] floats) ended by
+    /// Appends the triangle to a row store, 36 bytes: x, y, z of p0, p1, p2, by coordinate.
+    pub fn push_rows(rows: &mut Vec<f32>, [p0, p1, p2]: [Vec3; 3]) {
+        for k in 0..3 {
+            rows.extend([p0[k], p1[k], p2[k]]);
+        }
+    }
+
+    /// Triangle `i` of a row store built by [`PackedTriangle::push_rows`] and ended by
     /// [`ROW_PADDING`] floats (each row is loaded as four lanes). Out of range (not built so):
     /// the zero triangle, which nothing hits.
     #[inline(always)]
