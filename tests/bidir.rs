@@ -450,6 +450,31 @@ struct ZTest {
     image_z: f64,
 }
 
+impl ZTest {
+    /// One line for the test's log: the worst pixel of `a` against `b`, the levels, and the
+    /// image means.
+    fn describe(&self, a: &Batches, b: &Batches) -> String {
+        let (wp, wc) = self.worst;
+        format!(
+            "{} tests, max |z| {:.2} (pixel {wp} channel {wc}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}), \
+             min p {:.2e}, Šidák level {:.2e}; image Y {:.5} ± {:.5} vs {:.5} ± {:.5} (z {:.2})",
+            self.tests,
+            self.max_abs_z,
+            a.mean[wp][wc],
+            a.var_mean[wp][wc].sqrt(),
+            b.mean[wp][wc],
+            b.var_mean[wp][wc].sqrt(),
+            self.min_p,
+            self.sidak_alpha,
+            a.image_y.0,
+            a.image_y.1,
+            b.image_y.0,
+            b.image_y.1,
+            self.image_z
+        )
+    }
+}
+
 /// z = Δ / sqrt(σ²_a + σ²_b) per pixel and XYZ channel, two-sided p from Student's t with the
 /// Welch–Satterthwaite degrees of freedom; Šidák-corrected level for a family-wise α.
 fn z_test(a: &Batches, b: &Batches, alpha: f64) -> ZTest {
@@ -573,25 +598,7 @@ fn path_light_and_bdpt_agree_per_pixel() {
             ("BDPT(zsobol)-BDPT(independent)", &bd, &bd_independent),
         ] {
             let z = z_test(a, b, alpha);
-            let (wp, wc) = z.worst;
-            eprintln!(
-                "{}: {label}: {} tests, max |z| {:.2} (pixel {wp} channel {wc}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}), min p {:.2e}, Šidák level {:.2e}; \
-                 image Y {:.5} ± {:.5} vs {:.5} ± {:.5} (z {:.2})",
-                case.name,
-                z.tests,
-                z.max_abs_z,
-                a.mean[wp][wc],
-                a.var_mean[wp][wc].sqrt(),
-                b.mean[wp][wc],
-                b.var_mean[wp][wc].sqrt(),
-                z.min_p,
-                z.sidak_alpha,
-                a.image_y.0,
-                a.image_y.1,
-                b.image_y.0,
-                b.image_y.1,
-                z.image_z
-            );
+            eprintln!("{}: {label}: {}", case.name, z.describe(a, b));
             assert!(
                 z.min_p > z.sidak_alpha,
                 "{}: {label} differ per pixel: {z:?}",
@@ -879,21 +886,7 @@ fn vcm_agrees_with_bdpt_per_pixel() {
                 base,
             );
             let z = z_test(&v, &bd, 0.01);
-            let (wp, wc) = z.worst;
-            eprintln!(
-                "{label}: max |z| {:.2} (pixel {wp} channel {wc}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}), min p {:.2e}, Šidák {:.2e}; image Y {:.5} ± {:.5} vs {:.5} ± {:.5}",
-                z.max_abs_z,
-                v.mean[wp][wc],
-                v.var_mean[wp][wc].sqrt(),
-                bd.mean[wp][wc],
-                bd.var_mean[wp][wc].sqrt(),
-                z.min_p,
-                z.sidak_alpha,
-                v.image_y.0,
-                v.image_y.1,
-                bd.image_y.0,
-                bd.image_y.1
-            );
+            eprintln!("{label}: {}", z.describe(&v, &bd));
             assert!(z.min_p > z.sidak_alpha, "{label} differ per pixel: {z:?}");
             assert!(z.image_z.abs() < 3.3, "{label} image means differ: {z:?}");
         }

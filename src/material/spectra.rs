@@ -272,6 +272,23 @@ mod tests {
     use super::*;
     use crate::bxdf::TransportMode;
 
+    /// The bits of f(ωo, ωi) of material `i`'s BSDF through `cache` and without it, at one
+    /// fixed pair of directions.
+    fn cached_and_uncached(
+        cache: &mut SpectraCache,
+        ms: &[Material],
+        i: usize,
+        l: &SampledWavelengths,
+    ) -> ([u32; N_LAMBDA], [u32; N_LAMBDA]) {
+        let (wo, wi) = (Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::Z);
+        let tc = TexCoord::point(glam::Vec2::ZERO);
+        let f = |b: Bsdf| b.f(wo, wi, TransportMode::Radiance).0.map(f32::to_bits);
+        (
+            f(cache.bsdf(&ms[i], i, tc, Vec3::Z, l)),
+            f(ms[i].bsdf(tc, Vec3::Z, l)),
+        )
+    }
+
     fn lambda(u: f32) -> SampledWavelengths {
         SampledWavelengths::sample_visible(u)
     }
@@ -292,19 +309,12 @@ mod tests {
     fn cached_bsdfs_are_the_uncached_ones() {
         let ms = materials();
         let mut cache = SpectraCache::default();
-        let (wo, wi) = (Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::Z);
         for (k, u) in [0.1f32, 0.1, 0.7, 0.35, 0.7].into_iter().enumerate() {
             let l = lambda(u);
             cache.begin(&ms, &l);
             for i in [1usize, 0, 1, 0] {
-                let tc = TexCoord::point(glam::Vec2::ZERO);
-                let a = cache.bsdf(&ms[i], i, tc, Vec3::Z, &l);
-                let b = ms[i].bsdf(tc, Vec3::Z, &l);
-                let (fa, fb) = (
-                    a.f(wo, wi, TransportMode::Radiance),
-                    b.f(wo, wi, TransportMode::Radiance),
-                );
-                assert_eq!(fa.0.map(f32::to_bits), fb.0.map(f32::to_bits), "{k} {i}");
+                let (fa, fb) = cached_and_uncached(&mut cache, &ms, i, &l);
+                assert_eq!(fa, fb, "{k} {i}");
             }
             assert_eq!(cache.filled(), 2);
         }
@@ -342,16 +352,9 @@ mod tests {
         assert_eq!(cache.entries(), 5);
         assert!(same_spectra(&ms[0], &ms[2]) && !same_spectra(&ms[0], &ms[1]));
         assert!(!same_spectra(&ms[0], &ms[3]) && !same_spectra(&ms[4], &ms[5]));
-        let (wo, wi) = (Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::Z);
-        let tc = TexCoord::point(glam::Vec2::ZERO);
         for i in [3usize, 0, 4, 2, 5, 1, 6, 0] {
-            let a = cache.bsdf(&ms[i], i, tc, Vec3::Z, &l);
-            let b = ms[i].bsdf(tc, Vec3::Z, &l);
-            let (fa, fb) = (
-                a.f(wo, wi, TransportMode::Radiance),
-                b.f(wo, wi, TransportMode::Radiance),
-            );
-            assert_eq!(fa.0.map(f32::to_bits), fb.0.map(f32::to_bits), "{i}");
+            let (fa, fb) = cached_and_uncached(&mut cache, &ms, i, &l);
+            assert_eq!(fa, fb, "{i}");
         }
         assert_eq!(cache.filled(), 5);
         // Beyond MAX_SHARED distinct materials every further one has an entry of its own.
