@@ -3,7 +3,7 @@
 //! ```text
 //! cargo run --release --example equal_time -- STAGE [--time S | --spp N] [--seeds N]
 //!     [--reference-time S | --reference-spp N] [--resolution WxH] [--max-depth N|unlimited]
-//!     [--reference REF.exr] [--threads N] [--integrators path,bdpt,vcm,vcm:bins=B,auto,…]
+//!     [--reference REF.exr] [--threads N] [--integrators path,bdpt,vcm,vcm:caustic,vcm:bins=B,auto,…]
 //!     [--reference-integrator bdpt|vcm|path] [--region NAME=X0,Y0,X1,Y1]...
 //!     [--exclude X0,Y0,X1,Y1]... [--seed N] [--keep DIR]
 //! ```
@@ -54,7 +54,9 @@
 //!
 //! `vcm:bins=B` is VCM with per-sample wavelength tuples and merges within B hero bins
 //! (`VcmWavelengths::PerSample`), the measured alternative to one tuple per iteration.
+//! `vcm:all` and `vcm:caustic` are VCM with that merge rule (`--vcm-merge`).
 
+use spectral_render::integrator::bidir::MergeRule;
 use spectral_render::integrator::vcm::{VcmParams, VcmWavelengths};
 use spectral_render::output::exr;
 use spectral_render::sampling::SamplerKind;
@@ -97,6 +99,14 @@ fn config(name: &str) -> Result<Config, String> {
 }
 
 fn integrator(name: &str) -> Result<Integrator, String> {
+    if let Some(rule) = name.strip_prefix("vcm:") {
+        if let Some(merges) = MergeRule::ALL.into_iter().find(|r| r.name() == rule) {
+            return Ok(Integrator::Vcm(VcmParams {
+                merges,
+                ..VcmParams::default()
+            }));
+        }
+    }
     if let Some(b) = name.strip_prefix("vcm:bins=") {
         let bins = b.parse().map_err(|e| format!("{name}: {e}"))?;
         return Ok(Integrator::Vcm(VcmParams {

@@ -34,6 +34,7 @@ use spectral_render::SamplerKind;
 /// The bidirectional context's default (`BidirContext::new`): textures unfiltered.
 const FINEST: TextureFilter = TextureFilter::Finest;
 use spectral_render::integrator::bidir::merge::{merge_weight, sensor_merge_weight};
+use spectral_render::integrator::bidir::merge_rule::{near_specular, MergeRule};
 use spectral_render::integrator::bidir::vertex::LightOrigin;
 use spectral_render::integrator::bidir::{
     BidirContext, MergeVertex, Mis, MisHeuristic, PathVertex, Walk,
@@ -87,6 +88,11 @@ fn looks() -> String {
                 "Mirror",
                 "spectral:conductor",
                 "        uniform token inputs:metal = \"Ag\"\n        float inputs:roughness = 0\n",
+            )
+            + &material(
+                "Satin",
+                "spectral:conductor",
+                "        uniform token inputs:metal = \"Ag\"\n        float inputs:roughness = 0.06\n",
             )
             + &material(
                 "Glass",
@@ -893,6 +899,43 @@ fn vcm_agrees_with_bdpt_per_pixel() {
     }
 }
 
+/// VCM merging only after near-specular vertices (`MergeRule::Caustic`) agrees with BDPT per
+/// pixel where that rule merges: the small-light scene with its tilted panel a near-specular
+/// glossy silver (GGX α 0.06 < `NEAR_SPECULAR_ALPHA`), whose reflection of the light lands on
+/// the diffuse walls (L S D paths: merged after the panel, connected elsewhere), at 20²
+/// pixels and a base radius of 1 cm. The bias bound is that of
+/// [`vcm_agrees_with_bdpt_per_pixel`], for light of the panel's spread; the store keeps
+/// only the light vertices after the panel, and the camera subpaths decide their merge terms
+/// one vertex late, which this checks in the renderer as the brute-force MIS check does for
+/// the weights.
+#[test]
+fn vcm_merging_after_near_specular_vertices_agrees_with_bdpt_per_pixel() {
+    let scene = load_text("satin", &small_light_stage_with("Satin"), (20, 20));
+    let (batches_n, spp, depth) = (32, 32, 7);
+    let bd = batches(
+        &scene,
+        Integrator::Bdpt {
+            mis: MisHeuristic::Power,
+        },
+        batches_n,
+        spp,
+        depth,
+        3000,
+    );
+    let caustic = Integrator::Vcm(VcmParams {
+        mode: VcmMode::Vcm,
+        radius: Some(0.01),
+        merges: MergeRule::Caustic,
+        ..VcmParams::default()
+    });
+    let v = batches(&scene, caustic, batches_n, spp, depth, 4000);
+    let z = z_test(&v, &bd, 0.01);
+    let label = "VCM (merges caustic)-BDPT, near-specular panel";
+    eprintln!("{label}: {}", z.describe(&v, &bd));
+    assert!(z.min_p > z.sidak_alpha, "{label} differ per pixel: {z:?}");
+    assert!(z.image_z.abs() < 3.3, "{label} image means differ: {z:?}");
+}
+
 // ---------------------------------------------------------------------------------------------
 // MIS: recurrence against brute force
 // ---------------------------------------------------------------------------------------------
@@ -938,6 +981,19 @@ fn specular_stage() -> String {
         ],
         None,
         &binding("Glass"),
+    );
+    // A near-specular (GGX α 0.06 < `NEAR_SPECULAR_ALPHA`) glossy silver sheet on the floor:
+    // a non-delta vertex after which VCM's caustic rule merges.
+    s += &polygon(
+        "Satin",
+        &[
+            [0.5, 0.01, -0.1],
+            [1.4, 0.01, -0.1],
+            [1.4, 0.01, -1.4],
+            [0.5, 0.01, -1.4],
+        ],
+        None,
+        &binding("Satin"),
     );
     s
 }
@@ -1057,6 +1113,35 @@ impl FullPath {
                     && bsdf_at(scene, &self.surfaces[i - 1], FINEST, &mut lambda).is_specular()
             })
             .collect()
+    }
+
+    /// Per vertex: true for a surface vertex that is near-specular (a delta BSDF, or a
+    /// material with a delta or near-specular lobe: the one definition,
+    /// `merge_rule::near_specular`); never the light x_0 or the sensor.
+    fn near_specular(&self, scene: &Scene) -> Vec<bool> {
+        let mut lambda = SampledWavelengths::sample_visible(0.5);
+        (0..self.n())
+            .map(|i| {
+                (1..self.n() - 1).contains(&i) && {
+                    let si = &self.surfaces[i - 1];
+                    near_specular(scene, si, &bsdf_at(scene, si, FINEST, &mut lambda))
+                }
+            })
+            .collect()
+    }
+
+    /// Brute force: merging at x_i (1 ≤ i ≤ n − 1; n − 1 an irradiance meter's point) exists
+    /// under `rule`: at a non-specular vertex, and under the caustic rule only when x_{i−1},
+    /// its light-order predecessor, is near-specular (x_0, the light, never is).
+    fn merge_available(&self, scene: &Scene, rule: MergeRule, i: usize) -> bool {
+        let n = self.n();
+        if i == 0 || i >= n || (i < n - 1 && self.specular(scene)[i]) {
+            return false;
+        }
+        match rule {
+            MergeRule::All => true,
+            MergeRule::Caustic => self.near_specular(scene)[i - 1],
+        }
     }
 
     /// The longest run of consecutive specular surface vertices.
@@ -1372,9 +1457,10 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Techniques {
     // Merging at x_i (1 ≤ i ≤ n − 2, non-specular): both subpaths sample x_i, the light one
     // forward (as technique s = i + 1) and the camera one in reverse; times η in the caller
     // [tech. rep. (19), (20)].
+    let rule = ctx.mis.merge_rule;
     let merges = (0..n)
         .map(|i| {
-            if i == 0 || i + 1 >= n || specular[i] {
+            if i + 1 >= n || !path.merge_available(scene, rule, i) {
                 return 0.0;
             }
             let f: f64 = (0..=i).map(|j| forward(j, i + 1, &mut lambda)).product();
@@ -1386,7 +1472,9 @@ fn technique_pdfs(ctx: &BidirContext, path: &FullPath) -> Techniques {
     // last one landing within the radius of the meter (its cosine at the meter's normal).
     let sensor_merge = match &path.sensor {
         // Light vertices of depth ≥ 2 only (`bidir::connect::sensor_merge`).
-        SensorEnd::Meter(m) if !m.delta_direction() && n >= 3 => {
+        SensorEnd::Meter(m)
+            if !m.delta_direction() && n >= 3 && path.merge_available(scene, rule, n - 1) =>
+        {
             (0..n).map(|j| forward(j, n, &mut lambda)).product()
         }
         _ => 0.0,
@@ -1478,16 +1566,13 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
     let light = &scene.lights[li as usize];
     let pmf = scene.light_sampler.pmf(li as usize);
     let mut lambda = SampledWavelengths::sample_visible(0.5);
-    let vertex = |i: usize, wo: Vec3, walk: &Walk, lambda: &mut SampledWavelengths| {
+    // The vertex as the walks build it (`Walk::vertex`: its merge flags, and a camera
+    // walk's pending merge term decided), along the path's own direction back.
+    let vertex = |i: usize, wo: Vec3, walk: &mut Walk, lambda: &mut SampledWavelengths| {
         let si = &path.surfaces[i - 1];
-        PathVertex::new(
-            si,
-            wo,
-            bsdf_at(scene, si, FINEST, lambda),
-            walk.beta,
-            walk.mis,
-            walk.depth,
-        )
+        let mut v: PathVertex = walk.vertex(ctx, si, bsdf_at(scene, si, FINEST, lambda));
+        v.wo = wo;
+        v
     };
     // Leaves `v` towards `wi` as the walk would have sampled it (a delta lobe: specular, with
     // a density that cancels, as `Walk::advance` assumes).
@@ -1559,6 +1644,10 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
                 let SensorEnd::Meter(m) = &path.sensor else {
                     unreachable!("a sensor merge needs a meter");
                 };
+                // The store keeps only vertices merging is available at.
+                if !walk.arrival_merges {
+                    return 0.0;
+                }
                 let wo = path.dir(i, i - 1);
                 let y = MergeVertex {
                     p: p_i,
@@ -1574,7 +1663,7 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
                 };
                 return sensor_merge_weight(&ctx.mis, m, &y);
             }
-            light_vertex = Some(vertex(i, path.dir(i, i - 1), &walk, &mut lambda));
+            light_vertex = Some(vertex(i, path.dir(i, i - 1), &mut walk, &mut lambda));
         }
     }
     // Sensor side z_0 … z_{t−1} = x_{n−1} … x_s, and the weight.
@@ -1610,10 +1699,14 @@ fn recurrent_weight(ctx: &BidirContext, path: &FullPath, s: usize, replay: Repla
         }
         let si = &path.surfaces[i - 1];
         walk.arrive(&ctx.mis, si.p, si.ng);
-        camera_vertex = Some(vertex(i, path.dir(i, i + 1), &walk, &mut lambda));
+        camera_vertex = Some(vertex(i, path.dir(i, i + 1), &mut walk, &mut lambda));
     }
     if merge {
         let (z, y) = (camera_vertex.unwrap(), light_vertex.unwrap());
+        // The store keeps only light vertices merging is available at.
+        if !y.merges {
+            return 0.0;
+        }
         let e = z.bsdf.eval(z.wo, y.wo, TransportMode::Radiance);
         return merge_weight(&ctx.mis, &z.mis, &MergeVertex::new(&y, 0, false), &e);
     }
@@ -1674,6 +1767,12 @@ struct MisCheck {
     specular_at_both_ends: usize,
     /// Paths with specular vertices per light kind, by longest run (1, 2, 3 or more).
     specular_per_light: std::collections::BTreeMap<&'static str, [usize; 3]>,
+    /// Non-specular interior vertices (and irradiance meter points) of the paths checked at
+    /// which merging is available under the check's rule, and at which it is not.
+    merges_available: usize,
+    merges_unavailable: usize,
+    /// Available merges after a near-specular glossy (non-delta) vertex.
+    merges_after_glossy: usize,
     worst_diff: f64,
     worst_sum: f64,
 }
@@ -1686,6 +1785,8 @@ enum Merging {
     None,
     /// VCM: connections and merges.
     Vcm(f32),
+    /// VCM with merges only after near-specular vertices (`MergeRule::Caustic`).
+    Caustic(f32),
     /// Bidirectional photon mapping: merges only.
     Vm(f32),
 }
@@ -1715,13 +1816,14 @@ fn check_mis(
         })
         .collect();
     let mut ctx = BidirContext::new(scene, Mis::bdpt(heuristic), 100);
-    let (eta, connect) = match merging {
-        Merging::None => (0.0, true),
-        Merging::Vcm(eta) => (eta, true),
-        Merging::Vm(eta) => (eta, false),
+    let (eta, connect, rule) = match merging {
+        Merging::None => (0.0, true, MergeRule::All),
+        Merging::Vcm(eta) => (eta, true, MergeRule::All),
+        Merging::Caustic(eta) => (eta, true, MergeRule::Caustic),
+        Merging::Vm(eta) => (eta, false, MergeRule::All),
     };
     if eta > 0.0 {
-        ctx.mis = Mis::vcm(heuristic, eta, connect, true);
+        ctx.mis = Mis::vcm(heuristic, eta, connect, true).with_merge_rule(rule);
     }
     let mut sampler = Sampler::new(seed, 0, heuristic as u64);
     let mut out = MisCheck {
@@ -1812,6 +1914,23 @@ fn check_mis(
                     .entry(kinds[path.light as usize])
                     .or_default()[run - 1] += 1;
             }
+            let near = path.near_specular(scene);
+            let last = if path.sensor.merges_at_point() {
+                path.n() - 1
+            } else {
+                path.n() - 2
+            };
+            for i in 1..=last {
+                if i < path.n() - 1 && specular[i] {
+                    continue;
+                }
+                if path.merge_available(scene, rule, i) {
+                    out.merges_available += 1;
+                    out.merges_after_glossy += usize::from(near[i - 1] && !specular[i - 1]);
+                } else {
+                    out.merges_unavailable += 1;
+                }
+            }
             out.per_length[k] += 1;
             *out.per_light.entry(kinds[path.light as usize]).or_default() += 1;
         }
@@ -1845,11 +1964,14 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
             Vec3::new(0.3, -0.6, -1.0),
         ),
     ];
-    // BDPT, VCM at a small and a large η (merges weak and dominant), and merging alone.
+    // BDPT, VCM at a small and a large η (merges weak and dominant), the same with merges
+    // only after near-specular vertices, and merging alone.
     let modes = [
         (Merging::None, 500),
         (Merging::Vcm(0.05), 100),
         (Merging::Vcm(20.0), 100),
+        (Merging::Caustic(0.05), 100),
+        (Merging::Caustic(20.0), 100),
         (Merging::Vm(2.0), 100),
     ];
     const KINDS: [&str; 8] = [
@@ -1871,7 +1993,7 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
         {
             let c = check_mis(&scene, sensor, heuristic, merging, paths, 11 + i as u64);
             eprintln!(
-                "{} {heuristic:?} {merging:?}: paths per length (n = 2..7) {:?}, per light {:?}; {} with specular vertices ({} techniques excluded; longest specular run 1, 2, ≥3: {:?}; specular next to both ends {}; per light {:?}); max |recurrent − brute force| {:.2e}, max |Σ w − 1| {:.2e}",
+                "{} {heuristic:?} {merging:?}: paths per length (n = 2..7) {:?}, per light {:?}; {} with specular vertices ({} techniques excluded; longest specular run 1, 2, ≥3: {:?}; specular next to both ends {}; per light {:?}); merges available {} ({} after a glossy near-specular vertex), unavailable {}; max |recurrent − brute force| {:.2e}, max |Σ w − 1| {:.2e}",
                 sensor.name(),
                 c.per_length,
                 c.per_light,
@@ -1880,9 +2002,26 @@ fn mis_recurrence_matches_brute_force_and_weights_sum_to_one() {
                 &c.runs[1..],
                 c.specular_at_both_ends,
                 c.specular_per_light,
+                c.merges_available,
+                c.merges_after_glossy,
+                c.merges_unavailable,
                 c.worst_diff,
                 c.worst_sum
             );
+            // The caustic rule's check sees merges it keeps (after delta and after glossy
+            // near-specular vertices) and merges it drops: a wrong flag either way shows.
+            if matches!(merging, Merging::Caustic(_)) {
+                assert!(
+                    c.merges_available >= paths / 5
+                        && c.merges_after_glossy >= paths / 20
+                        && c.merges_unavailable >= paths,
+                    "{}: merges available {} ({} after glossy), unavailable {}",
+                    sensor.name(),
+                    c.merges_available,
+                    c.merges_after_glossy,
+                    c.merges_unavailable
+                );
+            }
             // A luminance meter looking at a plain floor sees no emitter directly (n = 2),
             // and a two-vertex path has nothing to merge at.
             let first = if matches!(sensor, SensorEnd::Meter(m) if m.delta_direction())

@@ -24,6 +24,7 @@
 mod common;
 use common::*;
 use glam::DVec3;
+use spectral_render::integrator::bidir::MergeRule;
 use spectral_render::integrator::vcm::{VcmMode, VcmParams, IMAGE_RADIUS_FOOTPRINTS};
 use spectral_render::scene::Scene;
 use spectral_render::session::{self, RenderOptions};
@@ -298,26 +299,33 @@ fn vcm_renders_a_caustic_seen_in_a_mirror_that_pt_and_bdpt_miss() {
     // 1/r², and at this radius 8 × 128 spp judge the closed form to within 2 % while the
     // blur's bias stays below 10⁻³ of it.
     let r0 = 1.5 * 0.75 * 0.2 / RES as f64;
-    let vcm = Integrator::Vcm(VcmParams {
-        radius: Some(r0 as f32),
-        ..VcmParams::default()
-    });
-    let (v, v_sem) = image_mean(&scene, vcm, 128, 8);
+    // The largest radius VCM used is its base radius.
+    let bias = merge_bias_bound(r0) * exact;
+    // Both merge rules: the caustic's merges at the floor follow the mirror (specular), so
+    // merging only after near-specular vertices keeps them (`bidir/merge_rule.rs`).
+    for merges in MergeRule::ALL {
+        let vcm = Integrator::Vcm(VcmParams {
+            radius: Some(r0 as f32),
+            merges,
+            ..VcmParams::default()
+        });
+        let (v, v_sem) = image_mean(&scene, vcm, 128, 8);
+        let rule = merges.name();
+        eprintln!(
+            "E-S-D-S-L: exact {exact:.5} cd/m² (direct alone {exact_direct:.5}); VCM (merges {rule}) {v:.5} ± {v_sem:.5} (bias bound {bias:.2e})"
+        );
+        assert!(
+            (v - exact).abs() < 3.3 * v_sem + bias,
+            "VCM (merges {rule}) {v} ± {v_sem} vs the closed form {exact} (bias bound {bias})"
+        );
+        assert!(v_sem < 0.02 * exact, "VCM too noisy to judge: {v_sem}");
+    }
     let bdpt = Integrator::Bdpt {
         mis: MisHeuristic::Power,
     };
     let (b, b_sem) = image_mean(&scene, bdpt, 48, 4);
     let (p, p_sem) = image_mean(&scene, Integrator::Path, 96, 4);
-    // The largest radius VCM used is its base radius.
-    let bias = merge_bias_bound(r0) * exact;
-    eprintln!(
-        "E-S-D-S-L: exact {exact:.5} cd/m² (direct alone {exact_direct:.5}); VCM {v:.5} ± {v_sem:.5} (bias bound {bias:.2e}), BDPT {b:.5} ± {b_sem:.5}, PT {p:.5} ± {p_sem:.5}"
-    );
-    assert!(
-        (v - exact).abs() < 3.3 * v_sem + bias,
-        "VCM {v} ± {v_sem} vs the closed form {exact} (bias bound {bias})"
-    );
-    assert!(v_sem < 0.02 * exact, "VCM too noisy to judge: {v_sem}");
+    eprintln!("E-S-D-S-L: BDPT {b:.5} ± {b_sem:.5}, PT {p:.5} ± {p_sem:.5}");
     // PT and BDPT cannot sample the caustic in practice: nothing of it at these counts.
     for (name, m, sem) in [("BDPT", b, b_sem), ("PT", p, p_sem)] {
         assert!(
@@ -438,36 +446,43 @@ fn vcm_meter_reads_the_lux_under_a_glass_slab() {
     let radius = 0.015f64;
     let d0 = a + b + t / n;
     let bias = 1.5 * 0.75 * (radius / d0).powi(2);
-    let vcm = Integrator::Vcm(VcmParams {
-        radius: Some(radius as f32),
-        alpha: 1.0,
-        ..VcmParams::default()
-    });
     let meter = spectral_render::Meter::illuminance(glam::Vec3::ZERO, glam::Vec3::Y).unwrap();
-    let opts = spectral_render::session::MeterOptions {
+    let options = |merges| spectral_render::session::MeterOptions {
         stop: spectral_render::session::Stop::RelError(0.03),
         max_depth: Some(10),
         seed: 5,
-        integrator: vcm,
+        integrator: Integrator::Vcm(VcmParams {
+            radius: Some(radius as f32),
+            alpha: 1.0,
+            merges,
+            ..VcmParams::default()
+        }),
         ..Default::default()
     };
-    let run = spectral_render::session::measure(&scene, &[meter], &opts).unwrap();
-    assert_eq!(run.dropped, 0);
-    let r = run.readings[0];
-    let sigma = r.ci95 / 1.96;
-    eprintln!(
-        "lux under the slab: VCM {:.3} ± {:.3} ({} samples) vs closed form {paraxial:.3} (bias bound {:.2} %)",
-        r.value,
-        r.ci95,
-        r.samples,
-        100.0 * bias
-    );
-    assert!(
-        (r.value - paraxial).abs() < 3.3 * sigma + bias * paraxial,
-        "{} ± {} vs {paraxial}",
-        r.value,
-        r.ci95
-    );
+    // Both merge rules: the merges at the meter's point follow the slab's lower interface
+    // (specular), so the caustic rule keeps them (`bidir/merge_rule.rs`).
+    for merges in MergeRule::ALL {
+        let run = spectral_render::session::measure(&scene, &[meter], &options(merges)).unwrap();
+        assert_eq!(run.dropped, 0);
+        let r = run.readings[0];
+        let sigma = r.ci95 / 1.96;
+        eprintln!(
+            "lux under the slab: VCM (merges {}) {:.3} ± {:.3} ({} samples) vs closed form {paraxial:.3} (bias bound {:.2} %)",
+            merges.name(),
+            r.value,
+            r.ci95,
+            r.samples,
+            100.0 * bias
+        );
+        assert!(
+            (r.value - paraxial).abs() < 3.3 * sigma + bias * paraxial,
+            "merges {}: {} ± {} vs {paraxial}",
+            merges.name(),
+            r.value,
+            r.ci95
+        );
+    }
+    let opts = options(MergeRule::All);
     // Path tracing cannot: its meter rays never find the 0.1 mm bulb through the slab.
     let pt = spectral_render::session::measure(
         &scene,

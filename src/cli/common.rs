@@ -3,6 +3,7 @@
 //! wrong name says which names there are), the one-line load summary, and warnings.
 
 use crate::error::{Error, Result};
+use crate::integrator::bidir::MergeRule;
 use crate::integrator::cut;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
@@ -55,6 +56,24 @@ impl ValueEnum for VcmMode {
     }
 }
 
+impl ValueEnum for MergeRule {
+    fn value_variants<'a>() -> &'a [Self] {
+        &MergeRule::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        let help = match self {
+            MergeRule::All => "at every non-specular vertex (Georgiev et al. 2012)",
+            MergeRule::Caustic => {
+                "only after a specular or near-specular vertex in light order (L S+ D: \
+                 caustics, Jensen's caustic photon map); diffuse light is left to the \
+                 connections"
+            }
+        };
+        Some(PossibleValue::new(self.name()).help(help))
+    }
+}
+
 impl ValueEnum for SamplerKind {
     fn value_variants<'a>() -> &'a [Self] {
         &SamplerKind::ALL
@@ -85,6 +104,9 @@ pub struct IntegratorArgs {
     /// What VCM does at a vertex.
     #[arg(long = "vcm-mode", value_parser = named::<VcmMode>("VCM mode"))]
     pub vcm_mode: Option<VcmMode>,
+    /// Where VCM (mode vcm) merges (default all; vm merges everywhere).
+    #[arg(long = "vcm-merge", value_parser = named::<MergeRule>("VCM merge rule"))]
+    pub vcm_merge: Option<MergeRule>,
     /// VCM's base merging radius r0 in metres (default: 0.75 pixel footprints at the first
     /// hit for images, 0.003 × the scene's radius for meters).
     #[arg(long = "vcm-radius", allow_negative_numbers = true)]
@@ -106,6 +128,7 @@ impl IntegratorArgs {
         let Integrator::Vcm(p) = integrator else {
             for (given, flag) in [
                 (self.vcm_mode.is_some(), "--vcm-mode"),
+                (self.vcm_merge.is_some(), "--vcm-merge"),
                 (self.vcm_radius.is_some(), "--vcm-radius"),
                 (self.vcm_alpha.is_some(), "--vcm-alpha"),
                 (self.vcm_light_paths.is_some(), "--vcm-light-paths"),
@@ -139,6 +162,7 @@ impl IntegratorArgs {
         }
         Ok(Integrator::Vcm(VcmParams {
             mode: self.vcm_mode.unwrap_or(p.mode),
+            merges: self.vcm_merge.unwrap_or(p.merges),
             radius: self.vcm_radius.or(p.radius),
             alpha: self.vcm_alpha.unwrap_or(p.alpha),
             meter_light_paths: self.vcm_light_paths.unwrap_or(p.meter_light_paths),

@@ -147,7 +147,7 @@ impl BdptIntegrator {
                 return;
             }
             let bsdf = cached_bsdf_at(ctx.scene, &si, ctx.filter, lambda, &mut ws.light.spectra);
-            let z = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
+            let z = walk.vertex(ctx, &si, bsdf);
             if !bsdf.is_specular() {
                 specular_only = false;
                 if tech.connect {

@@ -97,6 +97,7 @@ impl Integrator {
             alpha: vcm::DEFAULT_ALPHA,
             meter_light_paths: vcm::DEFAULT_METER_LIGHT_PATHS,
             wavelengths: vcm::VcmWavelengths::PerIteration,
+            merges: vcm::DEFAULT_MERGE_RULE,
         }),
         Integrator::Auto {
             mis: MisHeuristic::Power,

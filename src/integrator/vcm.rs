@@ -36,7 +36,8 @@ use super::bdpt::{BdptIntegrator, Techniques};
 use super::bidir::store::Traced;
 use super::bidir::vertex::bsdf_at;
 use super::bidir::{
-    trace_light_subpath, BidirContext, LightVertexStore, MergeParams, Mis, MisHeuristic, Workspace,
+    trace_light_subpath, BidirContext, LightVertexStore, MergeParams, MergeRule, Mis, MisHeuristic,
+    Workspace,
 };
 use super::{Estimator, Iteration, Settings};
 use crate::bxdf::TransportMode;
@@ -88,6 +89,8 @@ pub struct VcmParams {
     /// How camera samples and light subpaths choose their wavelengths (a test option: the
     /// measured alternative to the default, docs/design.md "### VCM").
     pub wavelengths: VcmWavelengths,
+    /// Where mode `vcm` merges (`bidir/merge_rule.rs`, `--vcm-merge`); `vm` merges everywhere.
+    pub merges: MergeRule,
 }
 
 impl Default for VcmParams {
@@ -99,6 +102,7 @@ impl Default for VcmParams {
             alpha: DEFAULT_ALPHA,
             meter_light_paths: DEFAULT_METER_LIGHT_PATHS,
             wavelengths: VcmWavelengths::PerIteration,
+            merges: DEFAULT_MERGE_RULE,
         }
     }
 }
@@ -135,6 +139,9 @@ pub const METER_RADIUS_FACTOR: f32 = 0.003;
 /// sets r_0 = 0.003 × the scene's radius). 0.75 keeps a mirror-seen caustic 34× below the path
 /// tracer's MSE, with a 3× margin over issue 10's 10×; 1.5 before.
 pub const IMAGE_RADIUS_FOOTPRINTS: f32 = 0.75;
+/// Where mode `vcm` merges by default (`--vcm-merge`; docs/design.md "### VCM", "Merges only
+/// after near-specular vertices": chosen by measurement).
+pub const DEFAULT_MERGE_RULE: MergeRule = MergeRule::All;
 /// Light subpaths traced per parallel task when filling the store (one batch of the store).
 const STORE_CHUNK: u64 = 1024;
 /// Offsets the store's sampler streams from the samples' own.
@@ -288,7 +295,13 @@ impl<'a> VcmEstimator<'a> {
         let r = radius(self.r0, self.params.alpha, k);
         let area = PI * r * r * self.light_paths as f32 / self.bins as f32;
         let connect = self.params.mode != VcmMode::Vm;
-        self.ctx.mis = Mis::vcm(self.params.mis, area, connect, true);
+        // Photon mapping keeps every merge: for most paths it is its only technique.
+        let rule = if connect {
+            self.params.merges
+        } else {
+            MergeRule::All
+        };
+        self.ctx.mis = Mis::vcm(self.params.mis, area, connect, true).with_merge_rule(rule);
         self.merge = MergeParams {
             mis: self.ctx.mis,
             normalization: 1.0 / area,
@@ -345,10 +358,11 @@ impl Estimator for VcmEstimator<'_> {
     fn report(&self) -> Option<String> {
         let mb = |b: usize| b as f64 / 1e6;
         Some(format!(
-            "{}: r0 = {:.4} mm, alpha = {}, {} light subpaths per iteration; light vertex store \
-             peak {:.1} MB ({} B per vertex); consistent, not unbiased: merges blur over the \
-             radius, which shrinks with the iterations",
+            "{} (merges: {}): r0 = {:.4} mm, alpha = {}, {} light subpaths per iteration; light \
+             vertex store peak {:.1} MB ({} B per merging vertex); consistent, not unbiased: \
+             merges blur over the radius, which shrinks with the iterations",
             self.params.mode.name(),
+            self.ctx.mis.merge_rule.name(),
             self.r0 * 1e3,
             self.params.alpha,
             self.light_paths,

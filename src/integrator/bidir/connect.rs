@@ -91,12 +91,13 @@ pub fn sensor_weight(ctx: &BidirContext, y: &PathVertex, p_sensor: Vec3, pdf_dir
     let wi = d / dist2.sqrt();
     let cam_a = pdf_dir_w * y.cos_geo(wi) / dist2;
     let land = || y.bsdf.pdf(y.wo, wi, TransportMode::Importance);
-    let merge = sensor_merge(ctx, wi, dist2, land);
+    let merge = sensor_merge(ctx, wi, dist2, land, y.near_specular);
     ctx.mis.light_to_camera(
         &y.mis,
         cam_a,
         y.reverse_pdf(wi, TransportMode::Importance),
         merge,
+        y.merges,
     )
 }
 
@@ -105,12 +106,21 @@ pub fn sensor_weight(ctx: &BidirContext, y: &PathVertex, p_sensor: Vec3, pdf_dir
 /// there: m(p_a η) with p_a on the meter's normal [`Mis::sensor_merge_ratio`]; 0 without such
 /// merges. The meter merges light vertices of depth ≥ 2 only: at depth 1 the competing
 /// connection of the light's own point would need its emission density in place of the
-/// next-event one the vertex carries, and direct light is the connections' anyway.
-fn sensor_merge(ctx: &BidirContext, wi: Vec3, dist2: f32, pdf_w: impl FnOnce() -> f32) -> f32 {
+/// next-event one the vertex carries, and direct light is the connections' anyway. Under the
+/// caustic rule the merge exists only when the light vertex, its predecessor, is
+/// near-specular (`near_specular`, `merge_rule.rs`).
+fn sensor_merge(
+    ctx: &BidirContext,
+    wi: Vec3,
+    dist2: f32,
+    pdf_w: impl FnOnce() -> f32,
+    near_specular: bool,
+) -> f32 {
     match ctx.sensor.infinite_light_meter() {
         Some(m) if ctx.sensor_merges => {
             let cos = m.dir.dot(wi).abs();
-            ctx.mis.sensor_merge_ratio(pdf_w() * cos / dist2)
+            ctx.mis
+                .sensor_merge_ratio(pdf_w() * cos / dist2, near_specular)
         }
         _ => 0.0,
     }
@@ -323,7 +333,8 @@ pub fn connect_weight(ctx: &BidirContext, y: &PathVertex, z: &PathVertex) -> f32
         light_fwd_a: y.bsdf.pdf(y.wo, -w, TransportMode::Importance) * z.cos_geo(w) / dist2,
         light_rev_w: y.reverse_pdf(-w, TransportMode::Importance),
     };
-    ctx.mis.connect(&y.mis, &z.mis, pdfs)
+    ctx.mis
+        .connect(&y.mis, &z.mis, pdfs, y.merges, y.near_specular)
 }
 
 /// s = 0: the camera walk, just arrived at light `light` (point `hit`), sees its emission

@@ -111,6 +111,9 @@ impl LightVertexStore {
         params: &MergeParams,
     ) -> Merged {
         let mut out = Merged::default();
+        if self.vertices.is_empty() {
+            return out;
+        }
         let lift = MERGE_LIFT * self.grid.radius();
         let z_lifted = z.p + arrival_normal(z) * lift;
         self.grid.query(z.p, params.key, |s| {

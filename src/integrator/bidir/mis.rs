@@ -26,6 +26,14 @@
 //! ([`Mis::vcm`]). Russian roulette is
 //! not folded into the pdfs (as pbrt-v4's BDPT): the weights are still a partition of unity for
 //! every path, which is all unbiasedness needs.
+//!
+//! **Merges only where they are available** (`merge_rule.rs`, [`MergeRule::Caustic`]): every
+//! merge term of the recurrences below is multiplied by the availability a(x_i) ∈ {0, 1} of
+//! merging at the vertex x_i it stands for. Which vertex that is, and which flag it takes, is
+//! derived in `merge_rule.rs`; [`Mis::merge_at`] is the η term of a merge at a vertex whose
+//! light-order predecessor is (or is not) near-specular.
+
+pub use super::merge_rule::MergeRule;
 
 /// Which heuristic turns technique pdfs into weights.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -46,10 +54,13 @@ impl MisHeuristic {
     }
 }
 
-/// The MIS configuration of a render: the heuristic and the merging factors of VCM.
+/// The MIS configuration of a render: the heuristic, the merging factors of VCM and where
+/// merging is available.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mis {
     pub heuristic: MisHeuristic,
+    /// At which vertices the merging technique exists (`merge_rule.rs`).
+    pub merge_rule: MergeRule,
     /// m(η_VCM), η_VCM = π r² n_VM / n_VC [tech. rep. (20)] ("mMisVmWeightFactor"):
     /// the weight of a merge relative to a connection; 0 when nothing merges (BDPT).
     pub vm_weight: f32,
@@ -62,8 +73,36 @@ impl Mis {
     pub fn bdpt(heuristic: MisHeuristic) -> Mis {
         Mis {
             heuristic,
+            merge_rule: MergeRule::All,
             vm_weight: 0.0,
             vc_weight: 0.0,
+        }
+    }
+
+    /// The same configuration with merging available where `rule` says.
+    pub fn with_merge_rule(self, rule: MergeRule) -> Mis {
+        Mis {
+            merge_rule: rule,
+            ..self
+        }
+    }
+
+    /// True when merges depend on the vertices' materials ([`MergeRule::Caustic`] while
+    /// anything merges).
+    #[inline]
+    pub fn caustic(&self) -> bool {
+        self.merge_rule == MergeRule::Caustic && self.vm_weight > 0.0
+    }
+
+    /// m(η_VCM) for merging at a vertex whose light-order predecessor is near-specular
+    /// (`after_near_specular`), 0 when the merge rule makes that merge unavailable
+    /// (`merge_rule.rs`: a(x_i) · m(η)).
+    #[inline]
+    pub fn merge_at(&self, after_near_specular: bool) -> f32 {
+        if after_near_specular || self.merge_rule == MergeRule::All {
+            self.vm_weight
+        } else {
+            0.0
         }
     }
 
@@ -75,6 +114,7 @@ impl Mis {
         let m = |x: f32| Mis::bdpt(heuristic).m(x);
         Mis {
             heuristic,
+            merge_rule: MergeRule::All,
             vm_weight: if merge { m(eta) } else { 0.0 },
             vc_weight: if connect { m(1.0 / eta) } else { 0.0 },
         }
@@ -117,40 +157,53 @@ impl Mis {
     }
 
     /// Connecting light vertex y_{s−1} to camera vertex z_{t−1} (s, t ≥ 2)
-    /// [tech. rep. (37), (40), (41)]; the densities are described at [`ConnectionPdfs`].
+    /// [tech. rep. (37), (40), (41)]; the densities are described at [`ConnectionPdfs`]. The
+    /// η term of w_light is merging at y_{s−1} (`light_merges`: y_{s−1}'s own availability),
+    /// that of w_camera merging at z_{t−1}, whose light-order predecessor is y_{s−1}
+    /// (`light_near_specular`) (`merge_rule.rs`).
     #[inline]
-    pub fn connect(&self, light: &SubpathMis, cam: &SubpathMis, pdfs: ConnectionPdfs) -> f32 {
+    pub fn connect(
+        &self,
+        light: &SubpathMis,
+        cam: &SubpathMis,
+        pdfs: ConnectionPdfs,
+        light_merges: bool,
+        light_near_specular: bool,
+    ) -> f32 {
         let w_light = self.m(pdfs.cam_fwd_a)
-            * (self.vm_weight + light.dvcm + light.dvc * self.m(pdfs.light_rev_w));
+            * (self.merge_at(light_merges) + light.dvcm + light.dvc * self.m(pdfs.light_rev_w));
         let w_camera = self.m(pdfs.light_fwd_a)
-            * (self.vm_weight + cam.dvcm + cam.dvc * self.m(pdfs.cam_rev_w));
+            * (self.merge_at(light_near_specular) + cam.dvcm + cam.dvc * self.m(pdfs.cam_rev_w));
         weight(w_light + 1.0 + w_camera)
     }
 
     /// Light vertex y_{s−1} (s ≥ 2) connected to the camera, t = 1 [tech. rep. (46), (47),
     /// (37)]; `cam_a` is the density with which a camera ray would find y_{s−1} (with n_L = 1).
-    #[inline]
     /// `sensor_merge` is the ratio of merging at the meter's point, when VCM does
-    /// ([`Mis::sensor_merge_ratio`]), 0 otherwise.
+    /// ([`Mis::sensor_merge_ratio`]), 0 otherwise; `light_merges` whether merging at y_{s−1}
+    /// is available (`merge_rule.rs`).
+    #[inline]
     pub fn light_to_camera(
         &self,
         light: &SubpathMis,
         cam_a: f32,
         light_rev_w: f32,
         sensor_merge: f32,
+        light_merges: bool,
     ) -> f32 {
-        let w_light =
-            self.m(cam_a) * (self.vm_weight + light.dvcm + light.dvc * self.m(light_rev_w));
+        let w_light = self.m(cam_a)
+            * (self.merge_at(light_merges) + light.dvcm + light.dvc * self.m(light_rev_w));
         weight(w_light + 1.0 + sensor_merge)
     }
 
     /// Merging at an irradiance meter's point relative to the connection of the same light
     /// vertex to it: m(p_a · η), with `land_a` the density per area at the meter point (on its
-    /// normal) with which the light subpath would have landed there.
+    /// normal) with which the light subpath would have landed there; `light_near_specular`:
+    /// the light vertex connected, the merge's light-order predecessor, is near-specular.
     #[inline]
-    pub fn sensor_merge_ratio(&self, land_a: f32) -> f32 {
+    pub fn sensor_merge_ratio(&self, land_a: f32, light_near_specular: bool) -> f32 {
         if land_a > 0.0 {
-            self.m(land_a) * self.vm_weight
+            self.m(land_a) * self.merge_at(light_near_specular)
         } else {
             0.0
         }
@@ -170,7 +223,9 @@ impl Mis {
     /// `direct_w` = pmf · the light-sampling density at z (1 relative to a delta);
     /// `emit` = pmf · p_pos_a · p_dir_w of emitting the same ray from the light;
     /// `cos_cam` (geometric, at z) and `cos_light` (1 for infinite lights) convert it;
-    /// `bsdf_fwd_w` / `bsdf_rev_w` are z's BSDF densities towards the light / back.
+    /// `bsdf_fwd_w` / `bsdf_rev_w` are z's BSDF densities towards the light / back. The η term
+    /// is merging at z, whose light-order predecessor is the light itself: never
+    /// near-specular (`merge_rule.rs`).
     #[inline]
     pub fn direct(&self, cam: &SubpathMis, p: DirectPdfs) -> f32 {
         let w_light = if p.delta {
@@ -179,7 +234,7 @@ impl Mis {
             self.m(p.bsdf_fwd_w / p.direct_w)
         };
         let w_camera = self.m(p.emit * p.cos_cam / (p.direct_w * p.cos_light))
-            * (self.vm_weight + cam.dvcm + cam.dvc * self.m(p.bsdf_rev_w));
+            * (self.merge_at(false) + cam.dvcm + cam.dvc * self.m(p.bsdf_rev_w));
         weight(w_light + 1.0 + w_camera)
     }
 
@@ -311,9 +366,10 @@ impl SubpathMis {
 
     /// At a newly found vertex, distance² `dist2` from the previous one, geometric cosine
     /// `cos_geo` [tech. rep. (31)–(36), the part after tracing]: dVCM · m(d²) (not for the first
-    /// segment of an infinite light, §5.1), all three divided by m(|cos θ|).
+    /// segment of an infinite light, §5.1), all three divided by m(|cos θ|). Returns that
+    /// divisor m(|cos θ|), which a pending merge term is divided by too.
     #[inline]
-    pub fn at_hit(&mut self, mis: &Mis, dist2: f32, cos_geo: f32, from_infinite: bool) {
+    pub fn at_hit(&mut self, mis: &Mis, dist2: f32, cos_geo: f32, from_infinite: bool) -> f32 {
         if !from_infinite {
             self.dvcm *= mis.m(dist2);
         }
@@ -321,11 +377,16 @@ impl SubpathMis {
         self.dvcm /= c;
         self.dvc /= c;
         self.dvm /= c;
+        c
     }
 
     /// After sampling the next direction with density `pdf_fwd_w` (reverse density
     /// `pdf_rev_w`, geometric cosine of the new direction `cos_out`): non-specular
-    /// [tech. rep. (34)–(36)], specular [tech. rep. (53)–(55)].
+    /// [tech. rep. (34)–(36)], specular [tech. rep. (53)–(55)]. The terms of merging at the
+    /// vertex left (m(η) in dVC, the 1 of dVM) are multiplied by `merge` ∈ {0, 1}, its
+    /// availability (`merge_rule.rs`). Returns m(|cos| / p_fwd) of a non-specular vertex
+    /// (0 for a specular one, where nothing merges): what those terms are multiplied by, for a
+    /// walk that learns the availability only at the next vertex ([`SubpathMis::add_merge`]).
     #[inline]
     pub fn scatter(
         &mut self,
@@ -334,18 +395,31 @@ impl SubpathMis {
         pdf_fwd_w: f32,
         pdf_rev_w: f32,
         specular: bool,
-    ) {
+        merge: f32,
+    ) -> f32 {
         let g = mis.m(cos_out.abs() / pdf_fwd_w);
         let rev = mis.m(pdf_rev_w);
         if specular {
             self.dvcm = 0.0;
             self.dvc *= g * rev;
             self.dvm *= g * rev;
+            0.0
         } else {
-            self.dvc = g * (self.dvc * rev + self.dvcm + mis.vm_weight);
-            self.dvm = g * (self.dvm * rev + self.dvcm * mis.vc_weight + 1.0);
+            self.dvc = g * (self.dvc * rev + self.dvcm + mis.vm_weight * merge);
+            self.dvm = g * (self.dvm * rev + self.dvcm * mis.vc_weight + merge);
             self.dvcm = mis.m(1.0 / pdf_fwd_w);
+            g
         }
+    }
+
+    /// Adds the terms of a merge found available after the walk moved on (camera subpaths
+    /// under [`MergeRule::Caustic`], `merge_rule.rs`): `pending` is what [`SubpathMis::scatter`]
+    /// returned, divided since by the same cosines as dVC and dVM. dVC gains m(η) · pending,
+    /// dVM pending, as if `scatter` had been called with `merge` = 1.
+    #[inline]
+    pub fn add_merge(&mut self, mis: &Mis, pending: f32) {
+        self.dvc += pending * mis.vm_weight;
+        self.dvm += pending;
     }
 }
 

@@ -10,6 +10,7 @@
 //! | `splat.rs` | t = 1: the light subpath connected to the sensor |
 //! | `store.rs` | the iteration's light subpaths ([`store::LightVertexStore`]): merge vertices and whole subpaths for connections |
 //! | `merge.rs` | vertex merging: the merge technique over the stored light vertices |
+//! | `merge_rule.rs` | where merging is available ([`MergeRule`]: everywhere, or after near-specular vertices) and its MIS |
 //! | `hashgrid.rs` | the fixed-radius hash grid over them |
 //! | `record.rs` | a sample's contributions → tile sums and splats |
 //! | `strategies.rs` | the per-(s, t) decomposition written by `--strategies` |
@@ -26,6 +27,7 @@
 pub mod connect;
 pub mod hashgrid;
 pub mod merge;
+pub mod merge_rule;
 pub mod mis;
 pub mod record;
 pub mod splat;
@@ -36,6 +38,7 @@ pub mod vertex;
 
 pub use connect::Contribution;
 pub use merge::{MergeParams, MergeVertex};
+pub use merge_rule::MergeRule;
 pub use mis::{Mis, MisHeuristic};
 pub use record::{SampleRecord, TileAccumulator};
 pub use splat::splat_light_subpath;

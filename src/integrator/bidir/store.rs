@@ -9,10 +9,12 @@
 //! are rebuilt from their surface hits with the same wavelengths ([`cached_bsdf_at`]), the
 //! same vertices bit for bit, at a fraction of the cost of tracing the subpath again (no rays,
 //! no sampling; the materials' spectra at the iteration's wavelengths come from the thread's
-//! cache, `material::spectra`). Per light vertex the store holds a [`MergeVertex`] twice (its batch's, and a
-//! copy in the grid's slot order, so that a merge reads the records of a cell's candidates
-//! contiguously), its surface hit and dVC ([`VertexHit`]), its key and the grid's 24 bytes
-//! (its position and key in slot order, its index, its slot); per subpath its origin. The
+//! cache, `material::spectra`). Per light vertex the store holds a [`MergeVertex`] (its
+//! batch's), its surface hit, dVC and merge flags ([`VertexHit`]) and its key; per vertex
+//! merging is available at (all of them, unless `merge_rule.rs` says otherwise) also its index
+//! in a list of those, a copy of its [`MergeVertex`] in the grid's slot order (so that a merge
+//! reads the records of a cell's candidates contiguously) and the grid's 24 bytes (its
+//! position and key in slot order, its index, its slot); per subpath its origin. The
 //! subpaths are traced, and the grid built and the copy gathered, in parallel and in a fixed
 //! order: the same store for any thread count. Buffers are reused from iteration to
 //! iteration.
@@ -31,11 +33,14 @@ use rayon::prelude::*;
 const STORE_GATHER_CHUNK: usize = 4096;
 
 /// What a stored light vertex needs besides its [`MergeVertex`] to be rebuilt as the
-/// [`PathVertex`] it was: its surface hit (for the BSDF) and dVC.
+/// [`PathVertex`] it was: its surface hit (for the BSDF), dVC and its merge flags
+/// (`merge_rule.rs`).
 #[derive(Clone, Copy, Debug)]
 pub struct VertexHit {
     pub hit: SurfaceHit,
     pub dvc: f32,
+    pub merges: bool,
+    pub near_specular: bool,
 }
 
 /// What tracing a light subpath into the store reports besides its vertices.
@@ -67,6 +72,9 @@ struct SubpathBatch {
     hits: Vec<VertexHit>,
     /// Each vertex's key (its subpath's).
     keys: Vec<u32>,
+    /// The vertices merging is available at (`PathVertex::merges`, `merge_rule.rs`), by
+    /// index in `vertices`: the grid holds these only.
+    mergeable: Vec<u32>,
 }
 
 impl SubpathBatch {
@@ -75,17 +83,23 @@ impl SubpathBatch {
         self.vertices.clear();
         self.hits.clear();
         self.keys.clear();
+        self.mergeable.clear();
     }
 
     fn push(&mut self, path: &LightSubpath, traced: Traced) {
         debug_assert_eq!(path.vertices.len(), path.hits.len());
         let hero_only = traced.hero_only;
         for (v, hit) in path.vertices.iter().zip(&path.hits) {
+            if v.merges {
+                self.mergeable.push(self.vertices.len() as u32);
+            }
             self.vertices
                 .push(MergeVertex::new(v, hit.tri.mesh, hero_only));
             self.hits.push(VertexHit {
                 hit: *hit,
                 dvc: v.mis.dvc,
+                merges: v.merges,
+                near_specular: v.near_specular,
             });
             self.keys.push(traced.key);
         }
@@ -101,6 +115,7 @@ impl SubpathBatch {
             + self.vertices.capacity() * std::mem::size_of::<MergeVertex>()
             + self.hits.capacity() * std::mem::size_of::<VertexHit>()
             + self.keys.capacity() * std::mem::size_of::<u32>()
+            + self.mergeable.capacity() * std::mem::size_of::<u32>()
     }
 }
 
@@ -108,11 +123,12 @@ impl SubpathBatch {
 /// reused from iteration to iteration.
 #[derive(Clone, Debug, Default)]
 pub struct LightVertexStore {
-    /// Every stored vertex, in the grid's slot order (position s of a grid query).
+    /// Every stored vertex merging is available at, in the grid's slot order (position s of a
+    /// grid query).
     pub vertices: Vec<MergeVertex>,
     pub(super) grid: HashGrid,
     batches: Vec<SubpathBatch>,
-    /// `batch_start[b]`: the index of batch b's first vertex in subpath order.
+    /// `batch_start[b]`: the index of batch b's first mergeable vertex in subpath order.
     batch_start: Vec<usize>,
     /// Subpaths per batch (all but the last batch hold this many).
     batch_size: u64,
@@ -121,11 +137,13 @@ pub struct LightVertexStore {
 }
 
 impl LightVertexStore {
-    /// Bytes per stored light vertex: its merge vertex (in its batch and in slot order), its
-    /// [`VertexHit`], its key, and the grid's position and key, index and slot of it.
+    /// Bytes per stored light vertex merging is available at: its merge vertex (in its batch
+    /// and in slot order), its [`VertexHit`], its key and mergeable index, and the grid's
+    /// position and key, index and slot of it (a vertex that does not merge has no grid
+    /// entry, no copy and no mergeable index: 104 bytes fewer).
     pub const BYTES_PER_VERTEX: usize = 2 * std::mem::size_of::<MergeVertex>()
         + std::mem::size_of::<VertexHit>()
-        + 3 * std::mem::size_of::<u32>()
+        + 4 * std::mem::size_of::<u32>()
         + std::mem::size_of::<GridPoint>();
 
     /// Traces light subpaths 0 … n − 1 with `trace(j, buffer)` (which fills the buffer), in
@@ -154,13 +172,13 @@ impl LightVertexStore {
         let mut n = 0;
         for b in &self.batches {
             self.batch_start.push(n);
-            n += b.vertices.len();
+            n += b.mergeable.len();
         }
         let (batches, starts) = (&self.batches, &self.batch_start);
-        // Vertex i in subpath order: (its batch, its index there).
+        // Mergeable vertex i in subpath order: (its batch, its index there).
         let at = |i: usize| {
             let b = starts.partition_point(|&s| s <= i) - 1;
-            (&batches[b], i - starts[b])
+            (&batches[b], batches[b].mergeable[i - starts[b]] as usize)
         };
         self.grid.build(
             n,
@@ -235,8 +253,10 @@ impl LightVertexStore {
                 dvm: m.dvm,
             };
             let bsdf = cached_bsdf_at(scene, &h.hit, filter, lambda, &mut out.spectra);
-            out.vertices
-                .push(PathVertex::new(&h.hit, m.wo, bsdf, m.beta, mis, m.depth));
+            let mut v = PathVertex::new(&h.hit, m.wo, bsdf, m.beta, mis, m.depth);
+            v.merges = h.merges;
+            v.near_specular = h.near_specular;
+            out.vertices.push(v);
             out.hits.push(h.hit);
         }
     }

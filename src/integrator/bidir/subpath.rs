@@ -7,9 +7,10 @@
 //! at most `max_depth` (pbrt's maxdepth, as the path tracer), so light subpaths stop at
 //! y_{max_depth} and camera subpaths at z_{max_depth+1}.
 
+use super::merge_rule::near_specular;
 use super::mis::{Mis, SubpathMis};
 use super::vertex::{cached_bsdf_at, shading_correction, LightOrigin, PathVertex};
-use crate::bxdf::{BsdfSample, TransportMode};
+use crate::bxdf::{Bsdf, BsdfSample, TransportMode};
 use crate::geometry::offset::spawn_ray;
 use crate::geometry::Ray;
 use crate::light::emit::{LightLeSample, SceneSphere};
@@ -121,6 +122,13 @@ pub struct Walk {
     pub prev: LightSampleContext,
     /// The ray left an infinite light (no distance factor in the MIS update, §5.1).
     pub from_infinite: bool,
+    /// Merging is available at the vertex the walk arrives at next (`merge_rule.rs`): the
+    /// vertex it left is near-specular, or every vertex merges. Light walks only.
+    pub arrival_merges: bool,
+    /// The merge terms of the vertex left, m(|cos| / p_fwd) / m(|cos θ|) since arrival, not
+    /// yet in dVC and dVM: a camera walk under the caustic rule adds them once the vertex
+    /// found decides (`merge_rule.rs`, [`Walk::vertex`]); 0 otherwise.
+    pub pending: f32,
 }
 
 impl Walk {
@@ -130,6 +138,7 @@ impl Walk {
     /// a luminance meter ([`SubpathMis::delta_sensor_start`]).
     pub fn sensor(ctx: &BidirContext, sr: &SensorRay) -> Option<Walk> {
         let d = sr.ray.d;
+        let mut pending = 0.0;
         let mis = if ctx.sensor.delta_direction() {
             SubpathMis::delta_sensor_start()
         } else {
@@ -139,7 +148,18 @@ impl Walk {
             }
             match ctx.sensor.infinite_light_meter() {
                 Some(m) if ctx.sensor_merges => {
-                    SubpathMis::meter_start_with_sensor_merges(&ctx.mis, pdf_dir_w, d.dot(m.dir))
+                    let start = SubpathMis::meter_start_with_sensor_merges(
+                        &ctx.mis,
+                        pdf_dir_w,
+                        d.dot(m.dir),
+                    );
+                    if ctx.mis.caustic() {
+                        // Merging at the meter's point: decided by z_1 (`merge_rule.rs`).
+                        pending = start.dvm;
+                        SubpathMis::camera_start(&ctx.mis, pdf_dir_w)
+                    } else {
+                        start
+                    }
                 }
                 _ => SubpathMis::camera_start(&ctx.mis, pdf_dir_w),
             }
@@ -160,6 +180,8 @@ impl Walk {
                 n: Vec3::ZERO,
             },
             from_infinite: false,
+            arrival_merges: true,
+            pending,
         })
     }
 
@@ -169,8 +191,30 @@ impl Walk {
     pub fn arrive(&mut self, mis: &Mis, p: Vec3, ng: Vec3) {
         let dist2 = (p - self.prev.p).length_squared();
         let cos = ng.dot(self.ray.d);
-        self.mis.at_hit(mis, dist2, cos, self.from_infinite);
+        let c = self.mis.at_hit(mis, dist2, cos, self.from_infinite);
+        if self.pending != 0.0 {
+            self.pending /= c;
+        }
         self.depth += 1;
+    }
+
+    /// The vertex at `si` (BSDF `bsdf`) the walk has just arrived at ([`Walk::arrive`]), with
+    /// its merge flags (`merge_rule.rs`): whether merging is available at it (light walks) and
+    /// whether it is near-specular. A camera walk's pending merge term of the vertex it left
+    /// enters dVC and dVM here when this vertex is near-specular, and is dropped otherwise.
+    #[inline]
+    pub fn vertex(&mut self, ctx: &BidirContext, si: &SurfaceHit, bsdf: Bsdf) -> PathVertex {
+        let near = ctx.mis.caustic() && near_specular(ctx.scene, si, &bsdf);
+        if self.pending != 0.0 {
+            if near {
+                self.mis.add_merge(&ctx.mis, self.pending);
+            }
+            self.pending = 0.0;
+        }
+        let mut v = PathVertex::new(si, -self.ray.d, bsdf, self.beta, self.mis, self.depth);
+        v.merges = self.arrival_merges;
+        v.near_specular = near;
+        v
     }
 
     /// Samples the next direction at vertex `v` and moves on ([`Walk::advance`]), then
@@ -198,6 +242,8 @@ impl Walk {
 
     /// Leaves vertex `v` along the sampled `bs`: throughput f |cos θ| / pdf (with the adjoint
     /// shading correction for importance), MIS [tech. rep. (34)–(36), (53)–(55)], new ray.
+    /// The merge terms of `v` (`merge_rule.rs`): a light walk knows their availability
+    /// (`v.merges`); a camera walk under the caustic rule leaves them pending.
     pub fn advance(&mut self, mis: &Mis, v: &PathVertex, bs: BsdfSample, mode: TransportMode) {
         let mut factor = v.cos_shading(bs.wi) / bs.pdf_w;
         if mode == TransportMode::Importance {
@@ -214,8 +260,21 @@ impl Walk {
         if mode == TransportMode::Radiance && bs.transmission {
             self.rr_beta *= bs.eta * bs.eta;
         }
-        self.mis
-            .scatter(mis, v.cos_geo(bs.wi), bs.pdf_w, pdf_rev_w, bs.specular);
+        let caustic = mis.caustic();
+        let camera_defers = caustic && mode == TransportMode::Radiance;
+        let merge = if v.merges && !camera_defers { 1.0 } else { 0.0 };
+        let g = self.mis.scatter(
+            mis,
+            v.cos_geo(bs.wi),
+            bs.pdf_w,
+            pdf_rev_w,
+            bs.specular,
+            merge,
+        );
+        if camera_defers {
+            self.pending = g;
+        }
+        self.arrival_merges = !caustic || v.near_specular;
         self.ray = spawn_ray(v.p, v.p_error, v.ng, bs.wi);
         self.t_max = f32::INFINITY;
         self.prev = LightSampleContext { p: v.p, n: v.ng };
@@ -319,7 +378,7 @@ fn trace_detached(
             return;
         }
         let bsdf = cached_bsdf_at(ctx.scene, &si, ctx.filter, lambda, &mut path.spectra);
-        let v = PathVertex::new(&si, -walk.ray.d, bsdf, walk.beta, walk.mis, walk.depth);
+        let v = walk.vertex(ctx, &si, bsdf);
         if !bsdf.is_specular() {
             path.vertices.push(v);
             path.hits.push(si);
@@ -394,6 +453,10 @@ impl Walk {
             depth: 0,
             prev: LightSampleContext { p: le.p, n: le.n },
             from_infinite: le.infinite,
+            // The light source is never near-specular: y_1 does not merge under the caustic
+            // rule (`merge_rule.rs`).
+            arrival_merges: !ctx.mis.caustic(),
+            pending: 0.0,
         })
     }
 }

@@ -30,6 +30,13 @@ pub struct PathVertex {
     pub mis: SubpathMis,
     /// Segments from the subpath's origin: i for y_i or z_i.
     pub depth: u32,
+    /// Merging at this vertex is available (`merge_rule.rs`): always under
+    /// [`super::MergeRule::All`]; under the caustic rule, for a light vertex, when its
+    /// predecessor on its subpath is near-specular (camera vertices: unused).
+    pub merges: bool,
+    /// The vertex is near-specular (`merge_rule::near_specular`), which decides merging at
+    /// the vertex after it in light order; false where no rule asks.
+    pub near_specular: bool,
 }
 
 impl PathVertex {
@@ -51,6 +58,8 @@ impl PathVertex {
             beta,
             mis,
             depth,
+            merges: true,
+            near_specular: false,
         }
     }
 
