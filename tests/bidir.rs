@@ -807,11 +807,15 @@ fn bdpt_variance_per_sample_is_at_most_the_path_tracers() {
 // VCM against BDPT
 // ---------------------------------------------------------------------------------------------
 
-/// VCM in `mode` with base radius `radius` (metres; None: its default) and α = 0.75.
+/// VCM in `mode` with base radius `radius` (metres; None: its default) and α = 0.75, merging
+/// at every non-specular vertex (`MergeRule::All`: on these diffuse and glossy scenes the
+/// default rule merges nothing; the rule has its own test,
+/// [`vcm_merging_after_near_specular_vertices_agrees_with_bdpt_per_pixel`]).
 fn vcm(mode: VcmMode, radius: Option<f32>) -> Integrator {
     Integrator::Vcm(VcmParams {
         mode,
         radius,
+        merges: MergeRule::All,
         ..VcmParams::default()
     })
 }

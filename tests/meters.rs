@@ -923,7 +923,11 @@ fn vcm_ci95_covers_the_exact_value_at_least_90_times_in_100() {
     // iteration's light vertices): it holds only if the iterations are independent, which the
     // meters' independent per-iteration wavelengths make them (`integrator::vcm`).
     let (scene, meter, exact) = heavy_tailed_case();
-    let vcm = Integrator::Vcm(spectral_render::integrator::vcm::VcmParams::default());
+    // Merging at every vertex (the default rule merges nothing on these diffuse scenes).
+    let vcm = Integrator::Vcm(spectral_render::integrator::vcm::VcmParams {
+        merges: spectral_render::integrator::bidir::MergeRule::All,
+        ..Default::default()
+    });
     let (mut covered, mut sq, mut width) = (0, 0.0, 0.0);
     for seed in 0..100u64 {
         let r = read_with(
@@ -985,7 +989,11 @@ fn readings_do_not_depend_on_the_number_of_threads() {
 /// are z-tests at |z| < 3.4, which an interval computed from correlated samples would fail.
 #[test]
 fn vcm_meters_read_the_furnace_and_agree_with_path_tracing() {
-    let vcm = Integrator::Vcm(spectral_render::integrator::vcm::VcmParams::default());
+    // Merging at every vertex (the default rule merges nothing on these diffuse scenes).
+    let vcm = Integrator::Vcm(spectral_render::integrator::vcm::VcmParams {
+        merges: spectral_render::integrator::bidir::MergeRule::All,
+        ..Default::default()
+    });
     let (le, rho) = (2.0, 0.5);
     let furnace = load("furnace-vcm", &furnace_stage(le as f32, rho as f32));
     let l = le / (1.0 - rho);

@@ -567,7 +567,11 @@ fn vcm_does_not_merge_light_through_a_wall() {
     // foot; merges with vertices the camera vertex cannot see must not count.
     let scene = load_text("vcm_walled", &walled_stage(), (16, 16));
     for integrator in [
-        Integrator::Vcm(VcmParams::default()),
+        // Every vertex merges (the default rule merges nothing on these diffuse floors).
+        Integrator::Vcm(VcmParams {
+            merges: MergeRule::All,
+            ..VcmParams::default()
+        }),
         Integrator::Bdpt {
             mis: MisHeuristic::Power,
         },

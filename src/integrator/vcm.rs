@@ -24,6 +24,10 @@
 //! vertices as hero-only; a merge with one counts on the hero lane alone
 //! (`SampleRecord::hero_only`).
 //!
+//! **Where it merges** (`--vcm-merge`, `bidir/merge_rule.rs`): by default only at vertices
+//! that follow a specular or near-specular one in light order (caustics, Jensen 1996), or at
+//! every non-specular vertex as in the paper (`all`).
+//!
 //! **Modes.** `vcm` connects and merges; `vm` merges only, plus emitters at the end of purely
 //! specular camera paths (bidirectional photon mapping); `vc` is BDPT, estimator and all
 //! (`Integrator::estimator` builds a `BdptEstimator` for it).
@@ -139,9 +143,12 @@ pub const METER_RADIUS_FACTOR: f32 = 0.003;
 /// sets r_0 = 0.003 × the scene's radius). 0.75 keeps a mirror-seen caustic 34× below the path
 /// tracer's MSE, with a 3× margin over issue 10's 10×; 1.5 before.
 pub const IMAGE_RADIUS_FOOTPRINTS: f32 = 0.75;
-/// Where mode `vcm` merges by default (`--vcm-merge`; docs/design.md "### VCM", "Merges only
-/// after near-specular vertices": chosen by measurement).
-pub const DEFAULT_MERGE_RULE: MergeRule = MergeRule::All;
+/// Where mode `vcm` merges by default (`--vcm-merge`): only after near-specular vertices,
+/// chosen by an equal-CPU comparison (docs/design.md "### VCM", "Merges only after
+/// near-specular vertices"): it ties merging everywhere on the caustic scenes, where the
+/// merges that count follow specular vertices, and costs 20–30 % less CPU time on the
+/// diffuse ones (the Cornell box, `gap.usda`, `room.usda`) for the same error.
+pub const DEFAULT_MERGE_RULE: MergeRule = MergeRule::Caustic;
 /// Light subpaths traced per parallel task when filling the store (one batch of the store).
 const STORE_CHUNK: u64 = 1024;
 /// Offsets the store's sampler streams from the samples' own.
@@ -572,11 +579,23 @@ mod tests {
             filter: TextureFilter::Finest,
             meters: false,
         };
-        let mut est = VcmEstimator::new(&scene, settings, VcmParams::default());
+        // Both merge rules: every vertex is stored and rebuilt, merge flags included, and the
+        // grid holds exactly those merging is available at.
+        for merges in MergeRule::ALL {
+            let params = VcmParams {
+                merges,
+                ..VcmParams::default()
+            };
+            store_rebuilds_as_traced(&scene, settings, params);
+        }
+    }
+
+    fn store_rebuilds_as_traced(scene: &Scene, settings: Settings, params: VcmParams) {
+        let mut est = VcmEstimator::new(scene, settings, params);
         est.begin_iteration(Iteration { seed: 5, index: 3 });
         let mut traced = LightSubpath::default();
         let mut rebuilt = LightSubpath::default();
-        let (mut stored_vertices, mut dispersed) = (0, 0);
+        let (mut stored_vertices, mut dispersed, mut merging) = (0, 0, 0);
         for j in 0..64 {
             let mut sampler = Sampler::new(5 ^ STORE_STREAM, j, 3);
             let mut l = est.lambda;
@@ -588,7 +607,7 @@ mod tests {
                 l2.terminate_secondary();
             }
             est.store
-                .subpath(j, &scene, TextureFilter::Finest, &mut l2, &mut rebuilt);
+                .subpath(j, scene, TextureFilter::Finest, &mut l2, &mut rebuilt);
             assert_eq!(hero_only, l.secondary_terminated());
             dispersed += u32::from(hero_only);
             assert_eq!(format!("{l:?}"), format!("{l2:?}"));
@@ -601,13 +620,18 @@ mod tests {
                 format!("{:?}", rebuilt.vertices)
             );
             stored_vertices += rebuilt.vertices.len();
+            merging += rebuilt.vertices.iter().filter(|v| v.merges).count();
         }
         assert!(
             stored_vertices >= 5 && dispersed >= 5,
             "{stored_vertices} {dispersed}"
         );
+        // The 64 subpaths are the iteration's all (8 × 8 pixels).
         assert_eq!(est.store.subpaths(), 64);
-        assert!(est.store.vertices.len() >= stored_vertices);
+        assert_eq!(est.store.vertices.len(), merging);
+        if params.merges == MergeRule::All {
+            assert_eq!(merging, stored_vertices);
+        }
     }
 
     #[test]
@@ -618,7 +642,12 @@ mod tests {
             filter: TextureFilter::Finest,
             meters: false,
         };
-        let mut est = VcmEstimator::new(&scene, settings, VcmParams::default());
+        // Every vertex merges (the default rule merges nothing on this diffuse floor).
+        let params = VcmParams {
+            merges: MergeRule::All,
+            ..VcmParams::default()
+        };
+        let mut est = VcmEstimator::new(&scene, settings, params);
         let mut peak_after_warmup = 0;
         for k in 0..1000 {
             est.begin_iteration(Iteration { seed: 1, index: k });

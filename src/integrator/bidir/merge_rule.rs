@@ -55,7 +55,7 @@ use crate::bxdf::Bsdf;
 use crate::scene::analysis::lobes::lobes;
 use crate::scene::{Scene, SurfaceHit};
 
-/// Which vertices VCM merges at (`--vcm-merge`).
+/// Which vertices VCM merges at (`--vcm-merge`; VCM's default is `vcm::DEFAULT_MERGE_RULE`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MergeRule {
     /// Every non-specular vertex (Georgiev et al. 2012; SmallVCM).
