@@ -49,7 +49,8 @@
 //!   terms carry their a already; the merge happens only where a(x_i) = 1, so the store keeps
 //!   (and its grid holds) only light vertices whose predecessor is near-specular.
 //!
-//! With [`MergeRule::All`] every a is 1 and the arithmetic is SmallVCM's, bit for bit.
+//! With [`MergeRule::All`] every a is 1 and the arithmetic is that of before (SmallVCM's): the
+//! same images bit for bit (`examples/exr_diff`).
 
 use crate::bxdf::Bsdf;
 use crate::scene::analysis::lobes::lobes;
