@@ -635,6 +635,66 @@ mod tests {
     }
 
     #[test]
+    fn the_caustic_rule_grids_only_vertices_after_near_specular_ones() {
+        // A near-specular floor (conductor, GGX α 0.05) under the bulb and a diffuse ceiling
+        // above it: light reaches the ceiling by the floor (L S D) and directly (L D).
+        let mut desc = floor_desc();
+        desc.materials.push(MaterialDesc {
+            prim_path: "/Satin".into(),
+            kind: MaterialKind::Conductor {
+                eta: SpectrumDesc::Samples(vec![(360.0, 0.2), (830.0, 0.2)]),
+                k: SpectrumDesc::Samples(vec![(360.0, 3.0), (830.0, 3.0)]),
+                roughness: 0.05,
+            },
+            emission: None,
+            textures: Vec::new(),
+            texcoord: "st".into(),
+        });
+        desc.meshes[0].material = Some(0);
+        let mut ceiling = desc.meshes[0].clone();
+        ceiling.prim_path = "/Ceiling".into();
+        ceiling.material = None;
+        for p in &mut ceiling.positions {
+            p.y = 2.0;
+        }
+        ceiling.indices = vec![[0, 1, 2], [0, 2, 3]];
+        desc.meshes.push(ceiling);
+        let scene = crate::scene::build(&desc, Some((8, 8))).unwrap();
+        let settings = Settings {
+            max_depth: 5,
+            filter: TextureFilter::Finest,
+            meters: false,
+        };
+        let gridded = |merges| {
+            let params = VcmParams {
+                merges,
+                ..VcmParams::default()
+            };
+            let mut est = VcmEstimator::new(&scene, settings, params);
+            let mut all = Vec::new();
+            for k in 0..16 {
+                est.begin_iteration(Iteration { seed: 2, index: k });
+                all.extend_from_slice(&est.store.vertices);
+            }
+            all
+        };
+        let (every, caustic) = (gridded(MergeRule::All), gridded(MergeRule::Caustic));
+        // The caustic rule grids the ceiling's vertices lit by the floor, none lit directly
+        // and none on the floor itself (its predecessor is the light or the ceiling).
+        assert!(caustic.len() >= 20, "{}", caustic.len()); // 16 × 64 light subpaths
+        assert!(
+            every.len() >= 2 * caustic.len(),
+            "{} {}",
+            every.len(),
+            caustic.len()
+        );
+        for v in &caustic {
+            assert!(v.depth >= 2 && v.p.y > 1.9, "{v:?}");
+        }
+        assert!(every.iter().any(|v| v.depth == 1));
+    }
+
+    #[test]
     fn the_store_is_reused_and_memory_stays_flat_over_a_thousand_iterations() {
         let scene = floor_scene();
         let settings = Settings {
