@@ -913,8 +913,25 @@ mod tests {
             }
             assert!(hits > 2000, "only {hits} hits");
         }
-        let mut walls = random_soup(&mut rng, 4000, 0.1);
-        walls.extend(axis_aligned_scene(&mut rng, 12, 8.0));
+        // Many small triangles inside a room of twelve large ones (the limit scenes' shape).
+        let mut walls: Vec<[Vec3; 3]> = (0..20_000)
+            .map(|_| {
+                let c = rng.vec3(-0.5, 0.5);
+                [0, 1, 2].map(|_| c + rng.vec3(-0.01, 0.01))
+            })
+            .collect();
+        for axis in 0..3 {
+            for side in [-1.0, 1.0] {
+                let corner = |u: f32, v: f32| {
+                    let mut p = Vec3::splat(side);
+                    (p[(axis + 1) % 3], p[(axis + 2) % 3]) = (u, v);
+                    p
+                };
+                let (a, b) = (corner(-1.0, -1.0), corner(1.0, 1.0));
+                walls.push([a, corner(1.0, -1.0), b]);
+                walls.push([a, b, corner(-1.0, 1.0)]);
+            }
+        }
         let [ploc, sah] =
             [Builder::Ploc, Builder::Sah].map(|b| Bvh::build_with(&walls, b).sah_cost());
         assert!(sah.nodes < ploc.nodes, "{sah:?} vs {ploc:?}");
