@@ -13,16 +13,20 @@
 //! hits (`Bvh::intersect`) for primary and diffuse rays, any hit (`Bvh::occluded`) for shadow
 //! rays, on one thread (median of 5 runs; also per CPU-second of that thread, which stays
 //! comparable with Embree's Mrays/s ÷ cpu% when other processes share the cores) and on all
-//! rayon threads. The header gives the build time and the BVH's memory (nodes, triangles).
+//! rayon threads. The header gives, for each builder of the binary BVH (obvhs's PLOC and our
+//! binned SAH), the build time, the BVH's memory (nodes, triangles) and its SAH: the expected
+//! 8-wide node tests and triangle tests of a ray meeting the root box (`Bvh::sah_cost`). The
+//! rays are traced through `Bvh::build`'s tree, or the one `--builder=ploc|sah` names.
 //!
-//! `cargo bench --bench limit_rays [-- SCENE.obj [SPP]]`; default `../shared/limit/scenes/cbox.obj`
-//! at 4 spp (256×256 from the camera line: 262,144 primary rays).
+//! `cargo bench --bench limit_rays [-- SCENE.obj [SPP]] [--builder=ploc|sah]`; default
+//! `../shared/limit/scenes/cbox.obj` at 4 spp (256×256 from the camera line: 262,144 primary
+//! rays).
 
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
-use spectral_render::accel::bvh::Bvh;
+use spectral_render::accel::bvh::{Builder, Bvh, TraversalCount};
 use spectral_render::geometry::Ray;
 use spectral_render::sampling::Sampler;
 
@@ -180,6 +184,27 @@ fn throughput<T: Sync>(rays: &[T], f: impl Fn(&T) -> bool + Sync) -> Throughput 
     }
 }
 
+/// Builds the scene's BVH with `builder` and prints its build time, memory and SAH.
+fn build(scene: &LimitScene, builder: Builder) -> Bvh {
+    let start = Instant::now();
+    let bvh = Bvh::build_with(&scene.triangles, builder);
+    let build = start.elapsed().as_secs_f64();
+    let (nodes, triangles) = bvh.memory_bytes();
+    let mib = |bytes: usize| bytes as f64 / (1024.0 * 1024.0);
+    let sah = bvh.sah_cost();
+    println!(
+        "{:>5}: build {build:.3} s, memory {:.3} MiB (nodes {:.3}, triangles {:.3}), \
+         SAH {:.2} node + {:.2} triangle tests per ray",
+        format!("{builder:?}"),
+        mib(nodes + triangles),
+        mib(nodes),
+        mib(triangles),
+        sah.nodes,
+        sah.triangles
+    );
+    bvh
+}
+
 fn main() {
     let args: Vec<String> = std::env::args()
         .skip(1)
@@ -198,39 +223,72 @@ fn main() {
         return;
     };
     let scene = parse_obj(&text);
-    let start = Instant::now();
-    let bvh = Bvh::build(&scene.triangles);
-    let build = start.elapsed().as_secs_f64();
+    println!("{path}: {} triangles", scene.triangles.len());
+    let chosen = std::env::args()
+        .find_map(|a| match a.as_str() {
+            "--builder=ploc" => Some(Builder::Ploc),
+            "--builder=sah" => Some(Builder::Sah),
+            _ => None,
+        })
+        .unwrap_or(Builder::DEFAULT);
+    // Both trees are built (and their figures printed) before the chosen one is kept.
+    let trees = [Builder::Ploc, Builder::Sah].map(|builder| (builder, build(&scene, builder)));
+    let bvh = trees
+        .into_iter()
+        .find_map(|(builder, bvh)| (builder == chosen).then_some(bvh))
+        .expect("the chosen builder is one of the two");
     let mut rng = Sampler::new(7, 0, 0);
     let primary = primary_rays(&scene, spp, &mut rng);
     let (diffuse, shadow) = secondary_rays(&scene, &bvh, &primary, &mut rng);
-    let (nodes, triangles) = bvh.memory_bytes();
-    let mib = |bytes: usize| bytes as f64 / (1024.0 * 1024.0);
+    println!("rays traced through the {chosen:?} tree");
     println!(
-        "{path}: {} triangles, build {build:.3} s, memory {:.3} MiB (nodes {:.3}, triangles {:.3})",
-        scene.triangles.len(),
-        mib(nodes + triangles),
-        mib(nodes),
-        mib(triangles)
-    );
-    println!(
-        "{:>8} {:>9} {:>7} {:>14} {:>14} {:>14}",
-        "class", "rays", "hit %", "Mrays/s 1 thr", "per CPU-s", "all threads"
+        "{:>8} {:>9} {:>7} {:>14} {:>14} {:>14} {:>10} {:>10}",
+        "class",
+        "rays",
+        "hit %",
+        "Mrays/s 1 thr",
+        "per CPU-s",
+        "all threads",
+        "nodes/ray",
+        "tris/ray"
     );
     let closest = |r: &Ray| bvh.intersect(r, f32::INFINITY).is_some();
     let any = |(r, t): &(Ray, f32)| bvh.occluded(r, *t);
+    // The tests per ray, counted in a pass of their own (the timed queries count nothing).
+    let count = TraversalCount::default();
     let rows = [
-        ("primary", primary.len(), throughput(&primary, closest)),
-        ("diffuse", diffuse.len(), throughput(&diffuse, closest)),
-        ("shadow", shadow.len(), throughput(&shadow, any)),
+        ("primary", primary.len(), throughput(&primary, closest), {
+            primary.iter().for_each(|r| {
+                bvh.count_closest(r, f32::INFINITY, &count);
+            });
+            per_ray(&count, primary.len())
+        }),
+        ("diffuse", diffuse.len(), throughput(&diffuse, closest), {
+            diffuse.iter().for_each(|r| {
+                bvh.count_closest(r, f32::INFINITY, &count);
+            });
+            per_ray(&count, diffuse.len())
+        }),
+        ("shadow", shadow.len(), throughput(&shadow, any), {
+            shadow.iter().for_each(|(r, t)| {
+                bvh.count_any(r, *t, &count);
+            });
+            per_ray(&count, shadow.len())
+        }),
     ];
-    for (class, n, t) in rows {
+    for (class, n, t, (nodes, triangles)) in rows {
         println!(
-            "{class:>8} {n:>9} {:>7.1} {:>14.2} {:>14.2} {:>14.2}",
+            "{class:>8} {n:>9} {:>7.1} {:>14.2} {:>14.2} {:>14.2} {nodes:>10.2} {triangles:>10.2}",
             100.0 * t.hit,
             t.one,
             t.one_cpu,
             t.all
         );
     }
+}
+
+/// The counts per ray of `rays` rays (nodes, triangles), and `count` reset.
+fn per_ray(count: &TraversalCount, rays: usize) -> (f64, f64) {
+    let per = |c: &std::cell::Cell<u64>| c.take() as f64 / rays.max(1) as f64;
+    (per(&count.nodes), per(&count.triangles))
 }

@@ -4,7 +4,8 @@
 //! Hierarchy Construction") plus reinsertion (Meister, Bittner 2017, "Parallel Reinsertion for
 //! Bounding Volume Hierarchy Optimization"). We keep its topology and child slots, store every
 //! node with the exact f32 boxes of its children, and traverse with our own loop.
-//! This is the only module that names obvhs.
+//! [`Builder::Sah`] builds the binary tree top-down by a binned SAH instead (`accel/sah.rs`).
+//! This module and `sah.rs` are the only ones that name obvhs.
 //!
 //! **Traversal.** A node holds its eight child boxes in SIMD lanes (two halves of four), so a
 //! node test is two 4-wide slab tests (Kay, Kajiya 1986; PBR 4ed §6.1.2). The children met are
@@ -45,6 +46,8 @@
 //! assert!(!bvh.occluded(&ray, 0.5));
 //! ```
 
+use std::cell::Cell;
+
 use glam::{Vec3, Vec3A, Vec4};
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
@@ -53,6 +56,7 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::triangle::Triangle;
 
+use super::sah;
 use super::stack::Stack;
 use crate::geometry::offset::gamma;
 use crate::geometry::ray::Ray;
@@ -113,28 +117,60 @@ const LEAF_SIZE: u32 = 3;
 /// Nodes reinserted at least (all of them in smaller trees): see [`build_cwbvh`].
 const REINSERTION_NODES: f32 = 4096.0;
 
-/// Builds the CWBVH with the settings of obvhs's `medium_build` preset: PLOC with search radius
-/// 14 (`PlocSearchDistance::Medium`, `search_depth_threshold` 3, 64-bit Morton codes),
+/// How the binary BVH that the 8-wide one is collapsed from is built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Builder {
+    /// obvhs's PLOC, bottom up (see `build_cwbvh` in the source).
+    Ploc,
+    /// Our top-down binned SAH (`accel/sah.rs`): a tree of 5–6 % lower SAH than PLOC's on the
+    /// spheres of `../shared/limit`, not faster to trace (docs/design.md §8), and a slower build.
+    Sah,
+}
+
+impl Builder {
+    /// The builder of [`Bvh::build`].
+    pub const DEFAULT: Builder = Builder::Ploc;
+}
+
+/// The SAH of a built tree: the expected number of 8-wide node tests and of triangle tests for
+/// a ray that meets the root box, with rays distributed uniformly over lines (so a box is met
+/// with probability area / root area; MacDonald, Booth 1990, "Heuristics for ray tracing using
+/// space subdivision"; PBR 4ed §7.3.2). The SAH cost is c_node·nodes + c_tri·triangles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SahCost {
+    pub nodes: f64,
+    pub triangles: f64,
+}
+
+/// Builds the CWBVH from the given builder's binary tree. [`Builder::Ploc`] has the settings
+/// of obvhs's `medium_build` preset: PLOC with search radius
+/// 14 (`PlocSearchDistance::Medium`, `search_depth_threshold` 3, 64-bit Morton codes), then
 /// reinsertion over 5% of the nodes but at least [`REINSERTION_NODES`] (on small scenes the full
 /// pass costs little and the tree shape matters most: on the Cornell box it saves 12% of the
 /// traversal instructions, while 20% instead of 5% on 50k-triangle scenes saves nothing and
-/// costs 37% more build), then collapse to 8-wide nodes with up to [`LEAF_SIZE`]
+/// costs 37% more build). [`Builder::Sah`]'s tree is not reinserted: 5% changed its SAH by
+/// less than 0.3% on the spheres of `../shared/limit` (`Bvh::sah_cost`). Then both are
+/// collapsed to 8-wide nodes with up to [`LEAF_SIZE`]
 /// triangles per leaf. No spatial pre-splits: a leaf's box must
 /// bound its whole triangles, which the conservative box test relies on for watertightness at
 /// leaf boundaries.
 /// (The body of obvhs's `build_cwbvh_from_tris`, minus its debug-build validation, which asserts
 /// a depth below 32 and absolute 1e-5 box tolerances that large scenes exceed.)
-fn build_cwbvh(triangles: &[Triangle]) -> CwBvh {
-    let indices = (0..triangles.len() as u32).collect();
-    let mut bvh2 = PlocBuilder::with_capacity(triangles.len()).build(
-        PlocSearchDistance::Medium,
-        triangles,
-        indices,
-        SortPrecision::U64,
-        3,
-    );
-    let ratio = (REINSERTION_NODES / bvh2.nodes.len() as f32).clamp(0.05, 1.0);
-    ReinsertionOptimizer::default().run(&mut bvh2, ratio, None);
+fn build_cwbvh(triangles: &[Triangle], builder: Builder) -> CwBvh {
+    let mut bvh2 = match builder {
+        Builder::Ploc => PlocBuilder::with_capacity(triangles.len()).build(
+            PlocSearchDistance::Medium,
+            triangles,
+            (0..triangles.len() as u32).collect(),
+            SortPrecision::U64,
+            3,
+        ),
+        Builder::Sah => sah::build_bvh2(triangles),
+    };
+    if builder == Builder::Ploc {
+        let ratio = (REINSERTION_NODES / bvh2.nodes.len() as f32).clamp(0.05, 1.0);
+        ReinsertionOptimizer::default().run(&mut bvh2, ratio, None);
+    }
     bvh2_to_cwbvh(&bvh2, LEAF_SIZE, false, false)
 }
 
@@ -142,6 +178,11 @@ impl Bvh {
     /// Builds a BVH over the triangles (each `[p0, p1, p2]`). Degenerate triangles are allowed
     /// and never hit; an empty slice gives a BVH that never hits.
     pub fn build(triangles: &[[Vec3; 3]]) -> Bvh {
+        Bvh::build_with(triangles, Builder::DEFAULT)
+    }
+
+    /// [`Bvh::build`] with the given builder of the binary BVH.
+    pub fn build_with(triangles: &[[Vec3; 3]], builder: Builder) -> Bvh {
         let kept: Vec<u32> = (0..triangles.len() as u32)
             .filter(|&i| {
                 let [p0, p1, p2] = triangles[i as usize];
@@ -158,7 +199,7 @@ impl Bvh {
                 Triangle { v0, v1, v2 }
             })
             .collect();
-        let cwbvh = build_cwbvh(&prims);
+        let cwbvh = build_cwbvh(&prims, builder);
         let input_index: Vec<u32> = cwbvh
             .primitive_indices
             .iter()
@@ -191,8 +232,37 @@ impl Bvh {
             return None;
         }
         let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
-        let (prim, hit) = self.closest(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max)?;
+        let (prim, hit) =
+            self.closest(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max, &())?;
         Some(BvhHit { prim, hit })
+    }
+
+    /// [`Bvh::intersect`], adding the nodes and triangles it tests to `count` (for benchmarks;
+    /// the queries above count nothing).
+    pub fn count_closest(&self, ray: &Ray, t_max: f32, count: &TraversalCount) -> Option<BvhHit> {
+        self.may_hit(t_max).then_some(())?;
+        let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
+        let (prim, hit) = self.closest(
+            &mut Stack::<Entry, STACK_PLACES>::new(),
+            query,
+            t_max,
+            count,
+        )?;
+        Some(BvhHit { prim, hit })
+    }
+
+    /// [`Bvh::occluded`], adding the nodes and triangles it tests to `count`.
+    pub fn count_any(&self, ray: &Ray, t_max: f32, count: &TraversalCount) -> bool {
+        let Some(triangle) = WatertightRay::new(ray).filter(|_| self.may_hit(t_max)) else {
+            return false;
+        };
+        let query = (&triangle, &RayBoxes::new(ray));
+        self.any(
+            &mut Stack::<Entry, STACK_PLACES>::new(),
+            query,
+            t_max,
+            count,
+        )
     }
 
     /// Whether anything is hit with t in (0, t_max) (shadow rays; stops at the first hit).
@@ -204,7 +274,7 @@ impl Bvh {
             return false;
         };
         let query = (&triangle, &RayBoxes::new(ray));
-        self.any(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max)
+        self.any(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max, &())
     }
 
     /// Number of triangles given to [`Bvh::build`] (degenerate ones included).
@@ -219,6 +289,39 @@ impl Bvh {
             self.rows.len() * std::mem::size_of::<f32>()
                 + self.input_index.len() * std::mem::size_of::<u32>(),
         )
+    }
+
+    /// The tree's [`SahCost`]; zero for a BVH without hittable triangles, and counted per
+    /// node when the root box has no area.
+    pub fn sah_cost(&self) -> SahCost {
+        let area = |(lo, hi): (Vec3, Vec3)| {
+            let d = (hi.as_dvec3() - lo.as_dvec3()).max(glam::DVec3::ZERO);
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
+        let mut cost = SahCost {
+            nodes: 0.0,
+            triangles: 0.0,
+        };
+        for node in &self.nodes {
+            let boxes = (0..8).filter(|&s| node.present & (1 << s) != 0);
+            let node_box = boxes.clone().map(|s| node.child_box(s));
+            let node_box = node_box.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |b, c| {
+                (b.0.min(c.0), b.1.max(c.1))
+            });
+            cost.nodes += area(node_box);
+            for s in boxes.filter(|&s| node.leaves & (1 << s) != 0) {
+                cost.triangles += area(node.child_box(s)) * node.count[s] as f64;
+            }
+        }
+        let root = area(self.bounds);
+        if root > 0.0 {
+            cost.nodes /= root;
+            cost.triangles /= root;
+        } else {
+            cost.nodes = self.nodes.len() as f64;
+            cost.triangles = self.input_index.len() as f64;
+        }
+        cost
     }
 
     /// World-space AABB `(min, max)` of the hittable triangles; both zero when there are none.
@@ -245,9 +348,11 @@ impl Bvh {
         stack: &mut Stack<Entry, N>,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
+        tally: &impl Tally,
     ) -> Option<(u32, TriangleHit)> {
         let mut best: Option<(usize, TriangleHit)> = None;
-        self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
+        self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
+            tally.triangles(count);
             for i in first..first + count {
                 let tri = PackedTriangle::load(&self.rows, i);
                 if let Some(hit) = intersect_packed(triangle, &tri, *t_max) {
@@ -267,10 +372,12 @@ impl Bvh {
         stack: &mut Stack<Entry, N>,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
+        tally: &impl Tally,
     ) -> bool {
         let mut hit = false;
-        self.traverse(stack, boxes, &mut t_max, |first, count, t_max| {
+        self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             hit = (first..first + count).any(|i| {
+                tally.triangles(1);
                 let tri = PackedTriangle::load(&self.rows, i);
                 intersect_packed(triangle, &tri, *t_max).is_some()
             });
@@ -287,6 +394,7 @@ impl Bvh {
         stack: &mut Stack<Entry, N>,
         ray: &RayBoxes,
         t_max: &mut f32,
+        tally: &impl Tally,
         mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
     ) {
         stack.push(Entry::default());
@@ -295,6 +403,7 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[entry.node as usize];
+            tally.node();
             let (hits, t_enter) = node.intersect(ray, *t_max);
             let (slots, n) = by_entry(hits & node.leaves as u32, &t_enter);
             for &slot in &slots[..n] {
@@ -311,6 +420,37 @@ impl Bvh {
                 });
             }
         }
+    }
+}
+
+/// Nodes and triangles tested by the queries given it ([`Bvh::count_closest`],
+/// [`Bvh::count_any`]).
+#[derive(Debug, Default)]
+pub struct TraversalCount {
+    pub nodes: Cell<u64>,
+    pub triangles: Cell<u64>,
+}
+
+/// What a traversal reports of its work: nothing for the queries (`()`, which compiles to no
+/// code), counts for [`TraversalCount`].
+trait Tally {
+    fn node(&self);
+    fn triangles(&self, n: usize);
+}
+
+impl Tally for () {
+    #[inline(always)]
+    fn node(&self) {}
+    #[inline(always)]
+    fn triangles(&self, _: usize) {}
+}
+
+impl Tally for TraversalCount {
+    fn node(&self) {
+        self.nodes.set(self.nodes.get() + 1);
+    }
+    fn triangles(&self, n: usize) {
+        self.triangles.set(self.triangles.get() + n as u64);
     }
 }
 
@@ -394,6 +534,16 @@ impl WideNode {
         let (t0, t1) = (t0.to_array(), t1.to_array());
         let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
         ((m0 | m1 << 4) & self.present as u32, t_enter)
+    }
+
+    /// Slot `slot`'s box `(min, max)`.
+    fn child_box(&self, slot: usize) -> (Vec3, Vec3) {
+        let (half, lane) = (slot / 4, slot % 4);
+        let plane = |row: usize| self.planes[half][row][lane];
+        (
+            Vec3::new(plane(0), plane(2), plane(4)),
+            Vec3::new(plane(1), plane(3), plane(5)),
+        )
     }
 
     fn set_box(&mut self, slot: usize, (lo, hi): (Vec3, Vec3)) {
@@ -718,6 +868,75 @@ mod tests {
         }
     }
 
+    /// The SAH builder's trees answer as brute force does, on soups (with degenerate triangles
+    /// and duplicates), axis-aligned scenes far from the origin, and a floor hit through its
+    /// shared vertices and edges; and, on a soup with a few large triangles around many small
+    /// ones, their SAH is below PLOC's.
+    #[test]
+    fn sah_builder_matches_brute_force() {
+        let mut rng = Rng::new(9);
+        let mut soup = random_soup(&mut rng, 3000, 1.0);
+        soup[7] = [soup[3][0]; 3];
+        soup[11] = soup[12];
+        let mut boxes = axis_aligned_scene(&mut rng, 600, 1e3);
+        boxes
+            .iter_mut()
+            .flatten()
+            .for_each(|p| *p += Vec3::splat(-7e3));
+        let floor: Vec<[Vec3; 3]> = (0..40 * 40)
+            .flat_map(|k| {
+                let at = |i: usize, j: usize| Vec3::new(i as f32 * 0.1, 0.0, j as f32 * 0.07);
+                let (i, j) = (k % 40, k / 40);
+                [
+                    [at(i, j), at(i + 1, j), at(i + 1, j + 1)],
+                    [at(i, j), at(i + 1, j + 1), at(i, j + 1)],
+                ]
+            })
+            .collect();
+        for tris in [&soup, &boxes, &floor] {
+            let bvh = Bvh::build_with(tris, Builder::Sah);
+            let (lo, hi) = bvh.bounds();
+            let (center, extent) = (0.5 * (lo + hi), (hi - lo).max_element());
+            let mut hits = 0;
+            for k in 0..6000 {
+                let r = if k % 2 == 0 {
+                    let t = tris[rng.below(tris.len())];
+                    let target = t[0].lerp(t[1], [0.0, 1.0, rng.f32()][k % 3]);
+                    let o = center + rng.vec3(-1.5, 1.5) * extent;
+                    Ray::new(o, target - o)
+                } else {
+                    random_ray(&mut rng, center, extent)
+                };
+                let t_max = random_t_max(&mut rng, extent);
+                assert_agrees(&bvh, tris, &r, t_max);
+                hits += bvh.intersect(&r, t_max).is_some() as usize;
+            }
+            assert!(hits > 2000, "only {hits} hits");
+        }
+        // Many small triangles inside a room of twelve large ones (the limit scenes' shape).
+        let mut walls: Vec<[Vec3; 3]> = (0..20_000)
+            .map(|_| {
+                let c = rng.vec3(-0.5, 0.5);
+                [0, 1, 2].map(|_| c + rng.vec3(-0.01, 0.01))
+            })
+            .collect();
+        for axis in 0..3 {
+            for side in [-1.0, 1.0] {
+                let corner = |u: f32, v: f32| {
+                    let mut p = Vec3::splat(side);
+                    (p[(axis + 1) % 3], p[(axis + 2) % 3]) = (u, v);
+                    p
+                };
+                let (a, b) = (corner(-1.0, -1.0), corner(1.0, 1.0));
+                walls.push([a, corner(1.0, -1.0), b]);
+                walls.push([a, b, corner(-1.0, 1.0)]);
+            }
+        }
+        let [ploc, sah] =
+            [Builder::Ploc, Builder::Sah].map(|b| Bvh::build_with(&walls, b).sah_cost());
+        assert!(sah.nodes < ploc.nodes, "{sah:?} vs {ploc:?}");
+    }
+
     /// A tessellated axis-aligned floor seen through the BVH: rays through shared vertices and
     /// edges (which lie on child-box faces) never fall through.
     #[test]
@@ -841,9 +1060,14 @@ mod tests {
                 let q = (&tri, &boxes);
                 let (mut one, mut two) = (Stack::<Entry, 1>::new(), Stack::<Entry, 2>::new());
                 let results = [
-                    bvh.closest(&mut one, q, f32::INFINITY),
-                    bvh.closest(&mut two, q, f32::INFINITY),
-                    bvh.closest(&mut Stack::<Entry, STACK_PLACES>::new(), q, f32::INFINITY),
+                    bvh.closest(&mut one, q, f32::INFINITY, &()),
+                    bvh.closest(&mut two, q, f32::INFINITY, &()),
+                    bvh.closest(
+                        &mut Stack::<Entry, STACK_PLACES>::new(),
+                        q,
+                        f32::INFINITY,
+                        &(),
+                    ),
                 ];
                 spills += two.spilled() as usize;
                 let expected = brute_closest(tris, &r, f32::INFINITY).map(|h| h.hit.t);

@@ -1,4 +1,5 @@
-//! Ray acceleration structures. Only `bvh.rs` names obvhs.
+//! Ray acceleration structures. Only `bvh.rs` and `sah.rs` name obvhs.
 
 pub mod bvh;
+mod sah;
 mod stack;
