@@ -1,10 +1,11 @@
-//! Triangle BVH: obvhs builds a compressed 8-wide BVH (CWBVH; Ylitie, Karras, Laine 2017,
-//! "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs") bottom-up with
-//! PLOC (Meister, Bittner 2018, "Parallel Locally-Ordered Clustering for Bounding Volume
-//! Hierarchy Construction") plus reinsertion (Meister, Bittner 2017, "Parallel Reinsertion for
-//! Bounding Volume Hierarchy Optimization"). We keep its topology and child slots, store every
-//! node with the exact f32 boxes of its children, and traverse with our own loop.
-//! [`Builder::Sah`] builds the binary tree top-down by a binned SAH instead (`accel/sah.rs`).
+//! Triangle BVH: obvhs collapses a binary BVH into a compressed 8-wide one (CWBVH; Ylitie,
+//! Karras, Laine 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
+//! BVHs"). The binary tree is built top-down by our binned SAH ([`Builder::Sah`],
+//! `accel/sah.rs`, the default) or bottom-up by obvhs's PLOC (Meister, Bittner 2018, "Parallel
+//! Locally-Ordered Clustering for Bounding Volume Hierarchy Construction") plus reinsertion
+//! (Meister, Bittner 2017, "Parallel Reinsertion for Bounding Volume Hierarchy Optimization").
+//! We keep the collapse's topology and child slots, store every node with the exact f32 boxes
+//! of its children, and traverse with our own loop.
 //! This module and `sah.rs` are the only ones that name obvhs.
 //!
 //! **Traversal.** A node holds its eight child boxes in SIMD lanes (two halves of four), so a
@@ -122,14 +123,15 @@ const REINSERTION_NODES: f32 = 4096.0;
 pub enum Builder {
     /// obvhs's PLOC, bottom up (see `build_cwbvh` in the source).
     Ploc,
-    /// Our top-down binned SAH (`accel/sah.rs`): a tree of 5–6 % lower SAH than PLOC's on the
-    /// spheres of `../shared/limit`, not faster to trace (docs/design.md §8), and a slower build.
+    /// Our top-down binned SAH (`accel/sah.rs`), the default: a tree of 5–6 % lower SAH than
+    /// PLOC's on the spheres of `../shared/limit`, 3–4 % fewer query instructions, 1.0–1.08×
+    /// the one-ray rate, for a 1.2× build (docs/design.md §8).
     Sah,
 }
 
 impl Builder {
     /// The builder of [`Bvh::build`].
-    pub const DEFAULT: Builder = Builder::Ploc;
+    pub const DEFAULT: Builder = Builder::Sah;
 }
 
 /// The SAH of a built tree: the expected number of 8-wide node tests and of triangle tests for
