@@ -57,10 +57,11 @@ use crate::scene::analysis::lobes::lobes;
 use crate::scene::{Scene, SurfaceHit};
 
 /// Which vertices VCM merges at (`--vcm-merge`; VCM's default is `vcm::DEFAULT_MERGE_RULE`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// No `Default`: VCM's default is `vcm::DEFAULT_MERGE_RULE`, and a second one here would
+/// disagree with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MergeRule {
     /// Every non-specular vertex (Georgiev et al. 2012; SmallVCM).
-    #[default]
     All,
     /// Only vertices whose light-order predecessor is near-specular: caustics (L S+ D …).
     Caustic,
