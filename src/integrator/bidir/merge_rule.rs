@@ -56,9 +56,8 @@ use crate::bxdf::Bsdf;
 use crate::scene::analysis::lobes::lobes;
 use crate::scene::{Scene, SurfaceHit};
 
-/// Which vertices VCM merges at (`--vcm-merge`; VCM's default is `vcm::DEFAULT_MERGE_RULE`).
-/// No `Default`: VCM's default is `vcm::DEFAULT_MERGE_RULE`, and a second one here would
-/// disagree with it.
+/// Which vertices VCM merges at (`--vcm-merge`). No `Default`: VCM's default is
+/// `vcm::DEFAULT_MERGE_RULE`, and a second one here could disagree with it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MergeRule {
     /// Every non-specular vertex (Georgiev et al. 2012; SmallVCM).
