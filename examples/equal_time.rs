@@ -52,11 +52,15 @@
 //! (`--sampler`; default zsobol, the reference's too), e.g. `bdpt,bdpt@independent` for the
 //! variance the low-discrepancy sequence saves BDPT at the same sample count.
 //!
+//! `path:rrN` is the path tracer with Russian roulette from bounce N (`--rr-depth N`, default
+//! `roulette::DEFAULT_RR_DEPTH`), e.g. `path,path:rr5,path@independent,path:rr5@independent`.
+//!
 //! `vcm:bins=B` is VCM with per-sample wavelength tuples and merges within B hero bins
 //! (`VcmWavelengths::PerSample`), the measured alternative to one tuple per iteration.
 //! `vcm:all` and `vcm:caustic` are VCM with that merge rule (`--vcm-merge`).
 
 use spectral_render::integrator::bidir::MergeRule;
+use spectral_render::integrator::roulette::DEFAULT_RR_DEPTH;
 use spectral_render::integrator::vcm::{VcmParams, VcmWavelengths};
 use spectral_render::output::exr;
 use spectral_render::sampling::SamplerKind;
@@ -83,10 +87,12 @@ struct Args {
     keep: Option<PathBuf>,
 }
 
-/// An integrator and the sampler its samples draw from.
-type Config = (Integrator, SamplerKind);
+/// An integrator, the sampler its samples draw from and the path tracer's first bounce of
+/// Russian roulette (`--rr-depth`).
+type Config = (Integrator, SamplerKind, u32);
 
-/// `NAME[@SAMPLER]`: the integrator `NAME` ([`integrator`]) on `SAMPLER` (default zsobol).
+/// `NAME[@SAMPLER]`: the integrator `NAME` ([`integrator`]) on `SAMPLER` (default zsobol);
+/// `path:rrN` is the path tracer with roulette from bounce N (`--rr-depth N`).
 fn config(name: &str) -> Result<Config, String> {
     let (n, sampler) = match name.split_once('@') {
         Some((n, s)) => (
@@ -95,7 +101,14 @@ fn config(name: &str) -> Result<Config, String> {
         ),
         None => (name, SamplerKind::default()),
     };
-    Ok((integrator(n)?, sampler))
+    if let Some(d) = n.strip_prefix("path:rr") {
+        let rr: u32 = d.parse().map_err(|e| format!("{n}: {e}"))?;
+        if rr == 0 {
+            return Err(format!("{n}: the roulette's first bounce is at least 1"));
+        }
+        return Ok((Integrator::Path, sampler, rr));
+    }
+    Ok((integrator(n)?, sampler, DEFAULT_RR_DEPTH))
 }
 
 fn integrator(name: &str) -> Result<Integrator, String> {
@@ -148,7 +161,10 @@ fn parse() -> Result<Args, String> {
         reference: None,
         threads: None,
         integrators: vec![
-            ("path".into(), (Integrator::Path, SamplerKind::default())),
+            (
+                "path".into(),
+                (Integrator::Path, SamplerKind::default(), DEFAULT_RR_DEPTH),
+            ),
             (
                 "bdpt".into(),
                 (
@@ -156,6 +172,7 @@ fn parse() -> Result<Args, String> {
                         mis: MisHeuristic::Power,
                     },
                     SamplerKind::default(),
+                    DEFAULT_RR_DEPTH,
                 ),
             ),
         ],
@@ -251,7 +268,7 @@ struct Render {
 fn render_y(
     scene: &spectral_render::scene::Scene,
     args: &Args,
-    (integrator, sampler): Config,
+    (integrator, sampler, rr_depth): Config,
     (seconds, spp): (f64, Option<u32>),
     seed: u64,
     keep: Option<PathBuf>,
@@ -263,6 +280,7 @@ fn render_y(
         seed,
         threads: args.threads,
         max_depth: args.max_depth,
+        rr_depth,
         integrator,
         sampler,
         ..Default::default()
@@ -323,7 +341,7 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
         args.reference_spp.map(|n| n.div_ceil(2)),
     );
     let kind = args.reference_integrator;
-    let config = (kind, SamplerKind::default());
+    let config = (kind, SamplerKind::default(), DEFAULT_RR_DEPTH);
     let a = render_y(scene, args, config, half, 1001, None);
     let b = render_y(scene, args, config, half, 1002, None);
     let (sa, sb, ta, tb) = (a.spp, b.spp, a.wall, b.wall);

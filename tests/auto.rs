@@ -309,6 +309,7 @@ fn auto_has_no_estimator_of_its_own() {
     let scene = scene::load(&cbox_path(), Some((4, 4))).unwrap();
     let settings = spectral_render::integrator::Settings {
         max_depth: 7,
+        rr_depth: spectral_render::integrator::roulette::DEFAULT_RR_DEPTH,
         filter: spectral_render::texture::TextureFilter::Finest,
         meters: false,
     };

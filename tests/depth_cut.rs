@@ -12,6 +12,7 @@ mod common;
 use common::*;
 use glam::Vec3;
 use spectral_render::integrator::path::PathIntegrator;
+use spectral_render::integrator::roulette::DEFAULT_RR_DEPTH;
 use spectral_render::sampling::Sampler;
 use spectral_render::scene::Scene;
 use spectral_render::session::{self, measure, DepthCut, MeterOptions, RenderOptions, Stop};
@@ -99,22 +100,26 @@ fn without_a_cap_nothing_is_cut_unless_the_safety_cap_is_reached() {
     };
     assert_eq!(session::render(&scene, &opts).unwrap().depth_cut, None);
     // ρ = 1: no path ends before the safety cap, and a continuation not before its own
-    // limit either: 1025 bounces' worth of Le kept, 1024 more found, a lower bound.
+    // limit either: 1025 bounces' worth of Le kept, 1024 more found, a lower bound. Whatever
+    // bounce roulette starts at: its survival probability is min(max β, 1) = 1 (`roulette.rs`).
     let white = furnace(1.0);
-    let opts = RenderOptions {
-        spp: Some(16),
-        ..Default::default()
-    };
-    let out = session::render(&white, &opts).unwrap();
-    let cut = out.depth_cut.expect("the safety cap acted");
-    let expected = 1024.0 / 2049.0;
-    eprintln!(
-        "safety cap: {} paths, cut {:.3} ± {:.3} (expected {expected:.3})",
-        cut.capped, cut.fraction, cut.ci95
-    );
-    assert!(!cut.user && cut.lower_bound && cut.max_depth == 1024);
-    assert_eq!(cut.capped, 8 * 8 * 16);
-    assert!((cut.fraction - expected).abs() < 2.04 * cut.ci95, "{cut:?}");
+    for rr_depth in [1, 2, 5] {
+        let opts = RenderOptions {
+            spp: Some(16),
+            rr_depth,
+            ..Default::default()
+        };
+        let out = session::render(&white, &opts).unwrap();
+        let cut = out.depth_cut.expect("the safety cap acted");
+        let expected = 1024.0 / 2049.0;
+        eprintln!(
+            "safety cap, rr-depth {rr_depth}: {} paths, cut {:.3} ± {:.3} (expected {expected:.3})",
+            cut.capped, cut.fraction, cut.ci95
+        );
+        assert!(!cut.user && cut.lower_bound && cut.max_depth == 1024);
+        assert_eq!(cut.capped, 8 * 8 * 16);
+        assert!((cut.fraction - expected).abs() < 2.04 * cut.ci95, "{cut:?}");
+    }
 }
 
 /// The path tracer's estimate is the same number whether or not the capped path is
@@ -124,6 +129,7 @@ fn the_continuation_leaves_the_capped_estimate_alone() {
     let scene = furnace(RHO);
     let pt = PathIntegrator {
         max_depth: CAP,
+        rr_depth: DEFAULT_RR_DEPTH,
         filter: TextureFilter::Finest,
     };
     let mut continued = 0;

@@ -787,6 +787,7 @@ fn path_tracer_collapses_wavelengths_only_at_dispersive_glass() {
         let scene = spectral_render::scene::load(&path, Some((8, 8))).unwrap();
         let integrator = PathIntegrator {
             max_depth: 5,
+            rr_depth: spectral_render::integrator::roulette::DEFAULT_RR_DEPTH,
             filter: spectral_render::texture::TextureFilter::Finest,
         };
         let (mut hero, mut secondary) = (0.0f32, 0.0f32);

@@ -146,6 +146,7 @@ fn spot_centroid(
     let eye = Vec3::new(eye.x as f32, eye.y as f32, 0.0);
     let integrator = PathIntegrator {
         max_depth: 7,
+        rr_depth: spectral_render::integrator::roulette::DEFAULT_RR_DEPTH,
         filter: spectral_render::texture::TextureFilter::Finest,
     };
     let lambda = SampledWavelengths {

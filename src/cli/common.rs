@@ -119,6 +119,12 @@ pub struct IntegratorArgs {
     /// store one per pixel).
     #[arg(long = "vcm-light-paths", allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
     pub vcm_light_paths: Option<u64>,
+    /// The path tracer's first bounce at which Russian roulette may end a path (Mitsuba's
+    /// rr_depth; 2 is pbrt-v4's rule); survival max β·η², at most 1. BDPT and VCM keep
+    /// pbrt-v4's.
+    #[arg(long = "rr-depth", default_value_t = crate::integrator::roulette::DEFAULT_RR_DEPTH,
+          allow_negative_numbers = true, value_parser = at_least::<u32>(1))]
+    pub rr_depth: u32,
 }
 
 impl IntegratorArgs {

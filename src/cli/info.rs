@@ -60,6 +60,10 @@ struct InfoArgs {
     /// The depth cap to report on (default: the render's, unlimited).
     #[arg(long = "max-depth")]
     max_depth: Option<u32>,
+    /// The path tracer's first bounce of Russian roulette in the pilot (as for rendering).
+    #[arg(long = "rr-depth", default_value_t = crate::integrator::roulette::DEFAULT_RR_DEPTH,
+          value_parser = super::common::at_least::<u32>(1))]
+    rr_depth: u32,
 }
 
 /// Entry point: `argv[0]` is "info".
@@ -83,6 +87,7 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
         seed: args.seed,
         threads: args.threads,
         max_depth: depth,
+        rr_depth: args.rr_depth,
         integrator: Integrator::Auto {
             mis: MisHeuristic::Power,
         },

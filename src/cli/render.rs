@@ -527,6 +527,7 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
         seed: args.seed,
         threads: args.threads,
         max_depth: args.max_depth,
+        rr_depth: args.integrator.rr_depth,
         integrator,
         strategies: args.strategies.is_some(),
         filter_textures: !args.no_texture_filtering,

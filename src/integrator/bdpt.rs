@@ -212,6 +212,7 @@ fn continue_past_cap(
     };
     let pt = PathIntegrator {
         max_depth: ctx.max_depth,
+        rr_depth: super::roulette::PBRT_RR_DEPTH,
         filter: ctx.filter,
     };
     let depth = walk.depth - 1;

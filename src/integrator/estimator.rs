@@ -19,6 +19,9 @@ use crate::texture::TextureFilter;
 pub struct Settings {
     /// Maximum scattering events (pbrt's maxdepth).
     pub max_depth: u32,
+    /// The path tracer's first bounce of Russian roulette (`roulette.rs`, `--rr-depth`); the
+    /// bidirectional integrators' subpaths keep their own rule.
+    pub rr_depth: u32,
     /// Texture footprints: the camera's for images, the finest level for meters.
     pub filter: TextureFilter,
     /// The run measures light meters rather than an image.

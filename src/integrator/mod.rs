@@ -4,8 +4,8 @@
 //!   ([`Capabilities`]); the CLI and both drivers of `session` consult only this type;
 //! - [`Estimator`]: one run of an integrator on a scene, one sample at a time, for images
 //!   and for light meters (`estimator.rs`);
-//! - `path`: unidirectional path tracing with NEE and MIS; `meter`: its light-meter
-//!   estimators;
+//! - `path`: unidirectional path tracing with NEE and MIS; `roulette`: its Russian roulette
+//!   (`--rr-depth`); `meter`: its light-meter estimators;
 //! - `light_tracer`: light (particle) tracing, splatting to the film;
 //! - `bdpt`: bidirectional path tracing, every (s, t) technique with MIS;
 //! - `vcm`: vertex connection and merging, BDPT plus merges with the iteration's light
@@ -27,6 +27,7 @@ pub(crate) mod gathered;
 pub mod light_tracer;
 pub mod meter;
 pub mod path;
+pub mod roulette;
 pub mod vcm;
 
 pub use bidir::{MisHeuristic, Workspace};

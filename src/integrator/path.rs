@@ -1,6 +1,6 @@
 //! Unidirectional path tracing with next-event estimation, multiple importance sampling
 //! (power heuristic, Veach 1997 §9.2) between light and BSDF sampling, and Russian roulette
-//! (PBR 4ed §13.4, the PathIntegrator).
+//! (PBR 4ed §13.4, the PathIntegrator) from bounce `rr_depth` on (`roulette.rs`).
 //!
 //! Depth counts scattering events as pbrt's `maxdepth`: depth 0 sees emitters directly,
 //! `max_depth` = 7 allows up to seven bounces (Mitsuba's max_depth 8). Without a cap from the
@@ -22,6 +22,7 @@ use super::bidir::Contribution;
 use super::cut::{continuation, continuation_limit, CutSample};
 use super::gathered::Gathered;
 use super::meter::MeterIntegrator;
+use super::roulette;
 use super::{Estimator, Settings, Workspace};
 use crate::bxdf::{Bsdf, TransportMode};
 use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
@@ -40,6 +41,9 @@ use glam::{Vec2, Vec3};
 #[derive(Clone, Copy, Debug)]
 pub struct PathIntegrator {
     pub max_depth: u32,
+    /// The first scattering event after which Russian roulette may end a path
+    /// (`roulette.rs`, `--rr-depth`).
+    pub rr_depth: u32,
     /// Texture footprints: the camera's for images, none for meters.
     pub filter: TextureFilter,
 }
@@ -366,7 +370,7 @@ impl PathIntegrator {
         st.ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
         st.t_max = f32::INFINITY;
         sampler.set_dimension(dimensions::bounce(bounce, ROULETTE));
-        russian_roulette(&mut st.beta, st.eta_scale, st.depth, sampler)
+        roulette::survives(&mut st.beta, st.eta_scale, st.depth, self.rr_depth, sampler)
     }
 
     /// The emission of area light `light` met at `hit` by the path in state `st`, into the
@@ -653,25 +657,6 @@ pub(crate) fn transmittance(
     0.0
 }
 
-/// Russian roulette after the second bounce when the throughput has dropped below 1
-/// (PBR 4ed §13.4.1, q = max(0, 1 − max β η_scale)); returns false when the path is terminated.
-#[inline]
-fn russian_roulette(
-    beta: &mut SampledSpectrum,
-    eta_scale: f32,
-    depth: u32,
-    sampler: &mut Sampler,
-) -> bool {
-    let m = beta.max_value() * eta_scale;
-    if m < 1.0 && depth > 1 {
-        let q = (1.0 - m).max(0.0);
-        if sampler.get_1d() < q {
-            return false;
-        }
-        *beta = *beta / (1.0 - q);
-    }
-    true
-}
 /// The path tracer as an [`Estimator`]: camera rays for images, the meter estimators of
 /// `meter.rs` for light meters.
 pub struct PathEstimator<'a> {
@@ -685,6 +670,7 @@ impl<'a> PathEstimator<'a> {
             scene,
             pt: PathIntegrator {
                 max_depth: settings.max_depth,
+                rr_depth: settings.rr_depth,
                 filter: settings.filter,
             },
         }

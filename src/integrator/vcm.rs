@@ -576,6 +576,7 @@ mod tests {
         let scene = crate::scene::build(&desc, Some((8, 8))).unwrap();
         let settings = Settings {
             max_depth: 5,
+            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
             filter: TextureFilter::Finest,
             meters: false,
         };
@@ -662,6 +663,7 @@ mod tests {
         let scene = crate::scene::build(&desc, Some((8, 8))).unwrap();
         let settings = Settings {
             max_depth: 5,
+            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
             filter: TextureFilter::Finest,
             meters: false,
         };
@@ -699,6 +701,7 @@ mod tests {
         let scene = floor_scene();
         let settings = Settings {
             max_depth: 5,
+            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
             filter: TextureFilter::Finest,
             meters: false,
         };

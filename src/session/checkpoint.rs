@@ -67,6 +67,7 @@ pub fn identity(scene: &Scene, opts: &RenderOptions) -> Vec<(String, String)> {
                 .map_or("unlimited".to_string(), |d| d.to_string()),
         ),
         ("integrator", format!("{:?}", opts.integrator)),
+        ("rr depth", opts.rr_depth.to_string()),
         ("texture filtering", opts.filter_textures.to_string()),
         ("strategy images", opts.strategies.to_string()),
         ("wavelengths", opts.wavelengths.to_string()),

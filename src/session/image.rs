@@ -78,6 +78,9 @@ pub struct RenderOptions {
     /// paths, behind the safety cap `SAFETY_DEPTH`. Whatever the cap, the output says what
     /// it cut when a path reached it ([`RenderOutput::depth_cut`]).
     pub max_depth: Option<u32>,
+    /// The path tracer's first bounce of Russian roulette (`--rr-depth`,
+    /// `integrator::roulette`); the other integrators ignore it.
+    pub rr_depth: u32,
     /// The light-transport algorithm and its settings.
     pub integrator: Integrator,
     /// Record the per-(s, t) decomposition (`Capabilities::strategy_images`).
@@ -116,6 +119,7 @@ impl Default for RenderOptions {
             seed: 0,
             threads: None,
             max_depth: None,
+            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
             integrator: Integrator::Path,
             strategies: false,
             filter_textures: true,
@@ -243,6 +247,7 @@ impl<'a> ImageSession<'a> {
         let layers = LayerFilms::new((w, h), &opts.layers, &emission, film.grid(), first_hit);
         let settings = Settings {
             max_depth: cap,
+            rr_depth: opts.rr_depth,
             filter: texture_filter(opts),
             meters: false,
         };

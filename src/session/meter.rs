@@ -101,6 +101,9 @@ pub struct MeterOptions {
     pub seed: u64,
     /// Maximum scattering events; None: unlimited (as [`super::RenderOptions::max_depth`]).
     pub max_depth: Option<u32>,
+    /// The path tracer's first bounce of Russian roulette (as
+    /// [`super::RenderOptions::rr_depth`]).
+    pub rr_depth: u32,
     pub threads: Option<usize>,
     /// The estimator: path tracing (default), light tracing or BDPT, with its settings.
     pub integrator: Integrator,
@@ -117,6 +120,7 @@ impl Default for MeterOptions {
             time_budget: None,
             seed: 0,
             max_depth: None,
+            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
             threads: None,
             integrator: Integrator::Path,
             max_memory: None,
@@ -255,6 +259,7 @@ impl<'a> MeterSession<'a> {
         super::memory::check("the measurement", &estimate, opts.max_memory)?;
         let settings = Settings {
             max_depth: depth_cap(opts.max_depth),
+            rr_depth: opts.rr_depth,
             filter: TextureFilter::Finest,
             meters: true,
         };

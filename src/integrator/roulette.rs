@@ -1,0 +1,107 @@
+//! The path tracer's Russian roulette (`--rr-depth`).
+//!
+//! After its `start`-th scattering event (and every later one) a path whose throughput has
+//! dropped below 1 survives with probability p = max β·η² and carries 1/p from then on;
+//! PBR 4ed §13.4.1 ("Russian roulette", the PathIntegrator's `rrBeta` test) with `start` 2,
+//! Mitsuba 3's `path` plugin (`rr_depth`, default 5; `src/integrators/path.cpp`) from its
+//! `rr_depth`-th. η² is the product of the squared relative IORs of the refractions so far
+//! (pbrt-v4's `etaScale`, PBR 4ed §14.1.3): radiance scaled by 1/η² across an interface is
+//! not absorbed, and roulette must not end it as if it were.
+//!
+//! Mitsuba also caps the survival probability at 0.95; ours is min(p, 1) as pbrt-v4's. The
+//! cap only acts where max β·η² ≥ 0.95 after `start` bounces — near-lossless surroundings —
+//! and there it multiplies each survivor's weight by 1/0.95 per bounce (more variance) to end
+//! paths that the reflectances would carry on. Without it a lossless path (ρ = 1) runs to the
+//! safety cap `cut::SAFETY_DEPTH`, which is reported with what it cut (docs/design.md §8
+//! "Variance per sample").
+
+use crate::sampling::Sampler;
+use crate::spectral::SampledSpectrum;
+
+/// pbrt-v4's first bounce of roulette (PBR 4ed §13.4.1): that of the bidirectional
+/// integrators' subpaths (`bidir/subpath.rs`) and of the path tracer that continues their
+/// camera subpaths past a cap (`cut.rs`).
+pub const PBRT_RR_DEPTH: u32 = 2;
+
+/// The default first bounce at which roulette may end a path (`--rr-depth`), chosen by the
+/// measurements of docs/design.md §8 "Variance per sample (issue 18)".
+pub const DEFAULT_RR_DEPTH: u32 = 2;
+
+/// Russian roulette after scattering event `depth` (1 for the first) of a path with
+/// throughput `beta` and refraction scale `eta_scale`, for roulette from bounce `rr_depth`;
+/// false when the path ends. Draws one number only when the test is played.
+#[inline]
+pub fn survives(
+    beta: &mut SampledSpectrum,
+    eta_scale: f32,
+    depth: u32,
+    rr_depth: u32,
+    sampler: &mut Sampler,
+) -> bool {
+    let m = beta.max_value() * eta_scale;
+    if m < 1.0 && depth >= rr_depth {
+        let q = (1.0 - m).max(0.0);
+        if sampler.get_1d() < q {
+            return false;
+        }
+        *beta = *beta / (1.0 - q);
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sampler() -> Sampler {
+        Sampler::new(7, 0, 0)
+    }
+
+    #[test]
+    fn before_its_start_roulette_neither_ends_nor_reweights_nor_draws() {
+        let mut s = sampler();
+        let mut reference = sampler();
+        let mut beta = SampledSpectrum::splat(0.01);
+        for depth in 1..5 {
+            assert!(survives(&mut beta, 1.0, depth, 5, &mut s));
+        }
+        assert_eq!(beta, SampledSpectrum::splat(0.01));
+        assert_eq!(s.get_1d(), reference.get_1d());
+    }
+
+    #[test]
+    fn survivors_carry_the_inverse_probability_so_the_mean_is_kept() {
+        // E[β'] = p · β/p = β: the mean of the survivors' weights over all trials is β, with
+        // standard error β √((1 − p)/(p n)); held at 5 σ.
+        let (b, n) = (0.3f32, 20_000u32);
+        let mut s = sampler();
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let mut beta = SampledSpectrum::splat(b);
+            if survives(&mut beta, 1.0, 5, 5, &mut s) {
+                assert!((beta.max_value() - 1.0).abs() < 1e-6);
+                sum += f64::from(beta.max_value());
+            }
+        }
+        let mean = sum / f64::from(n);
+        let se = f64::from(b) * ((1.0 - f64::from(b)) / (f64::from(b) * f64::from(n))).sqrt();
+        assert!(
+            (mean - f64::from(b)).abs() < 5.0 * se,
+            "{mean} vs {b} ± {se}"
+        );
+    }
+
+    #[test]
+    fn a_throughput_of_one_or_more_always_survives_unchanged() {
+        let mut s = sampler();
+        for m in [1.0f32, 1.5, 40.0] {
+            let mut beta = SampledSpectrum::splat(m);
+            assert!(survives(&mut beta, 1.0, 9, 1, &mut s));
+            assert_eq!(beta, SampledSpectrum::splat(m));
+        }
+        // Inside glass (η² = 2.25) a throughput of 0.5 is not absorption: 0.5 · 2.25 > 1.
+        let mut beta = SampledSpectrum::splat(0.5);
+        assert!(survives(&mut beta, 2.25, 9, 1, &mut s));
+        assert_eq!(beta, SampledSpectrum::splat(0.5));
+    }
+}
