@@ -159,9 +159,34 @@ fn bad_options_are_rejected() {
         ["small.usda", "--spp", "0"],
         ["small.usda", "--resolution", "0x5"],
         ["small.usda", "--integrator", "magic"],
+        ["small.usda", "--rr-depth", "0"],
+        ["small.usda", "--rr-depth", "-2"],
     ] {
         let o = spectral_render(&args, &dir);
         assert!(!o.status.success(), "{args:?} accepted");
         assert!(!stderr(&o).contains("panicked"));
+    }
+}
+
+/// `--rr-depth` (the path tracer's first bounce of Russian roulette) is taken by render and by
+/// info's pilot.
+#[test]
+fn rr_depth_is_an_option_of_render_and_info() {
+    let dir = temp_dir("cli-rr");
+    write(&dir, "small.usda", &small_stage());
+    for args in [
+        &[
+            "small.usda",
+            "--spp",
+            "2",
+            "--integrator",
+            "path",
+            "--rr-depth",
+            "5",
+        ][..],
+        &["info", "small.usda", "--spp", "2", "--rr-depth", "5"][..],
+    ] {
+        let o = spectral_render(args, &dir);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
     }
 }
