@@ -111,7 +111,8 @@ impl LightVertexStore {
         params: &MergeParams,
     ) -> Merged {
         let mut out = Merged::default();
-        if self.vertices.is_empty() {
+        // Most camera vertices lie far from every stored vertex (`reach.rs`).
+        if self.vertices.is_empty() || !self.grid.may_reach(z.p) {
             return out;
         }
         let lift = MERGE_LIFT * self.grid.radius();
