@@ -7,8 +7,8 @@
 //! (about 16 at 96 × 72), spread over the room by the glass ball's reflection, while every
 //! non-specular camera vertex queries. The grid's table has as many slots as points, so each
 //! query hashed its 2 × 2 × 2 cells into a table they almost all shared and scanned the hash
-//! collisions' candidates, to find nothing: about 600 instructions per camera vertex, 9 % of
-//! the render (docs/design.md "### VCM", "The cost per sample on caustic.usda").
+//! collisions' candidates, to find nothing: about 1,200 instructions per query, 9 % of the
+//! render (docs/design.md "### VCM", "The cost per sample, session 29").
 //!
 //! The bitmap divides the box grown by 2r on every side into at most 32 cells per axis, each
 //! at least 4r wide, and marks the cells that the cube of half-side 2r around some point
