@@ -178,13 +178,6 @@ impl HashGrid {
         }
     }
 
-    /// False when no point lies within the radius of `q` (`reach.rs`); true says only that
-    /// one may.
-    #[inline]
-    pub fn may_reach(&self, q: Vec3) -> bool {
-        self.reach.may_reach(q)
-    }
-
     /// True when `p` lies within the radius of `q`.
     #[inline]
     pub fn within(&self, q: Vec3, p: Vec3) -> bool {
