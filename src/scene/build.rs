@@ -192,6 +192,10 @@ pub(super) fn assemble(
     };
     let all_opaque = materials.iter().all(Material::is_opaque);
     let dispersive = machinery.dispersion_checks || materials.iter().any(Material::is_dispersive);
+    let specular_like = materials
+        .iter()
+        .map(|m| analysis::lobes::lobes(m).specular_like())
+        .collect();
     let mut scene = Scene {
         source: file.clone(),
         meshes,
@@ -199,6 +203,7 @@ pub(super) fn assemble(
         bvh,
         all_opaque,
         dispersive,
+        specular_like,
         materials,
         lights,
         light_sampler,

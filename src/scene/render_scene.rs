@@ -109,6 +109,10 @@ pub struct Scene {
     /// do the integrators check at each vertex whether to terminate the secondary
     /// wavelengths.
     pub dispersive: bool,
+    /// Per material, whether it has a delta or near-specular lobe
+    /// (`analysis::lobes::Lobes::specular_like`), found once here rather than at every vertex
+    /// of VCM's walks (`integrator::bidir::merge_rule::near_specular`).
+    pub specular_like: Vec<bool>,
     /// Stage space to world space (see `SceneDescription::stage_to_world`).
     pub stage_to_world: DMat4,
     /// The hash of the stage's layers (`SceneDescription::content_hash`).

@@ -16,7 +16,8 @@
 //! the 2 × 2 × 2 block holds about 5 candidates for each inside the ball, (4r)² / π r²).
 //! Queries report a candidate by its position in that order ([`HashGrid::order`] maps it back
 //! to the point's index), so that the caller can keep its own records in slot order too and
-//! read a cell's records contiguously.
+//! read a cell's records contiguously. A query first asks a coarse bitmap of the points
+//! (`reach.rs`) whether any point can lie within r of it at all, and stops there if not.
 //!
 //! The build is parallel (rayon) and deterministic: the bounds, the points' slots and the
 //! gather into slot order are computed in parallel, each element independently; only the
@@ -24,6 +25,7 @@
 //! in point order. The order within a slot is by decreasing point index whatever the thread
 //! count. The buffers are kept and reused by the next build.
 
+use super::reach::Reach;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -48,6 +50,8 @@ pub struct HashGrid {
     /// The counting sort's cursors (a build's scratch).
     cursor: Vec<u32>,
     origin: Vec3,
+    /// Where a query can find a point at all (`reach.rs`): [`HashGrid::query`]'s early exit.
+    reach: Reach,
     inv_cell: f32,
     radius2: f32,
 }
@@ -63,11 +67,17 @@ impl HashGrid {
     pub fn build(&mut self, n: usize, point: impl Fn(usize) -> GridPoint + Sync, radius: f32) {
         // Whole blocks of 8 slots, at least as many slots as points.
         let slots = n.max(1).next_power_of_two().max(BLOCK_SLOTS);
-        let lo = (0..n)
+        let (lo, hi) = (0..n)
             .into_par_iter()
             .with_min_len(BUILD_CHUNK)
-            .map(|i| point(i).p)
-            .reduce(|| Vec3::splat(f32::INFINITY), Vec3::min);
+            .map(|i| {
+                let p = point(i).p;
+                (p, p)
+            })
+            .reduce(
+                || (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
         self.origin = if lo.is_finite() { lo } else { Vec3::ZERO };
         self.inv_cell = 1.0 / (2.0 * radius);
         self.radius2 = radius * radius;
@@ -110,6 +120,8 @@ impl HashGrid {
             .with_min_len(BUILD_CHUNK)
             .zip(self.order.par_iter())
             .for_each(|(q, &i)| *q = point(i as usize));
+        self.reach
+            .build(self.points.iter().map(|g| g.p), lo, hi, radius);
     }
 
     /// The index of every point in slot order: the position a query reports ↦ the point's
@@ -121,7 +133,7 @@ impl HashGrid {
     /// Calls `visit(s)` for the position s in slot order ([`Self::order`]) of every point of
     /// key `key` that lies within the radius of `q` ([`Self::within`]), in a fixed order.
     pub fn query(&self, q: Vec3, key: u32, mut visit: impl FnMut(usize)) {
-        if self.points.is_empty() {
+        if self.points.is_empty() || !self.reach.may_reach(q) {
             return;
         }
         let c = (q - self.origin) * self.inv_cell;
@@ -185,6 +197,7 @@ impl HashGrid {
             + self.cursor.capacity())
             * std::mem::size_of::<u32>()
             + self.points.capacity() * std::mem::size_of::<GridPoint>()
+            + self.reach.bytes()
     }
 
     fn cell_of(&self, p: Vec3) -> [i64; 3] {

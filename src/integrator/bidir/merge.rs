@@ -114,8 +114,8 @@ impl LightVertexStore {
         if self.vertices.is_empty() {
             return out;
         }
-        let lift = MERGE_LIFT * self.grid.radius();
-        let z_lifted = z.p + arrival_normal(z) * lift;
+        // Most camera vertices lie far from every stored vertex: the query stops at once
+        // (`reach.rs`), so nothing is computed for them before it.
         self.grid.query(z.p, params.key, |s| {
             let y = &self.vertices[s];
             if y.depth + z.depth > params.max_depth + 1 {
@@ -129,8 +129,12 @@ impl LightVertexStore {
             let c = z.beta * e.f * y.beta * (w * params.normalization);
             // The light-leak guard last: most candidates lie on z's own mesh, and the rest
             // need a shadow ray only when they would count.
-            if y.mesh != mesh && !c.is_black() && !unoccluded(scene, z_lifted, y.p + y.n * lift) {
-                return;
+            if y.mesh != mesh && !c.is_black() {
+                let lift = MERGE_LIFT * self.grid.radius();
+                let z_lifted = z.p + arrival_normal(z) * lift;
+                if !unoccluded(scene, z_lifted, y.p + y.n * lift) {
+                    return;
+                }
             }
             if y.hero_only && !camera_hero_only {
                 out.hero_only += c;

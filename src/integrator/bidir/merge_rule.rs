@@ -53,7 +53,6 @@
 //! same images bit for bit (`examples/exr_diff`).
 
 use crate::bxdf::Bsdf;
-use crate::scene::analysis::lobes::lobes;
 use crate::scene::{Scene, SurfaceHit};
 
 /// Which vertices VCM merges at (`--vcm-merge`). No `Default`: VCM's default is
@@ -79,8 +78,9 @@ impl MergeRule {
 
 /// The vertex at `si` with BSDF `bsdf` is near-specular: its BSDF is a delta, or its material
 /// has a delta or near-specular lobe (`scene::analysis::lobes`, the one definition the scene
-/// analysis' path classes use: GGX α < `NEAR_SPECULAR_ALPHA`).
+/// analysis' path classes use: GGX α < `NEAR_SPECULAR_ALPHA`; per material in
+/// `Scene::specular_like`).
 #[inline]
 pub fn near_specular(scene: &Scene, si: &SurfaceHit, bsdf: &Bsdf) -> bool {
-    bsdf.is_specular() || lobes(&scene.materials[si.material as usize]).specular_like()
+    bsdf.is_specular() || scene.specular_like[si.material as usize]
 }

@@ -12,6 +12,7 @@
 //! | `merge.rs` | vertex merging: the merge technique over the stored light vertices |
 //! | `merge_rule.rs` | where merging is available ([`MergeRule`]: everywhere, or after near-specular vertices) and its MIS |
 //! | `hashgrid.rs` | the fixed-radius hash grid over them |
+//! | `reach.rs` | a coarse bitmap of where the grid's queries can find a point at all |
 //! | `record.rs` | a sample's contributions → tile sums and splats |
 //! | `strategies.rs` | the per-(s, t) decomposition written by `--strategies` |
 //!
@@ -29,6 +30,7 @@ pub mod hashgrid;
 pub mod merge;
 pub mod merge_rule;
 pub mod mis;
+pub mod reach;
 pub mod record;
 pub mod splat;
 pub mod store;
