@@ -434,6 +434,32 @@ fn a_resume_of_another_run_is_one_line() {
     let err = stderr(&other);
     assert_eq!(other.status.code(), Some(1), "{err}");
     assert!(err.contains("another run: seed 0 there, 9 here"), "{err}");
+    // The roulette's start is part of the run; at its default it is not named, so checkpoints
+    // written before `--rr-depth` existed still resume.
+    let rr = spectral_render(
+        &[
+            &s,
+            "--sampler",
+            "independent",
+            "--resolution",
+            "16x16",
+            "--threads",
+            "1",
+            "--spp",
+            "4000",
+            "--rr-depth",
+            "5",
+            "--resume",
+            "ck",
+        ],
+        &dir,
+    );
+    let err = stderr(&rr);
+    assert_eq!(rr.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("another run: rr depth missing there, 5 here"),
+        "{err}"
+    );
     std::fs::write(dir.join("junk"), b"spectral-render checkpoint\nxx").unwrap();
     let out = spectral_render(&[&s, "--resume", "junk"], &dir);
     assert_eq!(out.status.code(), Some(1));

@@ -18,6 +18,7 @@ use crate::desc::ContentHash;
 use crate::error::Reason;
 use crate::integrator::bidir::strategies::StrategySums;
 use crate::integrator::cut::{BatchedRatio, BATCHES};
+use crate::integrator::roulette::DEFAULT_RR_DEPTH;
 use crate::scene::Scene;
 use crate::sensor::film_state::FilmState;
 use crate::sensor::raw_bytes::{ByteReader, ByteWriter};
@@ -67,7 +68,6 @@ pub fn identity(scene: &Scene, opts: &RenderOptions) -> Vec<(String, String)> {
                 .map_or("unlimited".to_string(), |d| d.to_string()),
         ),
         ("integrator", format!("{:?}", opts.integrator)),
-        ("rr depth", opts.rr_depth.to_string()),
         ("texture filtering", opts.filter_textures.to_string()),
         ("strategy images", opts.strategies.to_string()),
         ("wavelengths", opts.wavelengths.to_string()),
@@ -77,7 +77,14 @@ pub fn identity(scene: &Scene, opts: &RenderOptions) -> Vec<(String, String)> {
         ),
         ("version", env!("CARGO_PKG_VERSION").to_string()),
     ];
-    pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
+    let mut id: Vec<(String, String)> =
+        pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+    // Named only when not the default, so that checkpoints and parts written before the option
+    // existed (all at the default) still resume and merge.
+    if opts.rr_depth != DEFAULT_RR_DEPTH {
+        id.push(("rr depth".into(), opts.rr_depth.to_string()));
+    }
+    id
 }
 
 impl Checkpoint {
