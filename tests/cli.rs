@@ -189,4 +189,12 @@ fn rr_depth_is_an_option_of_render_and_info() {
         let o = spectral_render(args, &dir);
         assert!(o.status.success(), "{args:?}: {}", stderr(&o));
     }
+    // The EXR says where the path tracer's roulette started, and says nothing of it for an
+    // integrator it does not apply to.
+    use spectral_render::output::exr;
+    let rr = |dir: &Path| exr::read(&dir.join("small.exr")).unwrap().attributes;
+    assert_eq!(rr(&dir)[exr::RR_DEPTH_ATTRIBUTE], "5");
+    let o = spectral_render(&["small.usda", "--spp", "2", "--integrator", "bdpt"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!rr(&dir).contains_key(exr::RR_DEPTH_ATTRIBUTE));
 }

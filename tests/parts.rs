@@ -95,6 +95,7 @@ fn assert_merge_equals_single(dir: &Path, integrator: &str, spp: u32, n: u32) {
         exr::SAMPLER_ATTRIBUTE,
         exr::SEED_ATTRIBUTE,
         exr::MAX_DEPTH_ATTRIBUTE,
+        exr::RR_DEPTH_ATTRIBUTE,
         exr::SCENE_ATTRIBUTE,
         "worldToNDC",
         "whiteLuminance",

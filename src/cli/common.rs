@@ -435,6 +435,9 @@ pub struct Made<'a> {
     pub integrator: &'a Integrator,
     pub seed: u64,
     pub max_depth: Option<u32>,
+    /// The path tracer's first bounce of Russian roulette (`--rr-depth`); written only when
+    /// `integrator` is the path tracer, the only one it applies to.
+    pub rr_depth: u32,
     pub spp: u64,
     pub wall_time_s: f64,
     /// The sampler the samples drew from (`RenderOutput::sampler`), when known.
@@ -451,6 +454,7 @@ impl Made<'_> {
             sampler: self.sampler.map(|s| s.name().into()),
             seed: self.seed,
             max_depth: self.max_depth,
+            rr_depth: matches!(self.integrator, Integrator::Path).then_some(self.rr_depth),
             exposure: camera.exposure,
             wall_time_s: self.wall_time_s,
             version: env!("CARGO_PKG_VERSION").into(),

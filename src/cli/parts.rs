@@ -201,12 +201,18 @@ pub fn made<'a>(
         Some(d) => Some(d.parse().map_err(|_| bad("max depth"))?),
         None => return Err(bad("max depth")),
     };
+    // Named in the identity only when not the default (`session::checkpoint::identity`).
+    let rr_depth = match part::value(identity, "rr depth") {
+        Some(d) => d.parse().map_err(|_| bad("rr depth"))?,
+        None => crate::integrator::roulette::DEFAULT_RR_DEPTH,
+    };
     Ok(Made {
         stage,
         scene,
         integrator,
         seed,
         max_depth,
+        rr_depth,
         spp: out.spp,
         wall_time_s: out.wall_time_s,
         sampler: out.sampler,

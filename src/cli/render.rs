@@ -371,6 +371,7 @@ fn made<'a>(
         integrator,
         seed: opts.seed,
         max_depth: opts.max_depth,
+        rr_depth: opts.rr_depth,
         spp: out.spp,
         wall_time_s: out.wall_time_s,
         sampler: out.sampler,
