@@ -267,23 +267,25 @@ fn the_exr_names_the_sampler_its_samples_drew_from() {
     }
 }
 
+/// The settings of [`spawn_render`]'s run, which a resume must repeat.
+const INTERRUPTED_RUN: [&str; 6] = [
+    "--sampler",
+    "independent",
+    "--resolution",
+    "16x16",
+    "--threads",
+    "1",
+];
+
 /// A render of the Cornell box at 16 × 16 on one thread, with a checkpoint after every pass,
 /// on independent numbers: the first k samples of a zsobol run depend on its sample count
 /// (the sequence's block, `sampling/zsobol.rs`), so an interrupted run's image equals a run of
 /// k samples only with the independent sampler.
 fn spawn_render(dir: &Path, spp: u32, extra: &[&str]) -> Child {
     bin()
-        .args([
-            &stage(),
-            "--sampler",
-            "independent",
-            "--resolution",
-            "16x16",
-            "--threads",
-            "1",
-            "-o",
-            "out.exr",
-        ])
+        .arg(stage())
+        .args(INTERRUPTED_RUN)
+        .args(["-o", "out.exr"])
         .args(["--spp", &spp.to_string()])
         .args(["--checkpoint", "ck", "--checkpoint-interval", "0.001"])
         .args(extra)
@@ -436,24 +438,10 @@ fn a_resume_of_another_run_is_one_line() {
     assert!(err.contains("another run: seed 0 there, 9 here"), "{err}");
     // The roulette's start is part of the run; at its default it is not named, so checkpoints
     // written before `--rr-depth` existed still resume.
-    let rr = spectral_render(
-        &[
-            &s,
-            "--sampler",
-            "independent",
-            "--resolution",
-            "16x16",
-            "--threads",
-            "1",
-            "--spp",
-            "4000",
-            "--rr-depth",
-            "5",
-            "--resume",
-            "ck",
-        ],
-        &dir,
-    );
+    let mut args = vec![s.as_str()];
+    args.extend(INTERRUPTED_RUN);
+    args.extend(["--spp", "4000", "--rr-depth", "5", "--resume", "ck"]);
+    let rr = spectral_render(&args, &dir);
     let err = stderr(&rr);
     assert_eq!(rr.status.code(), Some(1), "{err}");
     assert!(

@@ -4,7 +4,7 @@
 # run: samples/s, relRMSE at 64 and 256 spp, time to relRMSE 5 % with the visible light
 # masked, and the ratios (tools/equal_error.py says how each is measured).
 #
-#   tools/bench_equal_error.sh [--rounds N] [--spp 64 256]     (extra options: equal_error.py)
+#   tools/bench_equal_error.sh [--rounds N] [--spp 64 256] [--rr-depth N…]   (equal_error.py)
 #
 # Needs the peers' venv (../shared/peers/README.md; PEERS_VENV, default ~/peers/venv) and
 # DRJIT_LIBLLVM_PATH for the llvm variant. The reference is Mitsuba llvm_ad_spectral at

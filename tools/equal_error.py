@@ -41,12 +41,13 @@ from compare_mitsuba import emitter_mask  # noqa: E402
 EXE = os.path.join(ROOT, "target", "release", "spectral-render")
 
 
-def ours(sampler, spp, res, seed, tmp):
-    out = os.path.join(tmp, f"ours_{sampler}_{spp}_{seed}.exr")
+def ours(sampler, spp, res, seed, tmp, rr_depth=None):
+    out = os.path.join(tmp, f"ours_{sampler}_{rr_depth}_{spp}_{seed}.exr")
+    rr = ["--rr-depth", str(rr_depth)] if rr_depth else []
     t0 = time.perf_counter()
     subprocess.run([EXE, os.path.join(PEERS, "cbox.usda"), "-o", out, "--spp", str(spp),
                     "--resolution", f"{res}x{res}", "--max-depth", "7", "--seed", str(seed),
-                    "--integrator", "path", "--sampler", sampler],
+                    "--integrator", "path", "--sampler", sampler] + rr,
                    check=True, stderr=subprocess.DEVNULL)
     return time.perf_counter() - t0, common.read_exr(out)
 
@@ -83,6 +84,8 @@ def main():
     ap.add_argument("--spp", type=int, nargs="+", default=[64, 256])
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--variants", nargs="+", default=["llvm_ad_spectral", "scalar_spectral"])
+    ap.add_argument("--rr-depth", type=int, nargs="*", default=[],
+                    help="extra rows: ours (zsobol) with --rr-depth N")
     a = ap.parse_args()
     ref = common.read_exr(a.reference)[..., :3].astype(np.float64)
     mask = emitter_mask(ref)
@@ -91,6 +94,9 @@ def main():
     configs = [("ours path zsobol", lambda spp, s, tmp: ours("zsobol", spp, a.res, s, tmp)),
                ("ours path independent",
                 lambda spp, s, tmp: ours("independent", spp, a.res, s, tmp))]
+    for d in a.rr_depth:
+        configs.append((f"ours path zsobol rr-depth {d}",
+                        lambda spp, s, tmp, d=d: ours("zsobol", spp, a.res, s, tmp, d)))
     scenes = {}
     for v in a.variants:
         configs.append((f"Mitsuba {v}",

@@ -556,6 +556,16 @@ mod tests {
         desc
     }
 
+    /// The tests' integrator settings: depth 5, finest textures, an image.
+    fn test_settings() -> Settings {
+        Settings {
+            max_depth: 5,
+            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
+            filter: TextureFilter::Finest,
+            meters: false,
+        }
+    }
+
     #[test]
     fn stored_subpaths_rebuild_as_traced_bit_for_bit() {
         // The floor of rough BK7 (non-specular and dispersive): stored vertices on it have
@@ -574,12 +584,7 @@ mod tests {
         });
         desc.meshes[0].material = Some(0);
         let scene = crate::scene::build(&desc, Some((8, 8))).unwrap();
-        let settings = Settings {
-            max_depth: 5,
-            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
-            filter: TextureFilter::Finest,
-            meters: false,
-        };
+        let settings = test_settings();
         // Both merge rules: every vertex is stored and rebuilt, merge flags included, and the
         // grid holds exactly those merging is available at.
         for merges in MergeRule::ALL {
@@ -661,12 +666,7 @@ mod tests {
         ceiling.indices = vec![[0, 1, 2], [0, 2, 3]];
         desc.meshes.push(ceiling);
         let scene = crate::scene::build(&desc, Some((8, 8))).unwrap();
-        let settings = Settings {
-            max_depth: 5,
-            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
-            filter: TextureFilter::Finest,
-            meters: false,
-        };
+        let settings = test_settings();
         let gridded = |merges| {
             let params = VcmParams {
                 merges,
@@ -699,12 +699,7 @@ mod tests {
     #[test]
     fn the_store_is_reused_and_memory_stays_flat_over_a_thousand_iterations() {
         let scene = floor_scene();
-        let settings = Settings {
-            max_depth: 5,
-            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
-            filter: TextureFilter::Finest,
-            meters: false,
-        };
+        let settings = test_settings();
         // Every vertex merges (the default rule merges nothing on this diffuse floor).
         let params = VcmParams {
             merges: MergeRule::All,
