@@ -5,7 +5,7 @@
 //!     [--reference-time S | --reference-spp N] [--resolution WxH] [--max-depth N|unlimited]
 //!     [--reference REF.exr] [--threads N] [--integrators path,bdpt,vcm,vcm:caustic,vcm:bins=B,auto,…]
 //!     [--reference-integrator bdpt|vcm|path] [--region NAME=X0,Y0,X1,Y1]...
-//!     [--exclude X0,Y0,X1,Y1]... [--seed N] [--keep DIR]
+//!     [--exclude X0,Y0,X1,Y1]... [--seed N] [--keep DIR] [--metric mse|relmse]
 //! ```
 //!
 //! 1. Reference: `--reference-integrator` (default BDPT; VCM where only merging samples the
@@ -45,6 +45,14 @@
 //!    Use `--threads 1` and `--spp` on a shared machine: CPU time is then what each render
 //!    cost, whatever the load.
 //!
+//! `--metric` chooses the error every figure is of. `mse` (the default): the mean squared
+//! error of luminance in (cd/m²)². `relmse`: the error the `converge` report judges by
+//! (`converge::metrics`), pbrt-v4's relMSE, (y − r)² / (r² + 0.01) per pixel, less the
+//! reference's noise per pixel on the same scale, over the pixels that do not see an emitter
+//! directly (`converge::mask`), here on luminance (the references keep Y alone). Absolute MSE
+//! lets the brightest few pixels decide (on `scenes/caustic.usda` the lamp's glints through
+//! the ball); relMSE weighs every pixel by its own brightness.
+//!
 //! `--keep DIR` also writes each timed render to DIR/NAME.exr (colour included; two runs with
 //! different `--seed`s give each integrator's colour noise without a reference).
 //!
@@ -59,6 +67,8 @@
 //! (`VcmWavelengths::PerSample`), the measured alternative to one tuple per iteration.
 //! `vcm:all` and `vcm:caustic` are VCM with that merge rule (`--vcm-merge`).
 
+use spectral_render::converge::mask::emitter_mask;
+use spectral_render::converge::metrics::REL_MSE_OFFSET;
 use spectral_render::integrator::bidir::MergeRule;
 use spectral_render::integrator::roulette::DEFAULT_RR_DEPTH;
 use spectral_render::integrator::vcm::{VcmParams, VcmWavelengths};
@@ -85,6 +95,17 @@ struct Args {
     exclude: Vec<[usize; 4]>,
     seed: u64,
     keep: Option<PathBuf>,
+    metric: Metric,
+}
+
+/// The error the figures are of (`--metric`).
+#[derive(Clone, Copy, PartialEq)]
+enum Metric {
+    /// Squared error of luminance, (cd/m²)².
+    Mse,
+    /// pbrt-v4's relative squared error, (y − r)² / (r² + 0.01), emitters seen directly left
+    /// out: the `converge` report's measure.
+    RelMse,
 }
 
 /// An integrator, the sampler its samples draw from and the path tracer's first bounce of
@@ -183,6 +204,7 @@ fn parse() -> Result<Args, String> {
         exclude: Vec::new(),
         seed: 7,
         keep: None,
+        metric: Metric::Mse,
     };
     let mut it = std::env::args().skip(1);
     let mut stage = None;
@@ -215,6 +237,13 @@ fn parse() -> Result<Args, String> {
             "--exclude" => a.exclude.push(rect(&value()?)?),
             "--seed" => a.seed = value()?.parse().map_err(|e| format!("--seed: {e}"))?,
             "--keep" => a.keep = Some(value()?.into()),
+            "--metric" => {
+                a.metric = match value()?.as_str() {
+                    "mse" => Metric::Mse,
+                    "relmse" => Metric::RelMse,
+                    m => return Err(format!("--metric {m}: want mse or relmse")),
+                }
+            }
             "--reference-integrator" => a.reference_integrator = integrator(&value()?)?,
             "--resolution" => {
                 let v = value()?;
@@ -427,6 +456,16 @@ fn regions(scene: &spectral_render::scene::Scene, args: &Args) -> Vec<(String, V
         let mask = (0..w * h).map(|k| inside(r, k)).collect();
         regions.push((format!("region {name} {r:?}"), mask));
     }
+    if args.metric == Metric::RelMse {
+        let lamps = emitter_mask(scene);
+        let n = lamps.iter().filter(|l| **l).count();
+        for (label, mask) in &mut regions {
+            mask.iter_mut().zip(&lamps).for_each(|(m, l)| *m &= !l);
+            if n > 0 {
+                *label += &format!(" (relMSE; {n} pixels seeing an emitter left out)");
+            }
+        }
+    }
     regions
 }
 
@@ -441,15 +480,46 @@ fn mean_over(v: &[f64], mask: &[bool]) -> f64 {
         / n
 }
 
-/// The MSE of luminance `y` over `mask` against the reference, less the reference's own
-/// noise variance.
-fn region_mse(y: &[f64], (reference, noise): (&[f64], &[f64]), mask: &[bool]) -> f64 {
+/// The error of luminance `y` over `mask` against the reference (`metric`), less the
+/// reference's own noise variance on the same scale.
+fn region_mse(
+    y: &[f64],
+    (reference, noise): (&[f64], &[f64]),
+    mask: &[bool],
+    metric: Metric,
+) -> f64 {
     let sq: Vec<f64> = y
         .iter()
         .zip(reference)
-        .map(|(a, b)| (a - b).powi(2))
+        .zip(noise)
+        .map(|((a, b), n)| ((a - b).powi(2) - n) * metric.weight(*b))
         .collect();
-    mean_over(&sq, mask) - mean_over(noise, mask)
+    mean_over(&sq, mask)
+}
+
+impl Metric {
+    /// The weight of a pixel's squared error where the reference is `r`.
+    fn weight(self, r: f64) -> f64 {
+        match self {
+            Metric::Mse => 1.0,
+            Metric::RelMse => 1.0 / (r * r + REL_MSE_OFFSET),
+        }
+    }
+
+    /// The root of a mean error over pixels of reference mean `ref_mean`, relative.
+    fn relative_root(self, err: f64, ref_mean: f64) -> f64 {
+        match self {
+            Metric::Mse => err.max(0.0).sqrt() / ref_mean,
+            Metric::RelMse => err.max(0.0).sqrt(),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Metric::Mse => "MSE",
+            Metric::RelMse => "relMSE",
+        }
+    }
 }
 
 /// One render per integrator at `--seed`: the table, the ratios to the best and to the first.
@@ -480,18 +550,18 @@ fn single_run(
         );
         println!(
             "{:>10} {:>8} {:>8} {:>7} {:>12} {:>9}",
-            "", "time s", "cpu s", "spp", "RMSE cd/m²", "relRMSE"
+            "", "time s", "cpu s", "spp", format!("√{}", args.metric.name()), "relRMSE"
         );
         let mut rows = Vec::new();
         for (name, r) in &renders {
-            let mse = region_mse(&r.y, reference, mask);
+            let mse = region_mse(&r.y, reference, mask, args.metric);
             let rmse = mse.max(0.0).sqrt();
             println!(
                 "{name:>10} {:8.1} {:8.1} {:7} {rmse:12.4e} {:9.4}",
                 r.wall,
                 r.cpu,
                 r.spp,
-                rmse / ref_mean
+                args.metric.relative_root(mse, ref_mean)
             );
             rows.push((*name, mse, r.wall, r.cpu));
         }
@@ -572,7 +642,7 @@ fn many_seeds(
             let r = render_y(scene, args, *kind, (args.time, args.spp), seed, None);
             let chose = r.choice.map_or(String::new(), |c| format!(" → {c}"));
             for (i, (_, mask)) in regions.iter().enumerate() {
-                run.mse[i].push(region_mse(&r.y, reference, mask));
+                run.mse[i].push(region_mse(&r.y, reference, mask, args.metric));
             }
             eprintln!(
                 "seed {seed} {}{chose}: {:.2} CPU-s, image MSE {:.4e}",
@@ -597,7 +667,7 @@ fn many_seeds(
             args.seed,
             mean_over(reference.1, mask).sqrt()
         );
-        seeds_table(&runs, i, ref_mean);
+        seeds_table(&runs, i, ref_mean, args.metric);
         auto_criterion(&runs, i, args.spp.is_some());
     }
 }
@@ -656,13 +726,13 @@ fn ratio_ci(a: &Runs, b: &Runs, i: usize) -> (f64, f64) {
 
 /// Per integrator: mean CPU time, samples per pixel, mean MSE ± its standard error, relative
 /// RMSE, and mean MSE × mean CPU time over the best fixed integrator's with its interval.
-fn seeds_table(runs: &[Runs], i: usize, ref_mean: f64) {
+fn seeds_table(runs: &[Runs], i: usize, ref_mean: f64, metric: Metric) {
     let Some(best) = best_fixed(runs, i) else {
         return;
     };
     println!(
         "{:>10} {:>8} {:>7} {:>22} {:>8} {:>9} {:>16}",
-        "", "cpu s", "spp", "MSE (mean ± se)", "relRMSE", "MSE×cpu", "ci95"
+        "", "cpu s", "spp", format!("{} (mean ± se)", metric.name()), "relRMSE", "err×cpu", "ci95"
     );
     for r in runs {
         let m = mean(&r.mse[i]);
@@ -674,7 +744,7 @@ fn seeds_table(runs: &[Runs], i: usize, ref_mean: f64) {
             r.name,
             mean(&r.cpu),
             format!("{m:.4e} ± {:.1e}", std_error(&r.mse[i])),
-            m.max(0.0).sqrt() / ref_mean,
+            metric.relative_root(m, ref_mean),
             format!("[{lo:.3}, {hi:.3}]"),
         );
     }

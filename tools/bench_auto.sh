@@ -14,7 +14,11 @@
 #   2. Per stage, ns per ray query of each integrator and its ratio to path's
 #      (examples/auto_pilot.rs), which `session::auto::cost_per_ray` rounds.
 #
-# Usage: [REFS=DIR] [COST=0] tools/bench_auto.sh [SEEDS [SPP [REFERENCE_SPP [RESOLUTION [STAGE…]]]]]
+#   With METRIC=relmse the figures of part 1 are of pbrt-v4's relMSE over the pixels that do
+#   not see an emitter (the `converge` report's measure; `equal_time --metric`), not of the
+#   luminance MSE.
+#
+# Usage: [REFS=DIR] [COST=0] [METRIC=mse|relmse] tools/bench_auto.sh [SEEDS [SPP [REFERENCE_SPP [RESOLUTION [STAGE…]]]]]
 #   (defaults 16, 64, 4096, 160x120, the six stages below)
 # Prints tables; writes references to a temporary directory, nothing in the repository, or
 # with REFS=DIR keeps them in DIR (named STAGE-RES-REFSPP.exr) and reuses them on the next
@@ -57,7 +61,7 @@ for s in "${STAGES[@]}"; do
   "$EQ" "$ROOT/$s" --resolution "$RES" --max-depth unlimited --threads 1 --spp "$SPP" \
     --seeds "$SEEDS" --seed 1 --reference "$TMP/$(basename "$s" .usda)-$RES-$REF_SPP.exr" \
     --reference-spp "$REF_SPP" --reference-integrator "$ref" --integrators path,bdpt,vcm,auto \
-    "${extra[@]}"
+    --metric "${METRIC:-mse}" "${extra[@]}"
 done
 [ "${COST:-1}" = 0 ] && exit 0
 echo "== cost per ray query (8 spp at $RES)"
