@@ -550,7 +550,12 @@ fn single_run(
         );
         println!(
             "{:>10} {:>8} {:>8} {:>7} {:>12} {:>9}",
-            "", "time s", "cpu s", "spp", format!("√{}", args.metric.name()), "relRMSE"
+            "",
+            "time s",
+            "cpu s",
+            "spp",
+            format!("√{}", args.metric.name()),
+            "relRMSE"
         );
         let mut rows = Vec::new();
         for (name, r) in &renders {
@@ -732,7 +737,13 @@ fn seeds_table(runs: &[Runs], i: usize, ref_mean: f64, metric: Metric) {
     };
     println!(
         "{:>10} {:>8} {:>7} {:>22} {:>8} {:>9} {:>16}",
-        "", "cpu s", "spp", format!("{} (mean ± se)", metric.name()), "relRMSE", "err×cpu", "ci95"
+        "",
+        "cpu s",
+        "spp",
+        format!("{} (mean ± se)", metric.name()),
+        "relRMSE",
+        "err×cpu",
+        "ci95"
     );
     for r in runs {
         let m = mean(&r.mse[i]);
