@@ -9,7 +9,8 @@
 //! directly). The mask is the true first-hit mask of the scene's geometry, not a threshold on
 //! the reference's brightness, so it holds for any reference (ours or another renderer's).
 
-use crate::scene::{Hit, Scene};
+use crate::scene::analysis::sees_emitter_at;
+use crate::scene::Scene;
 use rayon::prelude::*;
 
 /// Rays per pixel side (4 × 4 per pixel).
@@ -32,11 +33,6 @@ fn sees_emitter(scene: &Scene, x: usize, y: usize) -> bool {
             x as f32 + (i as f32 + 0.5) * step,
             y as f32 + (j as f32 + 0.5) * step,
         ];
-        let (ray, t_max) = scene.camera.generate_ray(film, [0.5, 0.5]);
-        match scene.intersect(&ray, t_max) {
-            Some(Hit::Light { .. }) => true,
-            Some(Hit::Surface(s)) => s.light.is_some(),
-            None => !scene.infinite_lights.is_empty(),
-        }
+        sees_emitter_at(scene, film)
     })
 }

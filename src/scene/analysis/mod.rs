@@ -359,6 +359,38 @@ fn specular_at(scene: &Scene, film: [f32; 2]) -> Option<&str> {
     specular.then(|| scene.meshes[h.tri.mesh as usize].prim_path.as_str())
 }
 
+/// Whether the camera ray through film point `film` (pixels, at the lens centre) first hits
+/// an emitter: an analytic light shape, an emissive triangle, or nothing at all while the
+/// scene has an infinite light (a dome or distant light seen directly).
+pub fn sees_emitter_at(scene: &Scene, film: [f32; 2]) -> bool {
+    let (ray, t_max) = scene.camera.generate_ray(film, [0.5, 0.5]);
+    match scene.intersect(&ray, t_max) {
+        Some(Hit::Light { .. }) => true,
+        Some(Hit::Surface(s)) => s.light.is_some(),
+        None => !scene.infinite_lights.is_empty(),
+    }
+}
+
+/// Per pixel (rows of the camera's width), whether an emitter is seen in it or beside it: the
+/// pixels whose centre ray sees one ([`sees_emitter_at`]) and their eight neighbours, so that
+/// the emitter's rim, pixels it covers in part (the film's box filter is one pixel wide), is
+/// included wherever the emitter is at least a pixel across. One ray per pixel.
+pub fn emitter_pixels(scene: &Scene) -> Vec<bool> {
+    let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+    let centre: Vec<bool> = (0..w * h)
+        .map(|i| sees_emitter_at(scene, [(i % w) as f32 + 0.5, (i / w) as f32 + 0.5]))
+        .collect();
+    let near = |x: usize, y: usize| {
+        let (xs, ys) = (
+            x.saturating_sub(1)..(x + 2).min(w),
+            y.saturating_sub(1)..(y + 2).min(h),
+        );
+        ys.into_iter()
+            .any(|j| xs.clone().any(|i| centre[j * w + i]))
+    };
+    (0..w * h).map(|i| near(i % w, i / w)).collect()
+}
+
 /// Per pixel (rows of the camera's width), whether the camera ray through its centre sees a
 /// specular or near-specular surface first: where paths of the kind E S+ … begin.
 pub fn specular_pixels(scene: &Scene) -> Vec<bool> {
