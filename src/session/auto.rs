@@ -407,7 +407,7 @@ fn counted_pixels(scene: &Scene) -> Vec<bool> {
     let share = specular.iter().filter(|s| **s).count() as f32 / specular.len().max(1) as f32;
     let skip_specular = share < SDS_DECIDES;
     (specular.iter().zip(emitter_pixels(scene)))
-        .map(|(s, e)| !e && !(skip_specular && *s))
+        .map(|(s, e)| !(e || skip_specular && *s))
         .collect()
 }
 
