@@ -58,6 +58,14 @@ pub trait Estimator: Sync + Send {
         None
     }
 
+    /// True when [`Estimator::image_sample`] replaces the wavelengths it is given by its own
+    /// before using them (VCM: its iteration's tuple, or its stored light subpath's): the
+    /// driver then still draws the sample's wavelength number, so that the sampler's stream
+    /// is the same, but does not turn it into wavelengths.
+    fn own_image_wavelengths(&self) -> bool {
+        false
+    }
+
     /// One sample of the pixel at raster position `film`, through lens sample `u_lens`:
     /// contributions into `ws.record`, which the caller has cleared. `lambda` may have its
     /// secondary wavelengths terminated on return.

@@ -390,6 +390,10 @@ impl Estimator for VcmEstimator<'_> {
         self.fill_store(it.seed, it.index, r);
     }
 
+    fn own_image_wavelengths(&self) -> bool {
+        true
+    }
+
     fn image_sample(
         &self,
         film: [f32; 2],
@@ -399,7 +403,8 @@ impl Estimator for VcmEstimator<'_> {
         ws: &mut Workspace,
     ) {
         // The camera sample takes the wavelengths of its pixel's light subpath, terminated as
-        // its trace left them when it connects to it.
+        // its trace left them when it connects to it (whatever `lambda` held: the driver
+        // leaves it unset, `own_image_wavelengths`).
         let j = self.pixel_subpath(film);
         let traced = self.store.traced(j).unwrap_or(Traced {
             lambda: self.lambda,
@@ -593,6 +598,45 @@ mod tests {
                 ..VcmParams::default()
             };
             store_rebuilds_as_traced(&scene, settings, params);
+        }
+    }
+
+    #[test]
+    fn image_samples_ignore_the_wavelengths_they_are_handed() {
+        // The image driver hands VCM unset wavelengths (`own_image_wavelengths`): a sample's
+        // contributions and final wavelengths must not depend on them, with one tuple per
+        // iteration or one per light subpath.
+        let scene = floor_scene();
+        let handed = [0.1, 0.6].map(SampledWavelengths::sample_visible);
+        let mut terminated = handed[1];
+        terminated.terminate_secondary();
+        for wavelengths in [
+            VcmWavelengths::PerIteration,
+            VcmWavelengths::PerSample { bins: 4 },
+        ] {
+            let params = VcmParams {
+                wavelengths,
+                ..VcmParams::default()
+            };
+            let mut est = VcmEstimator::new(&scene, test_settings(), params);
+            assert!(est.own_image_wavelengths());
+            est.begin_iteration(Iteration { seed: 3, index: 1 });
+            let mut lit = 0;
+            for j in 0..64u64 {
+                let film = [(j % 8) as f32 + 0.5, (j / 8) as f32 + 0.5];
+                let runs: Vec<String> = [handed[0], handed[1], terminated]
+                    .into_iter()
+                    .map(|mut lambda| {
+                        let mut ws = Workspace::new(5, 0);
+                        let mut sampler = Sampler::new(3, j, 1);
+                        est.image_sample(film, [0.5; 2], &mut lambda, &mut sampler, &mut ws);
+                        lit += usize::from(!ws.record.total(&lambda).is_black());
+                        format!("{lambda:?} {:?}", ws.record)
+                    })
+                    .collect();
+                assert!(runs.iter().all(|r| *r == runs[0]), "pixel {j}");
+            }
+            assert!(lit >= 3 * 32, "{lit}");
         }
     }
 

@@ -532,6 +532,7 @@ impl<'a> ImageSession<'a> {
             samplers: self.samplers,
             strategy_count: self.strategy_count,
             hero_only: self.opts.wavelengths == 1,
+            own_wavelengths: self.estimator.own_image_wavelengths(),
             grid: self.film.grid(),
         };
         let estimator = &*self.estimator;
@@ -693,6 +694,8 @@ struct Segment {
     strategy_count: usize,
     /// Terminate the secondary wavelengths (`RenderOptions::wavelengths` = 1).
     hero_only: bool,
+    /// The estimator replaces each sample's wavelengths (`Estimator::own_image_wavelengths`).
+    own_wavelengths: bool,
     /// The film's grid (`sensor::grid_sum`).
     grid: Grid,
 }
@@ -715,12 +718,20 @@ fn render_tile<const HERO_ONLY: bool>(
     let mut fixed = vec![[0; 3]; tile.pixel_count()];
     let mut clamped = 0;
     let mut k = 0;
+    // What an estimator that brings its own wavelengths is handed (it replaces them first).
+    let unset = SampledWavelengths::sample_visible(0.5);
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             for s in task.first..task.first + task.count {
                 let mut sampler = task.samplers.sampler(x as u32, y as u32, s);
                 sampler.set_dimension(dimensions::WAVELENGTH);
-                let mut lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+                // Drawn either way: the independent sampler's later numbers follow it.
+                let u = sampler.get_1d();
+                let mut lambda = if task.own_wavelengths {
+                    unset
+                } else {
+                    SampledWavelengths::sample_visible(u)
+                };
                 if HERO_ONLY {
                     lambda.terminate_secondary();
                 }

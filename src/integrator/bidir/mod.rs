@@ -30,6 +30,7 @@ pub mod hashgrid;
 pub mod merge;
 pub mod merge_rule;
 pub mod mis;
+pub mod origin_view;
 pub mod reach;
 pub mod record;
 pub mod splat;

@@ -4,6 +4,7 @@
 //! to its one reading (bin 0).
 
 use super::connect::{origin_to_sensor, vertex_to_sensor};
+use super::origin_view::may_be_seen;
 use super::{BidirContext, Workspace};
 use crate::sampling::Sampler;
 use crate::spectral::SampledWavelengths;
@@ -33,7 +34,12 @@ fn splat_detached(
 ) {
     if let Some(o) = ws.light.origin {
         let u = sampler.get_2d();
-        if let Some(sc) = origin_to_sensor(ctx, &o, lambda, u, use_mis) {
+        // A lamp outside the camera's view: its points project nowhere (`origin_view.rs`).
+        let seen = may_be_seen(ctx.origins_in_view, o.light);
+        if let Some(sc) = seen
+            .then(|| origin_to_sensor(ctx, &o, lambda, u, use_mis))
+            .flatten()
+        {
             ws.record.add_splat(sc.bin, 1, sc.c);
         }
     }

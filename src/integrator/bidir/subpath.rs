@@ -37,6 +37,8 @@ pub struct BidirContext<'a> {
     /// An irradiance meter's point also merges light vertices (VCM): its subpath's MIS
     /// start accounts for that technique.
     pub sensor_merges: bool,
+    /// Which lights' points the sensor may see (`origin_view.rs`; every bit for a meter).
+    pub origins_in_view: u64,
 }
 
 impl<'a> BidirContext<'a> {
@@ -50,6 +52,7 @@ impl<'a> BidirContext<'a> {
             max_depth,
             filter: TextureFilter::Finest,
             sensor_merges: false,
+            origins_in_view: super::origin_view::lights_in_view(&scene.camera, &scene.lights),
         }
     }
 
@@ -60,7 +63,15 @@ impl<'a> BidirContext<'a> {
 
     /// The same render with another sensor (a meter).
     pub fn with_sensor(&self, sensor: Sensor<'a>) -> BidirContext<'a> {
-        BidirContext { sensor, ..*self }
+        let origins_in_view = match sensor {
+            Sensor::Camera(c) => super::origin_view::lights_in_view(c, &self.scene.lights),
+            _ => !0,
+        };
+        BidirContext {
+            sensor,
+            origins_in_view,
+            ..*self
+        }
     }
 }
 
