@@ -146,8 +146,9 @@ impl RectLight {
     }
 
     /// The spherical rectangle seen from `ctx` when a near rectangle ([`Self::near`]) is to be
-    /// sampled by solid angle: orthogonal edges (relative |cos| ≤ 10⁻⁴, pbrt-v4's
-    /// `IsRectangle` tolerance), a receiver in front, Ω above the threshold.
+    /// sampled by solid angle: orthogonal edges (relative |cos| ≤ 10⁻⁴; pbrt-v4's
+    /// `BilinearPatch::IsRectangle` allows the same 10⁻⁴ of relative difference between the
+    /// corners' squared distances from the centre), a receiver in front, Ω above the threshold.
     #[inline(never)]
     fn spherical(&self, ctx: &LightSampleContext) -> Option<SphericalRect> {
         let skew = self.edge_u.dot(self.edge_v).abs();

@@ -16,6 +16,7 @@ pub fn sample_linear(u: f32, a: f32, b: f32) -> f32 {
         return 0.0;
     }
     let x = u * (a + b) / (a + ((1.0 - u) * a * a + u * b * b).sqrt());
+    // The largest f32 below 1 (pbrt's `OneMinusEpsilon`): samples stay in [0, 1).
     x.min(1.0 - f32::EPSILON / 2.0)
 }
 

@@ -110,6 +110,7 @@ impl SphericalRect {
         let h1 = self.y1 / (d2 + self.y1 * self.y1).sqrt();
         let hv = h0 + f64::from(u[1]) * (h1 - h0);
         let hv2 = hv * hv;
+        // Algorithm 1's guard hv² < 1 − ε against the pole of y = h d/√(1 − h²), in f64.
         let yv = if hv2 < 1.0 - 1e-12 {
             (hv * d2.sqrt() / (1.0 - hv2).sqrt()).clamp(self.y0, self.y1)
         } else {
