@@ -239,11 +239,13 @@ fn chi2_bsdfs() {
 // Lights
 // ---------------------------------------------------------------------------------------------
 
-/// One light seen from one receiver; `domain` covers every direction the light can send.
+/// One light seen from one receiver (with unit normal `normal`, or zero for a point in space);
+/// `domain` covers every direction the light can send.
 struct LightCase {
     name: String,
     light: Light,
     receiver: Vec3,
+    normal: Vec3,
     domain: SphericalDomain,
 }
 
@@ -281,9 +283,44 @@ fn flat_light_cases(kind: &str, light: &Light, c: Vec3, n: Vec3, size: f32) -> V
             name: format!("light {kind}, receiver {label}"),
             light: light.clone(),
             receiver: p,
+            normal: Vec3::ZERO,
             domain: cap_towards(p, c, 0.5 * size),
         })
         .collect()
+}
+
+/// The same receivers with a surface normal, which warps solid-angle sampling by cos θ
+/// (`light::solid_angle`): facing the light, tilted 70° away from it, and facing away (|cos θ|
+/// also weights transmission), plus one receiver so near that it sees nearly a hemisphere.
+fn flat_light_cases_with_normals(
+    kind: &str,
+    light: &Light,
+    c: Vec3,
+    n: Vec3,
+    size: f32,
+) -> Vec<LightCase> {
+    let t = Frame::from_normal(n).s;
+    let tilt = (70f32.to_radians().cos() * -n + 70f32.to_radians().sin() * t).normalize();
+    let near = c + 0.02 * size * n;
+    let mut cases: Vec<LightCase> = receivers_in_front(c, n, t, size)
+        .into_iter()
+        .zip([-n, tilt, n])
+        .map(|((label, p), normal)| LightCase {
+            name: format!("light {kind}, receiver {label} with a normal"),
+            light: light.clone(),
+            receiver: p,
+            normal,
+            domain: cap_towards(p, c, 0.5 * size),
+        })
+        .collect();
+    cases.push(LightCase {
+        name: format!("light {kind}, receiver almost on it with a normal"),
+        light: light.clone(),
+        receiver: near,
+        normal: -tilt,
+        domain: SphericalDomain::around(-n),
+    });
+    cases
 }
 
 fn triangle_lights() -> Vec<LightCase> {
@@ -297,13 +334,41 @@ fn triangle_lights() -> Vec<LightCase> {
     let c = (p[0] + p[1] + p[2]) / 3.0;
     let size = 2.0 * p.iter().map(|q| (*q - c).length()).fold(0.0, f32::max);
     let n = one.n;
-    let mut cases = flat_light_cases("triangle", &Light::Triangle(one), c, n, size);
+    let mut cases = flat_light_cases("triangle", &Light::Triangle(one.clone()), c, n, size);
+    cases.extend(flat_light_cases_with_normals(
+        "triangle",
+        &Light::Triangle(one),
+        c,
+        n,
+        size,
+    ));
     let behind = c - 0.8 * n + 0.3 * Frame::from_normal(n).t;
     cases.push(LightCase {
         name: "light triangle two-sided, receiver behind".into(),
+        light: Light::Triangle(two.clone()),
+        receiver: behind,
+        normal: Vec3::ZERO,
+        domain: cap_towards(behind, c, 0.5 * size),
+    });
+    cases.push(LightCase {
+        name: "light triangle two-sided, receiver behind with a normal".into(),
         light: Light::Triangle(two),
         receiver: behind,
+        normal: Vec3::new(0.3, 0.9, 0.1).normalize(),
         domain: cap_towards(behind, c, 0.5 * size),
+    });
+    // A sliver (50:1; thinner ones fall between the quadrature's points, and
+    // `light::triangle`'s tests take them) seen from close by, with a normal.
+    let sliver = [p[0], p[1], p[0] + 0.02 * (p[2] - p[0])];
+    let thin = TriangleLight::new("/sliver".into(), sliver, Spectrum::Constant(1.0), true);
+    let sc = (sliver[0] + sliver[1] + sliver[2]) / 3.0;
+    let at = sc + 0.3 * thin.n + 0.1 * (p[2] - p[0]);
+    cases.push(LightCase {
+        name: "light triangle sliver, receiver near with a normal".into(),
+        light: Light::Triangle(thin),
+        receiver: at,
+        normal: Vec3::new(0.2, 1.0, -0.4).normalize(),
+        domain: cap_towards(at, sc, 0.7),
     });
     cases
 }
@@ -319,7 +384,32 @@ fn rect_lights() -> Vec<LightCase> {
     let rect = RectLight::new("/rect".into(), corner, eu, ev, n, Spectrum::Constant(1.0));
     let c = corner + 0.5 * (eu + ev);
     let (n, size) = (rect.n, (eu + ev).length());
-    flat_light_cases("rect", &Light::Rect(rect), c, n, size)
+    let mut cases = flat_light_cases("rect", &Light::Rect(rect.clone()), c, n, size);
+    cases.extend(flat_light_cases_with_normals(
+        "rect",
+        &Light::Rect(rect),
+        c,
+        n,
+        size,
+    ));
+    // A sheared parallelogram is sampled by area whatever the receiver.
+    let skew = RectLight::new(
+        "/skew".into(),
+        corner,
+        eu,
+        ev + 0.3 * eu,
+        -eu.cross(ev),
+        Spectrum::Constant(1.0),
+    );
+    let at = c + 0.4 * n;
+    cases.push(LightCase {
+        name: "light parallelogram, receiver near with a normal".into(),
+        light: Light::Rect(skew),
+        receiver: at,
+        normal: -n,
+        domain: cap_towards(at, c, 0.5 * size),
+    });
+    cases
 }
 
 fn disk_lights() -> Vec<LightCase> {
@@ -374,6 +464,7 @@ fn sphere_lights() -> Vec<LightCase> {
             name: format!("light sphere, receiver {label}"),
             light: Light::Sphere(sphere.clone()),
             receiver: p,
+            normal: Vec3::ZERO,
             domain: cap_towards(p, c, sphere.radius),
         })
         .collect()
@@ -415,6 +506,7 @@ fn ellipsoid_lights() -> Vec<LightCase> {
             name: format!("light ellipsoid, receiver {label}"),
             light: Light::Sphere(sphere.clone()),
             receiver: p,
+            normal: Vec3::ZERO,
             domain: cap_towards(p, c, r),
         })
         .collect()
@@ -435,6 +527,7 @@ fn distant_lights() -> Vec<LightCase> {
                 radiance: Spectrum::Constant(1.0),
             }),
             receiver: Vec3::ZERO,
+            normal: Vec3::ZERO,
             domain: SphericalDomain::cap(to_light, 1.15 * (half_deg as f64).to_radians()),
         })
         .collect()
@@ -496,6 +589,7 @@ fn dome_lights() -> Vec<LightCase> {
             portals: Vec::new(),
         }),
         receiver: Vec3::new(0.1, 0.2, 0.3),
+        normal: Vec3::ZERO,
         domain: SphericalDomain::sphere(),
     };
     // Two portals facing the receiver (0.1, 0.2, 0.3) and one it is behind, over the
@@ -592,12 +686,13 @@ fn light_case(c: LightCase) -> Case {
         name,
         light,
         receiver,
+        normal,
         domain,
     } = c;
     Case::new(name, move |name, m| {
         let ctx = LightSampleContext {
             p: receiver,
-            n: Vec3::ZERO,
+            n: normal,
         };
         let lambda = SampledWavelengths::sample_visible(0.5);
         Chi2Test::new(name, domain).test_count(m).run(

@@ -24,6 +24,7 @@ pub mod rect;
 pub mod report;
 pub mod sampler;
 pub mod shaping;
+pub mod solid_angle;
 pub mod sphere;
 pub mod triangle;
 

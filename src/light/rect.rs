@@ -1,16 +1,23 @@
-//! UsdLux RectLight: a one-sided rectangle emitting along its local −Z, sampled uniformly by
-//! area (PBR 4ed §12.5 for area lights; the pdf conversion is eq. 4.9).
+//! UsdLux RectLight: a one-sided rectangle emitting along its local −Z. Next-event estimation
+//! samples the spherical rectangle it subtends uniformly (Ureña et al. 2013) warped by the
+//! receiver's cos θ when it is near the receiver, its solid angle passes pbrt-v4's threshold
+//! (`solid_angle.rs`) and its edges are orthogonal (a sheared transform makes a
+//! parallelogram), else uniformly by area (PBR 4ed §12.5 for area lights; the pdf conversion is
+//! eq. 4.9).
 //!
 //! `inputs:texture:file` multiplies the emission by the texture, looked up at st = the
 //! point's coordinates along the rectangle's local +X and +Y edges (UsdLux: "the U axis along
 //! +X and V along +Y"). The texel's linear RGB is uplifted per lookup as an unbounded
 //! reflectance (scale · sigmoid, pbrt-v4 `RGBUnboundedSpectrum`; Jakob and Hanika 2019), so a
 //! grey texel v multiplies the spectrum by exactly v. As for textured mesh lights
-//! (`triangle.rs`), points are still sampled uniformly by area: only the radiance varies; the
-//! light sampler and the report use the texture's mean luminance.
+//! (`triangle.rs`), the sampling ignores the texture: the radiance is looked up at the sampled
+//! point; the light sampler and the report use the texture's mean luminance.
 
 use super::shaping::{self, Shaping};
+use super::solid_angle::{self, cos_weights};
 use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
+use crate::sampling::bilinear::{bilinear_pdf, sample_bilinear};
+use crate::sampling::spherical_rect::SphericalRect;
 use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
 use crate::texture::TextureInput;
@@ -138,7 +145,59 @@ impl RectLight {
         RectLight { shaping, ..self }
     }
 
+    /// The spherical rectangle seen from `ctx` when a near rectangle ([`Self::near`]) is to be
+    /// sampled by solid angle: orthogonal edges (relative |cos| ≤ 10⁻⁴; pbrt-v4's
+    /// `BilinearPatch::IsRectangle` allows the same 10⁻⁴ of relative difference between the
+    /// corners' squared distances from the centre), a receiver in front, Ω above the threshold.
+    #[inline(never)]
+    fn spherical(&self, ctx: &LightSampleContext) -> Option<SphericalRect> {
+        let skew = self.edge_u.dot(self.edge_v).abs();
+        if self.n.dot(ctx.p - self.corner) <= 0.0
+            || skew.is_nan()
+            || skew > 1e-4 * self.edge_u.length() * self.edge_v.length()
+        {
+            return None;
+        }
+        let r = SphericalRect::new(ctx.p, self.corner, self.edge_u, self.edge_v)?;
+        (r.area >= solid_angle::RECT_MIN_SOLID_ANGLE).then_some(r)
+    }
+
+    /// The receiver's cos θ weights at the primary-sample square's corners, which
+    /// `SphericalRect::sample` maps to corner + (0 | edge_u) + (0 | edge_v).
+    fn weights(&self, ctx: &LightSampleContext) -> Option<[f32; 4]> {
+        if ctx.n == Vec3::ZERO {
+            return None;
+        }
+        let (c, eu, ev) = (self.corner, self.edge_u, self.edge_v);
+        let dir = |p: Vec3| (p - ctx.p).normalize_or_zero();
+        cos_weights(ctx.n, [dir(c), dir(c + eu), dir(c + ev), dir(c + eu + ev)])
+    }
+
+    /// The cheap first test of [`Self::spherical`]: the switch and `solid_angle::is_near`.
+    #[inline]
+    fn near(&self, ctx: &LightSampleContext) -> bool {
+        let centre = self.corner + 0.5 * (self.edge_u + self.edge_v);
+        solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p)
+    }
+
+    #[inline]
     pub fn sample_li(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        if self.near(ctx) {
+            if let Some(r) = self.spherical(ctx) {
+                return self.sample_solid_angle(ctx, &r, u, lambda);
+            }
+        }
+        self.sample_area(ctx, u, lambda)
+    }
+
+    /// Uniform by area: p_w = d² / (A cos θ_light) (eq. 4.9).
+    #[inline]
+    pub(crate) fn sample_area(
         &self,
         ctx: &LightSampleContext,
         u: [f32; 2],
@@ -151,11 +210,57 @@ impl RectLight {
         })
     }
 
+    /// Uniform by solid angle, warped by the bilinear cos θ weights: p_w = p_bilinear(u′)/Ω.
+    #[inline(never)]
+    fn sample_solid_angle(
+        &self,
+        ctx: &LightSampleContext,
+        r: &SphericalRect,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        let (u, warp) = match self.weights(ctx) {
+            Some(w) => {
+                let u = sample_bilinear(u, w);
+                (u, bilinear_pdf(u, w))
+            }
+            None => (u, 1.0),
+        };
+        let p = r.sample(u);
+        let wi = (p - ctx.p.as_dvec3()).normalize_or_zero().as_vec3();
+        let pdf_w = (f64::from(warp) / r.area) as f32;
+        if wi == Vec3::ZERO || self.n.dot(wi) >= 0.0 || !(pdf_w > 0.0 && pdf_w.is_finite()) {
+            return None;
+        }
+        let p = p.as_vec3();
+        let st = match self.texture {
+            Some(_) => self.edge_coords(p).clamp(Vec2::ZERO, Vec2::ONE),
+            None => Vec2::ZERO,
+        };
+        let l = shaping::shape(&self.shaping, -wi, self.radiance_at(st, lambda), lambda);
+        Some(LightLiSample {
+            l,
+            wi,
+            pdf_w,
+            p_light: p,
+            n_light: self.n,
+            delta: false,
+            infinite: false,
+        })
+    }
+
     pub fn pdf_li(&self, ctx: &LightSampleContext, _wi: Vec3, hit: &LightHit) -> f32 {
         if self.area == 0.0 {
             return 0.0;
         }
-        area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n)
+        let Some(r) = self.near(ctx).then(|| self.spherical(ctx)).flatten() else {
+            return area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n);
+        };
+        let warp = match self.weights(ctx) {
+            Some(w) => bilinear_pdf(r.invert(hit.p), w),
+            None => 1.0,
+        };
+        (f64::from(warp) / r.area) as f32
     }
 
     /// Radiance leaving the point `p` of the rectangle towards `w`.

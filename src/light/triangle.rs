@@ -1,16 +1,23 @@
 //! One emissive triangle of a mesh light (MeshLightAPI or an emissive material), sampled
-//! uniformly by area (PBR 4ed §6.5.4).
+//! for next-event estimation uniformly by solid angle (the spherical triangle it subtends,
+//! Arvo 1995) warped by the receiver's cos θ when it is near the receiver and its solid angle
+//! lies within pbrt-v4's thresholds (`solid_angle.rs`), else uniformly by area (PBR 4ed
+//! §6.5.4).
 //!
 //! A textured UsdPreviewSurface `emissiveColor` ([`EmissiveTexture`]) makes the radiance vary
 //! over the triangle: it is looked up at the st of the emitting point and uplifted per lookup
 //! as an RGB illuminant (D65 × sigmoid, pbrt-v4 `RGBIlluminantSpectrum`), so the colour
-//! (1, 1, 1) emits D65 of 1 cd/m², as a constant `emissiveColor` does. Points are still
-//! sampled uniformly by area (the pdfs are unchanged); `radiance` then holds the triangle's
-//! mean colour, which weights the light sampler and the `lights` report.
+//! (1, 1, 1) emits D65 of 1 cd/m², as a constant `emissiveColor` does. The sampling ignores
+//! the texture (its pdfs are the untextured triangle's), the radiance is looked up at the
+//! sampled point; `radiance` then holds the triangle's mean colour, which weights the light
+//! sampler and the `lights` report.
 
+use super::solid_angle::{self, cos_weights};
 use super::{
     area_to_solid_angle, emits_towards, sample_by_area, LightHit, LightLiSample, LightSampleContext,
 };
+use crate::sampling::bilinear::{bilinear_pdf, sample_bilinear};
+use crate::sampling::spherical_triangle::SphericalTriangle;
 use crate::sampling::warp::uniform_triangle;
 use crate::spectral::uplift::RgbIlluminantSpectrum;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
@@ -120,6 +127,34 @@ impl TriangleLight {
         [1.0 - b1 - b2, b1, b2]
     }
 
+    /// The spherical triangle seen from `ctx` when a near triangle ([`Self::near`]) is to be
+    /// sampled by solid angle: a receiver in front of a one-sided one, Ω within the thresholds.
+    #[inline(never)]
+    fn spherical(&self, ctx: &LightSampleContext) -> Option<SphericalTriangle> {
+        if !emits_towards(self.n, ctx.p - self.p[0], self.two_sided) {
+            return None;
+        }
+        let t = SphericalTriangle::new(ctx.p, self.p)?;
+        let range = solid_angle::TRIANGLE_MIN_SOLID_ANGLE..=solid_angle::TRIANGLE_MAX_SOLID_ANGLE;
+        range.contains(&t.area).then_some(t)
+    }
+
+    /// The receiver's cos θ weights at the corners of the primary-sample square of `t`:
+    /// (·, 0) → b, (0, 1) → a, (1, 1) → c (`SphericalTriangle::sample`).
+    fn weights(ctx: &LightSampleContext, t: &SphericalTriangle) -> Option<[f32; 4]> {
+        let [a, b, c] = t.vertices();
+        cos_weights(ctx.n, [b, b, a, c])
+    }
+
+    /// The cheap first test of [`Self::spherical`] (kept apart so that the far receivers'
+    /// area sampling pays only for it): the switch and `solid_angle::is_near`.
+    #[inline]
+    fn near(&self, ctx: &LightSampleContext) -> bool {
+        let centre = (self.p[0] + self.p[1] + self.p[2]) * (1.0 / 3.0);
+        solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p)
+    }
+
+    #[inline]
     pub fn sample_li(
         &self,
         ctx: &LightSampleContext,
@@ -129,6 +164,22 @@ impl TriangleLight {
         if self.area == 0.0 {
             return None;
         }
+        if self.near(ctx) {
+            if let Some(t) = self.spherical(ctx) {
+                return self.sample_solid_angle(ctx, &t, u, lambda);
+            }
+        }
+        self.sample_area(ctx, u, lambda)
+    }
+
+    /// Uniform by area: p_w = d² / (A |cos θ_light|) (eq. 4.9).
+    #[inline]
+    pub(crate) fn sample_area(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
         let b = uniform_triangle(u);
         let p = b[0] * self.p[0] + b[1] * self.p[1] + b[2] * self.p[2];
         sample_by_area(ctx, p, self.n, self.area, self.two_sided, |_| {
@@ -136,11 +187,61 @@ impl TriangleLight {
         })
     }
 
+    /// Uniform by solid angle, warped by the bilinear cos θ weights: p_w = p_bilinear(u′)/Ω.
+    #[inline(never)]
+    fn sample_solid_angle(
+        &self,
+        ctx: &LightSampleContext,
+        t: &SphericalTriangle,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<LightLiSample> {
+        let (u, warp) = match Self::weights(ctx, t) {
+            Some(w) => {
+                let u = sample_bilinear(u, w);
+                (u, bilinear_pdf(u, w))
+            }
+            None => (u, 1.0),
+        };
+        let wi = t.sample(u);
+        // The point: the ray's hit on the triangle's plane.
+        let (o, n) = (ctx.p.as_dvec3(), self.n.as_dvec3());
+        let cos = n.dot(wi);
+        let dist = n.dot(self.p[0].as_dvec3() - o) / cos;
+        let pdf_w = (f64::from(warp) / t.area) as f32;
+        if !(dist > 0.0 && dist.is_finite() && pdf_w > 0.0 && pdf_w.is_finite()) {
+            return None;
+        }
+        let (p, wi) = ((o + dist * wi).as_vec3(), wi.as_vec3());
+        if !emits_towards(self.n, -wi, self.two_sided) {
+            return None;
+        }
+        Some(LightLiSample {
+            l: match &self.texture {
+                Some(tex) => tex.radiance(self.barycentrics(p), lambda),
+                None => self.radiance.sample(lambda),
+            },
+            wi,
+            pdf_w,
+            p_light: p,
+            n_light: self.n,
+            delta: false,
+            infinite: false,
+        })
+    }
+
     pub fn pdf_li(&self, ctx: &LightSampleContext, _wi: Vec3, hit: &LightHit) -> f32 {
         if self.area == 0.0 {
             return 0.0;
         }
-        area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n)
+        let Some(t) = self.near(ctx).then(|| self.spherical(ctx)).flatten() else {
+            return area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n);
+        };
+        let warp = match Self::weights(ctx, &t) {
+            Some(w) => bilinear_pdf(t.invert((hit.p - ctx.p).normalize_or_zero()), w),
+            None => 1.0,
+        };
+        (f64::from(warp) / t.area) as f32
     }
 
     /// Radiance leaving the point `hit` of the triangle towards `w`.

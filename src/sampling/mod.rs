@@ -1,12 +1,15 @@
 //! Random numbers — independent or low-discrepancy (`--sampler`) — and the warps from the
 //! unit square to directions and shapes.
 
+pub mod bilinear;
 pub mod dimensions;
 pub mod distribution;
 pub mod owen;
 pub mod pixel;
 pub mod rng;
 pub mod sobol;
+pub mod spherical_rect;
+pub mod spherical_triangle;
 pub mod warp;
 pub mod zsobol;
 
