@@ -16,7 +16,7 @@
 use super::shaping::{self, Shaping};
 use super::solid_angle::{self, cos_weights};
 use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
-use crate::sampling::bilinear::{bilinear_pdf, sample_bilinear};
+use crate::sampling::bilinear::bilinear_pdf;
 use crate::sampling::spherical_rect::SphericalRect;
 use crate::spectral::uplift::reflectance_lookup;
 use crate::spectral::{xyz, SampledSpectrum, SampledWavelengths, Spectrum};
@@ -219,13 +219,7 @@ impl RectLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let (u, warp) = match self.weights(ctx) {
-            Some(w) => {
-                let u = sample_bilinear(u, w);
-                (u, bilinear_pdf(u, w))
-            }
-            None => (u, 1.0),
-        };
+        let (u, warp) = solid_angle::warp(u, self.weights(ctx));
         let p = r.sample(u);
         let wi = (p - ctx.p.as_dvec3()).normalize_or_zero().as_vec3();
         let pdf_w = (f64::from(warp) / r.area) as f32;

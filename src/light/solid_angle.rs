@@ -14,6 +14,7 @@
 //! numerically fragile. Lights far from the receiver ([`NEAR_MIN`]) keep area sampling too:
 //! there the construction costs more than the variance it saves.
 
+use crate::sampling::bilinear::{bilinear_pdf, sample_bilinear};
 use glam::Vec3;
 
 /// Sample triangles and rectangles by solid angle where the thresholds allow (true), or
@@ -58,6 +59,20 @@ pub fn cos_weights(n: Vec3, corners: [Vec3; 4]) -> Option<[f32; 4]> {
         return None;
     }
     Some(corners.map(|w| n.dot(w).abs().max(MIN_WEIGHT)))
+}
+
+/// The primary sample `u` warped by the bilinear `weights` ([`cos_weights`]) and the warp's
+/// density at the warped point (PBR 4ed §2.4.2, `SampleBilinear`, `BilinearPDF`); `u` and 1
+/// without weights.
+#[inline]
+pub fn warp(u: [f32; 2], weights: Option<[f32; 4]>) -> ([f32; 2], f32) {
+    match weights {
+        Some(w) => {
+            let u = sample_bilinear(u, w);
+            (u, bilinear_pdf(u, w))
+        }
+        None => (u, 1.0),
+    }
 }
 
 #[cfg(test)]

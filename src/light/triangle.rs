@@ -16,7 +16,7 @@ use super::solid_angle::{self, cos_weights};
 use super::{
     area_to_solid_angle, emits_towards, sample_by_area, LightHit, LightLiSample, LightSampleContext,
 };
-use crate::sampling::bilinear::{bilinear_pdf, sample_bilinear};
+use crate::sampling::bilinear::bilinear_pdf;
 use crate::sampling::spherical_triangle::SphericalTriangle;
 use crate::sampling::warp::uniform_triangle;
 use crate::spectral::uplift::RgbIlluminantSpectrum;
@@ -196,13 +196,7 @@ impl TriangleLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let (u, warp) = match Self::weights(ctx, t) {
-            Some(w) => {
-                let u = sample_bilinear(u, w);
-                (u, bilinear_pdf(u, w))
-            }
-            None => (u, 1.0),
-        };
+        let (u, warp) = solid_angle::warp(u, Self::weights(ctx, t));
         let wi = t.sample(u);
         // The point: the ray's hit on the triangle's plane.
         let (o, n) = (ctx.p.as_dvec3(), self.n.as_dvec3());
