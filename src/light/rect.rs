@@ -145,7 +145,7 @@ impl RectLight {
         RectLight { shaping, ..self }
     }
 
-    /// The spherical rectangle seen from `ctx` when a near rectangle ([`Self::near`]) is to be
+    /// The spherical rectangle seen from `ctx` when a near rectangle ([`Self::solid_angle`]) is to be
     /// sampled by solid angle: orthogonal edges (relative |cos| ≤ 10⁻⁴; pbrt-v4's
     /// `BilinearPatch::IsRectangle` allows the same 10⁻⁴ of relative difference between the
     /// corners' squared distances from the centre), a receiver in front, Ω above the threshold.
@@ -173,11 +173,15 @@ impl RectLight {
         cos_weights(ctx.n, [dir(c), dir(c + eu), dir(c + ev), dir(c + eu + ev)])
     }
 
-    /// The cheap first test of [`Self::spherical`]: the switch and `solid_angle::is_near`.
+    /// The spherical rectangle to sample by solid angle from `ctx`, if any: the cheap test
+    /// first (the switch and `solid_angle::is_near`, so that far receivers' area sampling pays
+    /// only for it), then [`Self::spherical`]. Both `sample_li` and `pdf_li` decide by it.
     #[inline]
-    fn near(&self, ctx: &LightSampleContext) -> bool {
+    fn solid_angle(&self, ctx: &LightSampleContext) -> Option<SphericalRect> {
         let centre = self.corner + 0.5 * (self.edge_u + self.edge_v);
-        solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p)
+        let near =
+            solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p);
+        near.then(|| self.spherical(ctx)).flatten()
     }
 
     #[inline]
@@ -187,12 +191,10 @@ impl RectLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        if self.near(ctx) {
-            if let Some(r) = self.spherical(ctx) {
-                return self.sample_solid_angle(ctx, &r, u, lambda);
-            }
+        match self.solid_angle(ctx) {
+            Some(r) => self.sample_solid_angle(ctx, &r, u, lambda),
+            None => self.sample_area(ctx, u, lambda),
         }
-        self.sample_area(ctx, u, lambda)
     }
 
     /// Uniform by area: p_w = d² / (A cos θ_light) (eq. 4.9).
@@ -227,13 +229,8 @@ impl RectLight {
             return None;
         }
         let p = p.as_vec3();
-        let st = match self.texture {
-            Some(_) => self.edge_coords(p).clamp(Vec2::ZERO, Vec2::ONE),
-            None => Vec2::ZERO,
-        };
-        let l = shaping::shape(&self.shaping, -wi, self.radiance_at(st, lambda), lambda);
         Some(LightLiSample {
-            l,
+            l: self.l(p, -wi, lambda),
             wi,
             pdf_w,
             p_light: p,
@@ -247,13 +244,12 @@ impl RectLight {
         if self.area == 0.0 {
             return 0.0;
         }
-        let Some(r) = self.near(ctx).then(|| self.spherical(ctx)).flatten() else {
+        let Some(r) = self.solid_angle(ctx) else {
             return area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n);
         };
-        let warp = match self.weights(ctx) {
-            Some(w) => bilinear_pdf(r.invert(hit.p), w),
-            None => 1.0,
-        };
+        let warp = self
+            .weights(ctx)
+            .map_or(1.0, |w| bilinear_pdf(r.invert(hit.p), w));
         (f64::from(warp) / r.area) as f32
     }
 

@@ -127,7 +127,7 @@ impl TriangleLight {
         [1.0 - b1 - b2, b1, b2]
     }
 
-    /// The spherical triangle seen from `ctx` when a near triangle ([`Self::near`]) is to be
+    /// The spherical triangle seen from `ctx` when a near triangle ([`Self::solid_angle`]) is to be
     /// sampled by solid angle: a receiver in front of a one-sided one, Ω within the thresholds.
     #[inline(never)]
     fn spherical(&self, ctx: &LightSampleContext) -> Option<SphericalTriangle> {
@@ -146,12 +146,15 @@ impl TriangleLight {
         cos_weights(ctx.n, [b, b, a, c])
     }
 
-    /// The cheap first test of [`Self::spherical`] (kept apart so that the far receivers'
-    /// area sampling pays only for it): the switch and `solid_angle::is_near`.
+    /// The spherical triangle to sample by solid angle from `ctx`, if any: the cheap test
+    /// first (the switch and `solid_angle::is_near`, so that far receivers' area sampling pays
+    /// only for it), then [`Self::spherical`]. Both `sample_li` and `pdf_li` decide by it.
     #[inline]
-    fn near(&self, ctx: &LightSampleContext) -> bool {
+    fn solid_angle(&self, ctx: &LightSampleContext) -> Option<SphericalTriangle> {
         let centre = (self.p[0] + self.p[1] + self.p[2]) * (1.0 / 3.0);
-        solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p)
+        let near =
+            solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p);
+        near.then(|| self.spherical(ctx)).flatten()
     }
 
     #[inline]
@@ -164,12 +167,10 @@ impl TriangleLight {
         if self.area == 0.0 {
             return None;
         }
-        if self.near(ctx) {
-            if let Some(t) = self.spherical(ctx) {
-                return self.sample_solid_angle(ctx, &t, u, lambda);
-            }
+        match self.solid_angle(ctx) {
+            Some(t) => self.sample_solid_angle(ctx, &t, u, lambda),
+            None => self.sample_area(ctx, u, lambda),
         }
-        self.sample_area(ctx, u, lambda)
     }
 
     /// Uniform by area: p_w = d² / (A |cos θ_light|) (eq. 4.9).
@@ -211,10 +212,7 @@ impl TriangleLight {
             return None;
         }
         Some(LightLiSample {
-            l: match &self.texture {
-                Some(tex) => tex.radiance(self.barycentrics(p), lambda),
-                None => self.radiance.sample(lambda),
-            },
+            l: self.radiance_from(p, lambda),
             wi,
             pdf_w,
             p_light: p,
@@ -228,13 +226,11 @@ impl TriangleLight {
         if self.area == 0.0 {
             return 0.0;
         }
-        let Some(t) = self.near(ctx).then(|| self.spherical(ctx)).flatten() else {
+        let Some(t) = self.solid_angle(ctx) else {
             return area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n);
         };
-        let warp = match Self::weights(ctx, &t) {
-            Some(w) => bilinear_pdf(t.invert((hit.p - ctx.p).normalize_or_zero()), w),
-            None => 1.0,
-        };
+        let u = || t.invert((hit.p - ctx.p).normalize_or_zero());
+        let warp = Self::weights(ctx, &t).map_or(1.0, |w| bilinear_pdf(u(), w));
         (f64::from(warp) / t.area) as f32
     }
 
@@ -243,8 +239,14 @@ impl TriangleLight {
         if !emits_towards(self.n, w, self.two_sided) {
             return SampledSpectrum::ZERO;
         }
+        self.radiance_from(hit.p, lambda)
+    }
+
+    /// The radiance at the point `p` of the triangle (its barycentrics only when textured).
+    #[inline]
+    fn radiance_from(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         match &self.texture {
-            Some(t) => t.radiance(self.barycentrics(hit.p), lambda),
+            Some(t) => t.radiance(self.barycentrics(p), lambda),
             None => self.radiance.sample(lambda),
         }
     }
