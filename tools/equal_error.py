@@ -5,8 +5,10 @@ tools/bench_equal_error.sh, which names the reference; see that script for the o
 
 For each configuration and sample count (64, 256 by default) and each of --rounds rounds
 (configurations interleaved within a round, seeds 1, 2, ...):
-- ours: the release binary on ../shared/peers/cbox.usda, --max-depth 7, timed as a whole
-  process (scene load and EXR write included);
+- ours: the release binary on ../shared/peers/cbox.usda, --max-depth 7, timed by the render
+  loop's own wall time (the EXR header's `spectralRender:wallTime`: scene load and EXR write
+  not counted, as Mitsuba's scene load is not), with the whole process's wall time in a
+  column of its own (sessions before 31 timed the whole process);
 - Mitsuba: `mi.render` of the same box (`common.cbox_dict`, max_depth 8, 1-px box filter,
   its independent sampler) in this process, timed after one untimed warm-up render per
   variant (the llvm variant's JIT compile is not counted).
@@ -49,7 +51,15 @@ def ours(sampler, spp, res, seed, tmp, rr_depth=None):
                     "--resolution", f"{res}x{res}", "--max-depth", "7", "--seed", str(seed),
                     "--integrator", "path", "--sampler", sampler] + rr,
                    check=True, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t0, common.read_exr(out)
+    process = time.perf_counter() - t0
+    return render_seconds(out), process, common.read_exr(out)
+
+
+def render_seconds(path):
+    """The render loop's wall time that our renderer writes into the EXR header."""
+    import OpenEXR
+    with OpenEXR.File(path) as f:
+        return float(np.ravel(f.header()["spectralRender:wallTime"])[0])
 
 
 def mitsuba(variant, spp, res, seed, scenes):
@@ -60,7 +70,8 @@ def mitsuba(variant, spp, res, seed, scenes):
         mi.render(scenes[variant], spp=spp, seed=0)  # warm-up (JIT)
     t0 = time.perf_counter()
     img = np.array(mi.render(scenes[variant], spp=spp, seed=seed), dtype=np.float64)
-    return time.perf_counter() - t0, img[..., :3]
+    t = time.perf_counter() - t0
+    return t, t, img[..., :3]
 
 
 def ref_noise2_masked(path, ref, mask):
@@ -101,40 +112,42 @@ def main():
     for v in a.variants:
         configs.append((f"Mitsuba {v}",
                         lambda spp, s, tmp, v=v: mitsuba(v, spp, a.res, s, scenes)))
-    rows = {}  # (name, spp) -> list of (seconds, relRMSE)
+    rows = {}  # (name, spp) -> list of (render seconds, process seconds, relRMSE)
     tmp = tempfile.mkdtemp()
     for r in range(a.rounds):
         for spp in a.spp:
             for name, run in configs:
-                t, img = run(spp, r + 1, tmp)
+                t, tp, img = run(spp, r + 1, tmp)
                 err2 = np.mean((img[..., :3] - ref)[mask] ** 2) / ref_mean ** 2
                 err = np.sqrt(max(err2 - ref_noise2, 0.0))
-                rows.setdefault((name, spp), []).append((t, err))
-                print(f"round {r + 1} {name:28} {spp:5} spp: {t:7.2f} s, relRMSE {err:.4f}",
-                      file=sys.stderr)
+                rows.setdefault((name, spp), []).append((t, tp, err))
+                print(f"round {r + 1} {name:28} {spp:5} spp: {t:7.2f} s "
+                      f"(process {tp:7.2f} s), relRMSE {err:.4f}", file=sys.stderr)
     px = a.res * a.res
     print(f"cbox {a.res}x{a.res}, max depth 7 (Mitsuba 8), {a.rounds} interleaved rounds, "
           f"reference {os.path.basename(a.reference)} (its relative noise "
           f"{np.sqrt(ref_noise2):.4f} subtracted), light masked")
     hdr = ["renderer", "samples/s"] + [f"relRMSE {s} spp" for s in a.spp] + \
-          [f"relRMSE²×spp @{a.spp[-1]}", "time to 5 % (s)", "vs ours zsobol"]
+          [f"relRMSE²×spp @{a.spp[-1]}", "time to 5 % (s)", "vs ours zsobol",
+           "time to 5 %, whole process (s)"]
     print("| " + " | ".join(hdr) + " |")
     print("|" + "---|" * len(hdr))
-    t5 = {}
+    t5, t5p = {}, {}
     for name, _ in configs:
-        t, e = map(np.array, zip(*rows[(name, a.spp[-1])]))
-        sps = px * a.spp[-1] / t.mean()
+        t, tp, e = map(np.array, zip(*rows[(name, a.spp[-1])]))
         rel = float(np.sqrt(np.mean(e ** 2)))
         t5[name] = t.mean() * (rel / 0.05) ** 2
+        t5p[name] = tp.mean() * (rel / 0.05) ** 2
     base = t5[configs[0][0]]
     for name, _ in configs:
-        t, e = map(np.array, zip(*rows[(name, a.spp[-1])]))
+        t = np.array([x[0] for x in rows[(name, a.spp[-1])]])
         sps = px * a.spp[-1] / t.mean()
-        errs = [float(np.sqrt(np.mean(np.array([x[1] for x in rows[(name, s)]]) ** 2)))
+        errs = [float(np.sqrt(np.mean(np.array([x[2] for x in rows[(name, s)]]) ** 2)))
                 for s in a.spp]
         per_sample = errs[-1] ** 2 * a.spp[-1]
         cells = [name, f"{sps / 1e6:.2f} M"] + [f"{x:.4f}" for x in errs] + \
-                [f"{per_sample:.2f}", f"{t5[name]:.1f}", f"{t5[name] / base:.2f}×"]
+                [f"{per_sample:.2f}", f"{t5[name]:.1f}", f"{t5[name] / base:.2f}×",
+                 f"{t5p[name]:.1f}"]
         print("| " + " | ".join(cells) + " |")
 
 
