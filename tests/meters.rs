@@ -332,6 +332,65 @@ fn rect_light_matches_lamberts_polygon_formula_on_a_floor_and_a_wall() {
     }
 }
 
+/// Three panels of different sizes, radiances and yaws, one prim each, so that next-event
+/// estimation chooses among them by their importance at the meter (`light::spatial`) where
+/// light tracing and BDPT choose by power: every integrator's illuminance is the sum of
+/// Lambert's formula over the panels in front of the meter, under each panel, between them,
+/// far off, and facing sideways with two panels behind.
+#[test]
+fn rect_lights_chosen_by_importance_match_lamberts_formula() {
+    let panels = [
+        (0.6, 0.6, 3000.0, DVec3::new(0.0, 2.5, 0.0), 0.0),
+        (1.2, 0.3, 800.0, DVec3::new(2.5, 2.8, -1.0), 40.0),
+        (0.3, 0.3, 20000.0, DVec3::new(-3.0, 2.2, 2.0), -15.0),
+    ];
+    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0));
+    let mut lights = Vec::new();
+    for (k, &(w, h, l, c, yaw)) in panels.iter().enumerate() {
+        let (text, corners) = rect_light(w, h, l, c, yaw);
+        s += &text.replace("\"Panel\"", &format!("\"Panel{k}\""));
+        lights.push((l, corners));
+    }
+    let p = |x, y, z| DVec3::new(x, y, z);
+    s += &floor_quad([-12.0, 12.0], [-12.0, 12.0], "Black");
+    let scene = load("three-rects", &s);
+    assert!(
+        matches!(
+            scene.light_sampler,
+            spectral_render::light::LightSampler::Spatial(_)
+        ),
+        "three panels: the spatial sampler"
+    );
+    let points = [
+        (p(0.0, 0.0, 0.0), DVec3::Y),
+        (p(2.5, 0.0, -1.0), DVec3::Y),
+        (p(-3.0, 0.0, 2.0), DVec3::Y),
+        (p(1.0, 0.0, 1.0), DVec3::Y),
+        (p(8.0, 0.0, -5.0), DVec3::Y),
+        (p(-2.0, 1.0, 2.0), -DVec3::X),
+    ];
+    let meters: Vec<Meter> = points
+        .iter()
+        .map(|&(q, n)| Meter::illuminance(v3(q), v3(n)).unwrap())
+        .collect();
+    for kind in ALL {
+        let readings = read_with(&scene, &meters, Stop::RelError(REL), 3, Some(7), kind);
+        for (&(q, n), r) in points.iter().zip(&readings) {
+            // A panel wholly behind the meter's plane sends it nothing.
+            let exact: f64 = lights
+                .iter()
+                .filter(|(_, c)| c.iter().any(|v| n.dot(*v - q) > 0.0))
+                .map(|(l, c)| l * lambert(q, n, c))
+                .sum();
+            assert_exact(
+                &format!("{}: three rects at {q} n {n}", kind.name()),
+                r,
+                exact,
+            );
+        }
+    }
+}
+
 #[test]
 fn disk_light_on_axis() {
     let (l, radius, height) = (1500.0, 0.4, 3.0f64);

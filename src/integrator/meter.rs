@@ -131,7 +131,7 @@ fn light_sample(
     sampler: &mut Sampler,
 ) -> SampledSpectrum {
     let (ul, u) = (sampler.get_1d(), sampler.get_2d());
-    let Some((light, pmf)) = scene.light_sampler.sample(ul) else {
+    let Some((light, pmf)) = scene.light_sampler.sample_at(ctx, ul) else {
         return SampledSpectrum::ZERO;
     };
     let Some(ls) = scene.lights[light].sample_li(ctx, u, lambda) else {

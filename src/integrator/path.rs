@@ -444,8 +444,8 @@ impl PathIntegrator {
             // Next event estimation took all of a shadowless light's direct light.
             Some(p) if !p.specular && !scene.casts_shadows(light) => SampledSpectrum::ZERO,
             Some(p) if !p.specular && !le.is_black() => {
-                let pdf_light =
-                    scene.light_sampler.pmf(light as usize) * lgt.pdf_li(&p.ctx, -w, hit);
+                let pdf_light = scene.light_sampler.pmf_at(&p.ctx, light as usize)
+                    * lgt.pdf_li(&p.ctx, -w, hit);
                 le * power_heuristic(p.pdf_bsdf_w, pdf_light)
             }
             _ => le,
@@ -481,8 +481,8 @@ impl PathIntegrator {
             l += match prev {
                 Some(p) if !p.specular && !scene.casts_shadows(i) => SampledSpectrum::ZERO,
                 Some(p) if !p.specular => {
-                    let pdf_light =
-                        scene.light_sampler.pmf(i as usize) * lgt.pdf_li(&p.ctx, d, &far);
+                    let pdf_light = scene.light_sampler.pmf_at(&p.ctx, i as usize)
+                        * lgt.pdf_li(&p.ctx, d, &far);
                     le * power_heuristic(p.pdf_bsdf_w, pdf_light)
                 }
                 _ => le,
@@ -491,7 +491,8 @@ impl PathIntegrator {
         l
     }
 
-    /// Next-event estimation: one light chosen by power, one point on it, MIS-weighted
+    /// Next-event estimation: one light chosen by the scene's light sampler (by power, or by its
+    /// importance at this vertex: `light::spatial`), one point on it, MIS-weighted
     /// against BSDF sampling (Veach 1997 eq. 9.13 with β = 2), × `beta` into the image and
     /// every layer. A replacing layer samples its own light with the same numbers (the same
     /// point: only the spectrum differs) and shares the BSDF value, the shadow ray and the
@@ -509,10 +510,10 @@ impl PathIntegrator {
         g: &mut Gathered,
     ) {
         let (ul, u) = (sampler.get_1d(), sampler.get_2d());
-        let Some((light, pmf)) = scene.light_sampler.sample(ul) else {
+        let ctx = LightSampleContext { p: si.p, n: si.ng };
+        let Some((light, pmf)) = scene.light_sampler.sample_at(&ctx, ul) else {
             return;
         };
-        let ctx = LightSampleContext { p: si.p, n: si.ng };
         let nee = Nee {
             scene,
             si,

@@ -8,6 +8,7 @@
 //! IES profiles from `ies.rs`) scales the radiance of the analytic area lights per direction.
 //! `report.rs` computes the photometric report of `spectral-render lights`.
 
+pub mod bounds;
 pub mod cylinder;
 pub mod disk;
 pub mod distant;
@@ -25,12 +26,14 @@ pub mod report;
 pub mod sampler;
 pub mod shaping;
 pub mod solid_angle;
+pub mod spatial;
 pub mod sphere;
 pub mod triangle;
 
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use glam::Vec3;
 
+pub use bounds::LightBounds;
 pub use cylinder::CylinderLight;
 pub use disk::DiskLight;
 pub use distant::DistantLight;
