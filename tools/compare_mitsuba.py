@@ -23,6 +23,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PEERS = os.path.join(ROOT, "..", "shared", "peers")
 sys.path.insert(0, PEERS)
 import common  # noqa: E402  (the peers' helpers: cbox_dict, read_exr)
+from light_mask import emitter_mask  # noqa: E402,F401  (equal_error.py imports it from here)
 
 
 def ours(spp, res, seed, out):
@@ -39,16 +40,6 @@ def mitsuba(variant, spp, res, seed):
     mi.set_variant(variant)
     scene = mi.load_dict(common.cbox_dict(mi, res, spp, seed, 8))
     return np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)
-
-
-def emitter_mask(img):
-    """True away from the directly visible light (pixels > 5 grown by 2 px)."""
-    bright = img.max(axis=-1) > 5.0
-    grown = bright.copy()
-    for dy in range(-2, 3):
-        for dx in range(-2, 3):
-            grown |= np.roll(np.roll(bright, dy, 0), dx, 1)
-    return ~grown
 
 
 def main():

@@ -27,6 +27,8 @@ import tempfile
 import numpy as np
 import OpenEXR
 
+from light_mask import emitter_mask
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXE = os.path.join(ROOT, "target", "release", "spectral-render")
 Y_WEIGHTS = np.array([0.2126, 0.7152, 0.0722])
@@ -39,16 +41,6 @@ def read_rgb(path):
             if name in ch:
                 return np.array(ch[name].pixels, dtype=np.float64)[..., :3]
         return np.stack([np.array(ch[c].pixels, np.float64) for c in "RGB"], -1)
-
-
-def emitter_mask(img):
-    """True away from the directly visible light (pixels > 5 grown by 2 px)."""
-    bright = img.max(axis=-1) > 5.0
-    grown = bright.copy()
-    for dy in range(-2, 3):
-        for dx in range(-2, 3):
-            grown |= np.roll(np.roll(bright, dy, 0), dx, 1)
-    return ~grown
 
 
 def render(a, tmp, depth, sampler, seed):
