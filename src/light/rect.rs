@@ -14,7 +14,7 @@
 //! point; the light sampler and the report use the texture's mean luminance.
 
 use super::shaping::{self, Shaping};
-use super::solid_angle::{self, cos_weights};
+use super::solid_angle::{self, floor_weights};
 use super::{area_to_solid_angle, sample_by_area, LightHit, LightLiSample, LightSampleContext};
 use crate::sampling::bilinear::bilinear_pdf;
 use crate::sampling::spherical_rect::SphericalRect;
@@ -145,17 +145,14 @@ impl RectLight {
         RectLight { shaping, ..self }
     }
 
-    /// The spherical rectangle seen from `ctx` when a near rectangle ([`Self::solid_angle`]) is to be
-    /// sampled by solid angle: orthogonal edges (relative |cos| ≤ 10⁻⁴; pbrt-v4's
-    /// `BilinearPatch::IsRectangle` allows the same 10⁻⁴ of relative difference between the
-    /// corners' squared distances from the centre), a receiver in front, Ω above the threshold.
+    /// The spherical rectangle seen from `ctx` when a near rectangle with the receiver in front
+    /// ([`Self::near`]) is to be sampled by solid angle: orthogonal edges (relative |cos| ≤
+    /// 10⁻⁴; pbrt-v4's `BilinearPatch::IsRectangle` allows the same 10⁻⁴ of relative difference
+    /// between the corners' squared distances from the centre), Ω above the threshold.
     #[inline(never)]
     fn spherical(&self, ctx: &LightSampleContext) -> Option<SphericalRect> {
         let skew = self.edge_u.dot(self.edge_v).abs();
-        if self.n.dot(ctx.p - self.corner) <= 0.0
-            || skew.is_nan()
-            || skew > 1e-4 * self.edge_u.length() * self.edge_v.length()
-        {
+        if skew.is_nan() || skew > 1e-4 * self.edge_u.length() * self.edge_v.length() {
             return None;
         }
         let r = SphericalRect::new(ctx.p, self.corner, self.edge_u, self.edge_v)?;
@@ -163,25 +160,29 @@ impl RectLight {
     }
 
     /// The receiver's cos θ weights at the primary-sample square's corners, which
-    /// `SphericalRect::sample` maps to corner + (0 | edge_u) + (0 | edge_v).
-    fn weights(&self, ctx: &LightSampleContext) -> Option<[f32; 4]> {
-        if ctx.n == Vec3::ZERO {
-            return None;
-        }
-        let (c, eu, ev) = (self.corner, self.edge_u, self.edge_v);
-        let dir = |p: Vec3| (p - ctx.p).normalize_or_zero();
-        cos_weights(ctx.n, [dir(c), dir(c + eu), dir(c + ev), dir(c + eu + ev)])
+    /// `SphericalRect::sample` maps to corner + (0 | edge_u) + (0 | edge_v): the cosines from
+    /// the spherical rectangle's local coordinates (`SphericalRect::corner_cosines`).
+    fn weights(ctx: &LightSampleContext, r: &SphericalRect) -> Option<[f32; 4]> {
+        (ctx.n != Vec3::ZERO).then(|| floor_weights(r.corner_cosines(ctx.n)))
+    }
+
+    /// The first, cheap half of [`Self::solid_angle`]: the switch, `solid_angle::is_near` and
+    /// a receiver in front (so that receivers behind a near light, a ceiling beside its panel,
+    /// do not call out for the rest).
+    #[inline]
+    fn near(&self, ctx: &LightSampleContext) -> bool {
+        let centre = self.corner + 0.5 * (self.edge_u + self.edge_v);
+        solid_angle::SOLID_ANGLE_SAMPLING
+            && solid_angle::is_near(self.area, centre, ctx.p)
+            && self.n.dot(ctx.p - self.corner) > 0.0
     }
 
     /// The spherical rectangle to sample by solid angle from `ctx`, if any: the cheap test
-    /// first (the switch and `solid_angle::is_near`, so that far receivers' area sampling pays
-    /// only for it), then [`Self::spherical`]. Both `sample_li` and `pdf_li` decide by it.
+    /// first ([`Self::near`], so that far receivers' area sampling pays only for it), then
+    /// [`Self::spherical`]. Both `sample_li` and `pdf_li` decide by it.
     #[inline]
     fn solid_angle(&self, ctx: &LightSampleContext) -> Option<SphericalRect> {
-        let centre = self.corner + 0.5 * (self.edge_u + self.edge_v);
-        let near =
-            solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p);
-        near.then(|| self.spherical(ctx)).flatten()
+        self.near(ctx).then(|| self.spherical(ctx)).flatten()
     }
 
     #[inline]
@@ -191,10 +192,26 @@ impl RectLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        match self.solid_angle(ctx) {
-            Some(r) => self.sample_solid_angle(ctx, &r, u, lambda),
-            None => self.sample_area(ctx, u, lambda),
+        if self.near(ctx) {
+            if let Some(ls) = self.sample_near(ctx, u, lambda) {
+                return ls;
+            }
         }
+        self.sample_area(ctx, u, lambda)
+    }
+
+    /// The solid-angle sample when [`Self::solid_angle`] gives a spherical rectangle, None when
+    /// the light is to be area sampled: out of line, so that the far receivers' path (area
+    /// sampling, inlined into `Light::sample_li`) stays small.
+    #[inline(never)]
+    fn sample_near(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<Option<LightLiSample>> {
+        let r = self.solid_angle(ctx)?;
+        Some(self.sample_solid_angle(ctx, &r, u, lambda))
     }
 
     /// Uniform by area: p_w = d² / (A cos θ_light) (eq. 4.9).
@@ -213,7 +230,7 @@ impl RectLight {
     }
 
     /// Uniform by solid angle, warped by the bilinear cos θ weights: p_w = p_bilinear(u′)/Ω.
-    #[inline(never)]
+    #[inline]
     fn sample_solid_angle(
         &self,
         ctx: &LightSampleContext,
@@ -221,7 +238,7 @@ impl RectLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
-        let (u, warp) = solid_angle::warp(u, self.weights(ctx));
+        let (u, warp) = solid_angle::warp(u, Self::weights(ctx, r));
         let p = r.sample(u);
         let wi = (p - ctx.p.as_dvec3()).normalize_or_zero().as_vec3();
         let pdf_w = (f64::from(warp) / r.area) as f32;
@@ -247,9 +264,7 @@ impl RectLight {
         let Some(r) = self.solid_angle(ctx) else {
             return area_to_solid_angle(1.0 / self.area, ctx.p, hit.p, self.n);
         };
-        let warp = self
-            .weights(ctx)
-            .map_or(1.0, |w| bilinear_pdf(r.invert(hit.p), w));
+        let warp = Self::weights(ctx, &r).map_or(1.0, |w| bilinear_pdf(r.invert(hit.p), w));
         (f64::from(warp) / r.area) as f32
     }
 

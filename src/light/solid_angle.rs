@@ -58,7 +58,13 @@ pub fn cos_weights(n: Vec3, corners: [Vec3; 4]) -> Option<[f32; 4]> {
     if n == Vec3::ZERO {
         return None;
     }
-    Some(corners.map(|w| n.dot(w).abs().max(MIN_WEIGHT)))
+    Some(floor_weights(corners.map(|w| n.dot(w))))
+}
+
+/// The bilinear weights max(0.01, |cos|) of the receiver's cosines towards the four corners.
+#[inline]
+pub fn floor_weights(cos: [f32; 4]) -> [f32; 4] {
+    cos.map(|c| c.abs().max(MIN_WEIGHT))
 }
 
 /// The primary sample `u` warped by the bilinear `weights` ([`cos_weights`]) and the warp's

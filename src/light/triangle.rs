@@ -127,13 +127,10 @@ impl TriangleLight {
         [1.0 - b1 - b2, b1, b2]
     }
 
-    /// The spherical triangle seen from `ctx` when a near triangle ([`Self::solid_angle`]) is to be
-    /// sampled by solid angle: a receiver in front of a one-sided one, Ω within the thresholds.
+    /// The spherical triangle seen from `ctx` when a near triangle with the receiver in front
+    /// ([`Self::near`]) is to be sampled by solid angle: Ω within the thresholds.
     #[inline(never)]
     fn spherical(&self, ctx: &LightSampleContext) -> Option<SphericalTriangle> {
-        if !emits_towards(self.n, ctx.p - self.p[0], self.two_sided) {
-            return None;
-        }
         let t = SphericalTriangle::new(ctx.p, self.p)?;
         let range = solid_angle::TRIANGLE_MIN_SOLID_ANGLE..=solid_angle::TRIANGLE_MAX_SOLID_ANGLE;
         range.contains(&t.area).then_some(t)
@@ -146,15 +143,23 @@ impl TriangleLight {
         cos_weights(ctx.n, [b, b, a, c])
     }
 
+    /// The first, cheap half of [`Self::solid_angle`]: the switch, `solid_angle::is_near` and
+    /// a receiver the triangle emits towards (so that receivers behind a near one-sided light,
+    /// a ceiling beside its lamp, do not call out for the rest).
+    #[inline]
+    fn near(&self, ctx: &LightSampleContext) -> bool {
+        let centre = (self.p[0] + self.p[1] + self.p[2]) * (1.0 / 3.0);
+        solid_angle::SOLID_ANGLE_SAMPLING
+            && solid_angle::is_near(self.area, centre, ctx.p)
+            && emits_towards(self.n, ctx.p - self.p[0], self.two_sided)
+    }
+
     /// The spherical triangle to sample by solid angle from `ctx`, if any: the cheap test
-    /// first (the switch and `solid_angle::is_near`, so that far receivers' area sampling pays
-    /// only for it), then [`Self::spherical`]. Both `sample_li` and `pdf_li` decide by it.
+    /// first ([`Self::near`], so that far receivers' area sampling pays only for it), then
+    /// [`Self::spherical`]. Both `sample_li` and `pdf_li` decide by it.
     #[inline]
     fn solid_angle(&self, ctx: &LightSampleContext) -> Option<SphericalTriangle> {
-        let centre = (self.p[0] + self.p[1] + self.p[2]) * (1.0 / 3.0);
-        let near =
-            solid_angle::SOLID_ANGLE_SAMPLING && solid_angle::is_near(self.area, centre, ctx.p);
-        near.then(|| self.spherical(ctx)).flatten()
+        self.near(ctx).then(|| self.spherical(ctx)).flatten()
     }
 
     #[inline]
@@ -167,10 +172,26 @@ impl TriangleLight {
         if self.area == 0.0 {
             return None;
         }
-        match self.solid_angle(ctx) {
-            Some(t) => self.sample_solid_angle(ctx, &t, u, lambda),
-            None => self.sample_area(ctx, u, lambda),
+        if self.near(ctx) {
+            if let Some(ls) = self.sample_near(ctx, u, lambda) {
+                return ls;
+            }
         }
+        self.sample_area(ctx, u, lambda)
+    }
+
+    /// The solid-angle sample when [`Self::solid_angle`] gives a spherical triangle, None when
+    /// the light is to be area sampled: out of line, so that the far receivers' path (area
+    /// sampling, inlined into `Light::sample_li`) stays small.
+    #[inline(never)]
+    fn sample_near(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+    ) -> Option<Option<LightLiSample>> {
+        let t = self.solid_angle(ctx)?;
+        Some(self.sample_solid_angle(ctx, &t, u, lambda))
     }
 
     /// Uniform by area: p_w = d² / (A |cos θ_light|) (eq. 4.9).
@@ -189,7 +210,7 @@ impl TriangleLight {
     }
 
     /// Uniform by solid angle, warped by the bilinear cos θ weights: p_w = p_bilinear(u′)/Ω.
-    #[inline(never)]
+    #[inline]
     fn sample_solid_angle(
         &self,
         ctx: &LightSampleContext,

@@ -7,6 +7,7 @@
 //! - `_w` marks a pdf per unit solid angle, `_a` per unit area.
 //! - `lambda: &SampledWavelengths` is the wavelength tuple a path carries.
 
+pub mod angle32;
 pub mod frame;
 pub mod ratio;
 
