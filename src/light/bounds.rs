@@ -295,41 +295,24 @@ mod tests {
     use super::*;
     use crate::light::{RectLight, SphereLight, TriangleLight};
     use crate::spectral::Spectrum;
-
-    /// xorshift64*: test numbers in [0, 1).
-    struct Rng(u64);
-    impl Rng {
-        fn f(&mut self) -> f32 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn v(&mut self, scale: f32) -> Vec3 {
-            scale * Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5)
-        }
-        fn unit(&mut self) -> Vec3 {
-            loop {
-                let v = self.v(2.0);
-                if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
-                    return v.normalize();
-                }
-            }
-        }
-    }
+    use crate::testing::rng::Rng;
 
     /// A random one- or two-sided triangle, rectangle or sphere light of scale `s`.
     fn light(rng: &mut Rng, kind: u32, s: f32) -> Light {
-        let c = rng.v(4.0 * s);
+        let c = rng.vec3(-2.0 * s, 2.0 * s);
         match kind {
             0 | 1 => Light::Triangle(TriangleLight::new(
                 "/T".into(),
-                [c + rng.v(s), c + rng.v(s), c + rng.v(s)],
+                [
+                    c + rng.vec3(-0.5 * s, 0.5 * s),
+                    c + rng.vec3(-0.5 * s, 0.5 * s),
+                    c + rng.vec3(-0.5 * s, 0.5 * s),
+                ],
                 Spectrum::Constant(1.0),
                 kind == 1,
             )),
             2 => {
-                let (eu, ev0) = (rng.v(s), rng.v(s));
+                let (eu, ev0) = (rng.vec3(-0.5 * s, 0.5 * s), rng.vec3(-0.5 * s, 0.5 * s));
                 let ev = ev0 - eu * (ev0.dot(eu) / eu.length_squared());
                 Light::Rect(RectLight::new(
                     "/R".into(),
@@ -343,7 +326,7 @@ mod tests {
             _ => Light::Sphere(SphereLight {
                 prim_path: "/S".into(),
                 center: c,
-                radius: 0.3 * s * rng.f(),
+                radius: 0.3 * s * rng.f32(),
                 radiance: Spectrum::Constant(1.0),
                 shaping: None,
                 ellipsoid: None,
@@ -355,7 +338,7 @@ mod tests {
     fn surface_points(light: &Light, rng: &mut Rng) -> Vec<(Vec3, Option<(Vec3, bool)>)> {
         (0..64)
             .map(|_| {
-                let (a, b) = (rng.f(), rng.f());
+                let (a, b) = (rng.f32(), rng.f32());
                 match light {
                     Light::Triangle(t) => {
                         let (a, b) = if a + b > 1.0 {
@@ -367,7 +350,7 @@ mod tests {
                         (p, Some((t.n, t.two_sided)))
                     }
                     Light::Rect(r) => (r.corner + a * r.edge_u + b * r.edge_v, Some((r.n, false))),
-                    Light::Sphere(s) => (s.center + s.radius * rng.unit(), None),
+                    Light::Sphere(s) => (s.center + s.radius * rng.unit_vector(), None),
                     _ => unreachable!(),
                 }
             })
@@ -379,7 +362,7 @@ mod tests {
     /// that can arrive. Receivers near, far, on the light's plane, behind it, inside the box.
     #[test]
     fn importance_is_positive_wherever_light_can_arrive() {
-        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15);
         let mut checked = 0;
         for case in 0..4000 {
             let s = [1e-3f32, 1.0, 1e3][case % 3];
@@ -388,11 +371,15 @@ mod tests {
             let points = surface_points(&l, &mut rng);
             for k in 0..8 {
                 let p = match k {
-                    0 => points[0].0 + 1e-3 * s * rng.unit(),
-                    1 => b.lo + (b.hi - b.lo) * Vec3::new(rng.f(), rng.f(), rng.f()),
-                    _ => rng.v(20.0 * s),
+                    0 => points[0].0 + 1e-3 * s * rng.unit_vector(),
+                    1 => b.lo + (b.hi - b.lo) * Vec3::new(rng.f32(), rng.f32(), rng.f32()),
+                    _ => rng.vec3(-10.0 * s, 10.0 * s),
                 };
-                let n = if k % 2 == 0 { Vec3::ZERO } else { rng.unit() };
+                let n = if k % 2 == 0 {
+                    Vec3::ZERO
+                } else {
+                    rng.unit_vector()
+                };
                 let imp = b.importance(p, n);
                 assert!(imp.is_finite() && imp >= 0.0, "case {case}: {imp}");
                 let reaches = points.iter().any(|&(y, e)| {
@@ -434,19 +421,19 @@ mod tests {
     /// The union's cone holds every direction of both cones.
     #[test]
     fn union_holds_both_cones() {
-        let mut rng = Rng(7);
+        let mut rng = Rng::new(7);
         for case in 0..2000 {
             let cone = |rng: &mut Rng| {
                 let cos_o = if case % 5 == 0 {
                     1.0
                 } else {
-                    2.0 * rng.f() - 1.0
+                    2.0 * rng.f32() - 1.0
                 };
                 LightBounds {
                     lo: Vec3::ZERO,
                     hi: Vec3::ONE,
                     phi: 1.0,
-                    w: rng.unit(),
+                    w: rng.unit_vector(),
                     cos_theta_o: cos_o,
                     cos_theta_e: 0.0,
                     two_sided: false,
@@ -456,7 +443,7 @@ mod tests {
             let u = a.union(&b);
             for c in [a, b] {
                 for _ in 0..50 {
-                    let d = rng.unit();
+                    let d = rng.unit_vector();
                     if c.w.dot(d) >= c.cos_theta_o {
                         assert!(
                             u.w.dot(d) >= u.cos_theta_o - 1e-5,
