@@ -84,9 +84,9 @@ impl LightBounds {
     /// direction past π); both sides if either emits on both.
     pub fn union(&self, other: &LightBounds) -> LightBounds {
         let cos_ww = self.w.dot(other.w).clamp(-1.0, 1.0);
+        let sin_ww = sin_of(cos_ww);
         let (cos_o2, sin_o2) = (other.cos_theta_o, sin_of(other.cos_theta_o));
         // cos(θ(w, w′) + θo′), or −1 where the sum passes π.
-        let (cos_ww, sin_ww) = (cos_ww, sin_of(cos_ww));
         let sum_cos = cos_ww * cos_o2 - sin_ww * sin_o2;
         let sum_sin = sin_ww * cos_o2 + cos_ww * sin_o2;
         let reach = if self.cos_theta_o <= -1.0 || other.cos_theta_o <= -1.0 || sum_sin < 0.0 {
