@@ -391,6 +391,65 @@ fn rect_lights_chosen_by_importance_match_lamberts_formula() {
     }
 }
 
+/// 36 panels (more prims than the exhaustive sampler takes: the light tree, `light/tree.rs`)
+/// of varied sizes, radiances and yaws over a floor, against the sum of Lambert's formula.
+/// Path tracing only: it is the integrator whose next event estimation chooses lights down the
+/// tree (light subpaths, and so light tracing's and BDPT's, start by power, which the tests
+/// above check).
+#[test]
+fn many_rect_lights_chosen_down_the_tree_match_lamberts_formula() {
+    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0));
+    let mut lights = Vec::new();
+    for k in 0..36 {
+        let (i, j) = ((k % 6) as f64, (k / 6) as f64);
+        let (w, h) = (
+            0.3 + 0.1 * ((k * 7) % 5) as f64,
+            0.3 + 0.1 * ((k * 3) % 4) as f64,
+        );
+        let l = 500.0 * (1 + (k * 5) % 7) as f64;
+        let c = DVec3::new(
+            2.0 * i - 5.0,
+            2.6 + 0.1 * ((k * 11) % 3) as f64,
+            2.0 * j - 5.0,
+        );
+        let (text, corners) = rect_light(w, h, l, c, 15.0 * ((k * 13) % 6) as f64);
+        s += &text.replace("\"Panel\"", &format!("\"Panel{k}\""));
+        lights.push((l, corners));
+    }
+    s += &floor_quad([-12.0, 12.0], [-12.0, 12.0], "Black");
+    let scene = load("many-rects", &s);
+    assert!(
+        matches!(
+            scene.light_sampler,
+            spectral_render::light::LightSampler::Tree(_)
+        ),
+        "36 panels: the light tree"
+    );
+    let p = |x, y, z| DVec3::new(x, y, z);
+    let points = [
+        (p(0.0, 0.0, 0.0), DVec3::Y),
+        (p(-5.0, 0.0, -5.0), DVec3::Y),
+        (p(4.5, 0.5, 3.0), DVec3::Y),
+        (p(9.0, 0.0, 0.0), DVec3::Y),
+        (p(1.0, 1.2, -2.0), DVec3::Z),
+    ];
+    let meters: Vec<Meter> = points
+        .iter()
+        .map(|&(q, n)| Meter::illuminance(v3(q), v3(n)).unwrap())
+        .collect();
+    let kind = Integrator::Path;
+    let readings = read_with(&scene, &meters, Stop::RelError(REL), 5, Some(7), kind);
+    for (&(q, n), r) in points.iter().zip(&readings) {
+        // A panel wholly behind the meter's plane sends it nothing.
+        let exact: f64 = lights
+            .iter()
+            .filter(|(_, c)| c.iter().any(|v| n.dot(*v - q) > 0.0))
+            .map(|(l, c)| l * lambert(q, n, c))
+            .sum();
+        assert_exact(&format!("path: 36 rects at {q} n {n}"), r, exact);
+    }
+}
+
 #[test]
 fn disk_light_on_axis() {
     let (l, radius, height) = (1500.0, 0.4, 3.0f64);

@@ -28,6 +28,7 @@ pub mod shaping;
 pub mod solid_angle;
 pub mod spatial;
 pub mod sphere;
+pub mod tree;
 pub mod triangle;
 
 use crate::spectral::{SampledSpectrum, SampledWavelengths};

@@ -1,10 +1,12 @@
 //! Choosing a light: in proportion to its luminous power (PBR 4ed §12.6.2,
-//! PowerLightSampler), or for next-event estimation in scenes of a few bounded lights by its
-//! importance at the receiver (`spatial.rs`). A scene with a single light needs no table: it is
+//! PowerLightSampler), or for next-event estimation by the lights' importance at the receiver:
+//! exhaustively over a few prims of bounded lights (`spatial.rs`), through a tree over many
+//! (`tree.rs`). A scene with a single light needs no table: it is
 //! chosen with probability 1 without a lookup (the table would give the same index and pmf,
 //! exactly: its CDF is [0, 1]).
 
-use super::spatial::SpatialSampler;
+use super::spatial::{SpatialSampler, MAX_GROUPS};
+use super::tree::LightTree;
 use super::{Light, LightSampleContext};
 use crate::sampling::Distribution1D;
 
@@ -20,19 +22,28 @@ pub enum LightSampler {
     /// Next-event estimation by the lights' importance at the receiver (`spatial.rs`), light
     /// subpaths by power.
     Spatial(Box<SpatialSampler>),
+    /// Next-event estimation down a tree of the bounded lights (`tree.rs`), light subpaths by
+    /// power.
+    Tree(Box<LightTree>),
 }
 
 impl LightSampler {
-    /// The sampler of `lights`: none for one light, the spatial one for 2 to
-    /// `spatial::MAX_GROUPS` prims of bounded lights, else the power table.
+    /// The sampler of `lights`: none for one light, the spatial one for 2 to [`MAX_GROUPS`]
+    /// prims of bounded lights, the tree for more than [`MAX_GROUPS`] bounded lights otherwise
+    /// (more prims, or one emissive mesh of many triangles), else the power table.
     pub fn new(lights: &[Light], scene_radius: f32) -> LightSampler {
-        match lights.len() {
-            0 => LightSampler::Empty,
-            1 => LightSampler::Single,
-            _ => match SpatialSampler::new(lights, scene_radius) {
-                Some(s) => LightSampler::Spatial(Box::new(s)),
-                None => LightSampler::table(lights, scene_radius),
-            },
+        if lights.len() < 2 {
+            return match lights.len() {
+                0 => LightSampler::Empty,
+                _ => LightSampler::Single,
+            };
+        }
+        if let Some(s) = SpatialSampler::new(lights, scene_radius) {
+            return LightSampler::Spatial(Box::new(s));
+        }
+        match LightTree::new(lights, scene_radius, MAX_GROUPS) {
+            Some(t) => LightSampler::Tree(Box::new(t)),
+            None => LightSampler::table(lights, scene_radius),
         }
     }
 
@@ -60,6 +71,7 @@ impl LightSampler {
                 (pmf > 0.0).then_some((i, pmf))
             }
             LightSampler::Spatial(s) => s.sample_by_power(u),
+            LightSampler::Tree(t) => t.sample_by_power(u),
         }
     }
 
@@ -71,6 +83,7 @@ impl LightSampler {
             LightSampler::Single => 1.0,
             LightSampler::Power(d) => d.discrete_pmf(light),
             LightSampler::Spatial(s) => s.pmf_by_power(light),
+            LightSampler::Tree(t) => t.pmf_by_power(light),
         }
     }
 
@@ -79,6 +92,7 @@ impl LightSampler {
     pub fn sample_at(&self, ctx: &LightSampleContext, u: f32) -> Option<(usize, f32)> {
         match self {
             LightSampler::Spatial(s) => s.sample(ctx, u),
+            LightSampler::Tree(t) => t.sample(ctx, u),
             _ => self.sample(u),
         }
     }
@@ -88,6 +102,7 @@ impl LightSampler {
     pub fn pmf_at(&self, ctx: &LightSampleContext, light: usize) -> f32 {
         match self {
             LightSampler::Spatial(s) => s.pmf(ctx, light),
+            LightSampler::Tree(t) => t.pmf(ctx, light),
             _ => self.pmf(light),
         }
     }

@@ -96,7 +96,7 @@ impl SpatialSampler {
     /// (light index, probability) for the receiver `ctx`, or None when no light is chosen.
     pub fn sample(&self, ctx: &LightSampleContext, u: f32) -> Option<(usize, f32)> {
         if u < self.p_infinite {
-            return self.sample_infinite(u / self.p_infinite);
+            return pick_infinite(&self.power, &self.infinite, u);
         }
         let (imp, sum) = self.importances(ctx);
         if sum <= 0.0 {
@@ -104,18 +104,7 @@ impl SpatialSampler {
         }
         let share = 1.0 - self.p_infinite;
         let target = ((u - self.p_infinite) / share).min(1.0) * sum;
-        let (mut below, mut chosen) = (0.0f32, None);
-        for (k, &ik) in imp.iter().take(self.groups.len()).enumerate() {
-            if ik == 0.0 {
-                continue;
-            }
-            chosen = Some((k, below));
-            if target < below + ik {
-                break;
-            }
-            below += ik;
-        }
-        let (k, below) = chosen?;
+        let (k, below) = pick(&imp[..self.groups.len()], target)?;
         let p_group = share * (imp[k] / sum);
         let g = &self.groups[k];
         match &g.table {
@@ -157,26 +146,48 @@ impl SpatialSampler {
     pub fn pmf_by_power(&self, light: usize) -> f32 {
         self.power.discrete_pmf(light)
     }
+}
 
-    /// An infinite light chosen by power among the infinite lights, u in [0, 1); its
-    /// probability overall is its power's share (P∞ is the infinite lights' sum of those).
-    fn sample_infinite(&self, u: f32) -> Option<(usize, f32)> {
-        let target = u * self.p_infinite;
-        let mut acc = 0.0;
-        let mut last = None;
-        for &i in &self.infinite {
-            let p = self.power.discrete_pmf(i);
-            if p == 0.0 {
-                continue;
-            }
-            acc += p;
-            last = Some((i, p));
-            if target < acc {
-                break;
-            }
+/// The first index k of a nonzero weight with `target` < Σ_{j≤k} wⱼ (the last nonzero one if
+/// `target` reaches the sum), and Σ_{j<k} wⱼ; None when every weight is 0. Zero weights are
+/// skipped, so they are never chosen.
+#[inline]
+pub(super) fn pick(weights: &[f32], target: f32) -> Option<(usize, f32)> {
+    let (mut below, mut chosen) = (0.0f32, None);
+    for (k, &w) in weights.iter().enumerate() {
+        if w == 0.0 {
+            continue;
         }
-        last
+        chosen = Some((k, below));
+        if target < below + w {
+            break;
+        }
+        below += w;
     }
+    chosen
+}
+
+/// An infinite light chosen by power among `infinite`, for u in [0, P∞) (P∞ the sum of their
+/// power shares): its probability overall is its power's share.
+pub(super) fn pick_infinite(
+    power: &Distribution1D,
+    infinite: &[usize],
+    u: f32,
+) -> Option<(usize, f32)> {
+    let mut acc = 0.0;
+    let mut last = None;
+    for &i in infinite {
+        let p = power.discrete_pmf(i);
+        if p == 0.0 {
+            continue;
+        }
+        acc += p;
+        last = Some((i, p));
+        if u < acc {
+            break;
+        }
+    }
+    last
 }
 
 /// The bounded lights grouped by prim path (in order of first appearance), and each light's

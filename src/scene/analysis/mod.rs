@@ -441,7 +441,11 @@ fn light_features(f: &mut SceneFeatures, lights: &[LightInfo]) {
         reason: match n {
             0 => "no lights".into(),
             1 => format!("one light: {}", all[0]),
-            n => format!("{n} lights: next-event estimation picks one by luminous power"),
+            n => format!(
+                "{n} lights: next-event estimation picks one by its importance at the receiver \
+                 (over up to 32 prims of bounded lights, down a light tree beyond), else by \
+                 luminous power"
+            ),
         },
         prims: if n > 1 { all } else { Vec::new() },
     };
