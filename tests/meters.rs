@@ -332,6 +332,35 @@ fn rect_light_matches_lamberts_polygon_formula_on_a_floor_and_a_wall() {
     }
 }
 
+/// A stage of flat panels (w, h, luminance, centre, yaw in degrees) facing down over a black
+/// floor, and each panel's luminance and corners.
+#[allow(clippy::type_complexity)]
+fn panels_over_floor(
+    name: &str,
+    panels: &[(f64, f64, f64, DVec3, f64)],
+) -> (Scene, Vec<(f64, Vec<DVec3>)>) {
+    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0));
+    let mut lights = Vec::new();
+    for (k, &(w, h, l, c, yaw)) in panels.iter().enumerate() {
+        let (text, corners) = rect_light(w, h, l, c, yaw);
+        s += &text.replace("\"Panel\"", &format!("\"Panel{k}\""));
+        lights.push((l, corners));
+    }
+    s += &floor_quad([-12.0, 12.0], [-12.0, 12.0], "Black");
+    (load(name, &s), lights)
+}
+
+/// The illuminance at `q` (normal `n`) from Lambertian panels of luminance l and corners c:
+/// Σ l · Lambert's formula over the panels not wholly behind the meter's plane (those send it
+/// nothing).
+fn lambert_sum(lights: &[(f64, Vec<DVec3>)], q: DVec3, n: DVec3) -> f64 {
+    lights
+        .iter()
+        .filter(|(_, c)| c.iter().any(|v| n.dot(*v - q) > 0.0))
+        .map(|(l, c)| l * lambert(q, n, c))
+        .sum()
+}
+
 /// Three panels of different sizes, radiances and yaws, one prim each, so that next-event
 /// estimation chooses among them by their importance at the meter (`light::spatial`) where
 /// light tracing and BDPT choose by power: every integrator's illuminance is the sum of
@@ -344,16 +373,7 @@ fn rect_lights_chosen_by_importance_match_lamberts_formula() {
         (1.2, 0.3, 800.0, DVec3::new(2.5, 2.8, -1.0), 40.0),
         (0.3, 0.3, 20000.0, DVec3::new(-3.0, 2.2, 2.0), -15.0),
     ];
-    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0));
-    let mut lights = Vec::new();
-    for (k, &(w, h, l, c, yaw)) in panels.iter().enumerate() {
-        let (text, corners) = rect_light(w, h, l, c, yaw);
-        s += &text.replace("\"Panel\"", &format!("\"Panel{k}\""));
-        lights.push((l, corners));
-    }
-    let p = |x, y, z| DVec3::new(x, y, z);
-    s += &floor_quad([-12.0, 12.0], [-12.0, 12.0], "Black");
-    let scene = load("three-rects", &s);
+    let (scene, lights) = panels_over_floor("three-rects", &panels);
     assert!(
         matches!(
             scene.light_sampler,
@@ -361,6 +381,7 @@ fn rect_lights_chosen_by_importance_match_lamberts_formula() {
         ),
         "three panels: the spatial sampler"
     );
+    let p = |x, y, z| DVec3::new(x, y, z);
     let points = [
         (p(0.0, 0.0, 0.0), DVec3::Y),
         (p(2.5, 0.0, -1.0), DVec3::Y),
@@ -376,48 +397,35 @@ fn rect_lights_chosen_by_importance_match_lamberts_formula() {
     for kind in ALL {
         let readings = read_with(&scene, &meters, Stop::RelError(REL), 3, Some(7), kind);
         for (&(q, n), r) in points.iter().zip(&readings) {
-            // A panel wholly behind the meter's plane sends it nothing.
-            let exact: f64 = lights
-                .iter()
-                .filter(|(_, c)| c.iter().any(|v| n.dot(*v - q) > 0.0))
-                .map(|(l, c)| l * lambert(q, n, c))
-                .sum();
-            assert_exact(
-                &format!("{}: three rects at {q} n {n}", kind.name()),
-                r,
-                exact,
-            );
+            let label = format!("{}: three rects at {q} n {n}", kind.name());
+            assert_exact(&label, r, lambert_sum(&lights, q, n));
         }
     }
 }
 
 /// 36 panels (more prims than the exhaustive sampler takes: the light tree, `light/tree.rs`)
-/// of varied sizes, radiances and yaws over a floor, against the sum of Lambert's formula.
-/// Path tracing only: it is the integrator whose next event estimation chooses lights down the
-/// tree (light subpaths, and so light tracing's and BDPT's, start by power, which the tests
-/// above check).
+/// of varied sizes, radiances and yaws. Path tracing only: it is the integrator whose next
+/// event estimation chooses lights down the tree (light subpaths, and so light tracing's and
+/// BDPT's, start by power, which the test above checks).
 #[test]
 fn many_rect_lights_chosen_down_the_tree_match_lamberts_formula() {
-    let mut s = header() + &looks_scope(&flat_diffuse("Black", 0.0));
-    let mut lights = Vec::new();
-    for k in 0..36 {
-        let (i, j) = ((k % 6) as f64, (k / 6) as f64);
-        let (w, h) = (
-            0.3 + 0.1 * ((k * 7) % 5) as f64,
-            0.3 + 0.1 * ((k * 3) % 4) as f64,
-        );
-        let l = 500.0 * (1 + (k * 5) % 7) as f64;
-        let c = DVec3::new(
-            2.0 * i - 5.0,
-            2.6 + 0.1 * ((k * 11) % 3) as f64,
-            2.0 * j - 5.0,
-        );
-        let (text, corners) = rect_light(w, h, l, c, 15.0 * ((k * 13) % 6) as f64);
-        s += &text.replace("\"Panel\"", &format!("\"Panel{k}\""));
-        lights.push((l, corners));
-    }
-    s += &floor_quad([-12.0, 12.0], [-12.0, 12.0], "Black");
-    let scene = load("many-rects", &s);
+    let panels: Vec<(f64, f64, f64, DVec3, f64)> = (0..36)
+        .map(|k| {
+            let (i, j) = ((k % 6) as f64, (k / 6) as f64);
+            let (w, h) = (
+                0.3 + 0.1 * ((k * 7) % 5) as f64,
+                0.3 + 0.1 * ((k * 3) % 4) as f64,
+            );
+            let l = 500.0 * (1 + (k * 5) % 7) as f64;
+            let c = DVec3::new(
+                2.0 * i - 5.0,
+                2.6 + 0.1 * ((k * 11) % 3) as f64,
+                2.0 * j - 5.0,
+            );
+            (w, h, l, c, 15.0 * ((k * 13) % 6) as f64)
+        })
+        .collect();
+    let (scene, lights) = panels_over_floor("many-rects", &panels);
     assert!(
         matches!(
             scene.light_sampler,
@@ -437,16 +445,17 @@ fn many_rect_lights_chosen_down_the_tree_match_lamberts_formula() {
         .iter()
         .map(|&(q, n)| Meter::illuminance(v3(q), v3(n)).unwrap())
         .collect();
-    let kind = Integrator::Path;
-    let readings = read_with(&scene, &meters, Stop::RelError(REL), 5, Some(7), kind);
+    let readings = read_with(
+        &scene,
+        &meters,
+        Stop::RelError(REL),
+        5,
+        Some(7),
+        Integrator::Path,
+    );
     for (&(q, n), r) in points.iter().zip(&readings) {
-        // A panel wholly behind the meter's plane sends it nothing.
-        let exact: f64 = lights
-            .iter()
-            .filter(|(_, c)| c.iter().any(|v| n.dot(*v - q) > 0.0))
-            .map(|(l, c)| l * lambert(q, n, c))
-            .sum();
-        assert_exact(&format!("path: 36 rects at {q} n {n}"), r, exact);
+        let label = format!("path: 36 rects at {q} n {n}");
+        assert_exact(&label, r, lambert_sum(&lights, q, n));
     }
 }
 

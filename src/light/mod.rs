@@ -21,6 +21,7 @@ pub mod ies;
 pub mod line;
 pub mod point;
 pub mod portal;
+pub mod power_share;
 pub mod rect;
 pub mod report;
 pub mod sampler;

@@ -22,6 +22,7 @@
 //! returned.
 
 use super::bounds::Bounds4;
+use super::power_share::PowerShare;
 use super::{Light, LightBounds, LightSampleContext};
 use crate::sampling::Distribution1D;
 
@@ -45,11 +46,8 @@ pub struct SpatialSampler {
     chunks: Vec<Bounds4>,
     /// Per scene light: (its group, its position in the group); `u32::MAX` for an infinite one.
     member: Vec<(u32, u32)>,
-    /// Every light's luminous power: light subpaths' choice, and the infinite lights'.
-    power: Distribution1D,
-    infinite: Vec<usize>,
-    /// P∞: the infinite lights' share of the power.
-    p_infinite: f32,
+    /// Every light's power, and the infinite lights' share P∞.
+    share: PowerShare,
 }
 
 impl SpatialSampler {
@@ -57,28 +55,14 @@ impl SpatialSampler {
     /// or more than [`MAX_GROUPS`] groups of bounded lights, or no power at all.
     pub fn new(lights: &[Light], scene_radius: f32) -> Option<SpatialSampler> {
         let (groups, member) = group(lights)?;
-        let weights: Vec<f32> = lights
-            .iter()
-            .map(|l| l.luminous_power(scene_radius))
-            .collect();
-        let total: f64 = weights.iter().map(|&w| f64::from(w)).sum();
-        if !(total > 0.0 && total.is_finite()) {
-            return None;
-        }
-        let infinite: Vec<usize> = (0..lights.len())
-            .filter(|&i| lights[i].is_infinite())
-            .collect();
-        let power = Distribution1D::new(&weights);
-        let p_infinite = infinite.iter().map(|&i| power.discrete_pmf(i)).sum();
+        let share = PowerShare::new(lights, scene_radius)?;
         let bounds: Vec<LightBounds> = groups.iter().map(|g| g.bounds).collect();
         let chunks = bounds.chunks(4).map(Bounds4::new).collect();
         Some(SpatialSampler {
             groups,
             chunks,
             member,
-            power,
-            infinite,
-            p_infinite,
+            share,
         })
     }
 
@@ -95,15 +79,16 @@ impl SpatialSampler {
 
     /// (light index, probability) for the receiver `ctx`, or None when no light is chosen.
     pub fn sample(&self, ctx: &LightSampleContext, u: f32) -> Option<(usize, f32)> {
-        if u < self.p_infinite {
-            return pick_infinite(&self.power, &self.infinite, u);
+        let p_infinite = self.share.p_infinite;
+        if u < p_infinite {
+            return self.share.sample_infinite(u);
         }
         let (imp, sum) = self.importances(ctx);
         if sum <= 0.0 {
             return None;
         }
-        let share = 1.0 - self.p_infinite;
-        let target = ((u - self.p_infinite) / share).min(1.0) * sum;
+        let share = 1.0 - p_infinite;
+        let target = ((u - p_infinite) / share).min(1.0) * sum;
         let (k, below) = pick(&imp[..self.groups.len()], target)?;
         let p_group = share * (imp[k] / sum);
         let g = &self.groups[k];
@@ -122,14 +107,14 @@ impl SpatialSampler {
         let (k, m) = self.member[light];
         if k == u32::MAX {
             // An infinite light: its power's share, as the power sampler gives it.
-            return self.power.discrete_pmf(light);
+            return self.share.pmf(light);
         }
         let (imp, sum) = self.importances(ctx);
         if sum <= 0.0 {
             return 0.0;
         }
         let g = &self.groups[k as usize];
-        let p_group = (1.0 - self.p_infinite) * (imp[k as usize] / sum);
+        let p_group = (1.0 - self.share.p_infinite) * (imp[k as usize] / sum);
         match &g.table {
             None => p_group,
             Some(t) => p_group * t.discrete_pmf(m as usize),
@@ -138,13 +123,12 @@ impl SpatialSampler {
 
     /// The power sampler's choice, for light subpaths (they start without a receiver).
     pub fn sample_by_power(&self, u: f32) -> Option<(usize, f32)> {
-        let (i, pmf, _) = self.power.sample_discrete(u);
-        (pmf > 0.0).then_some((i, pmf))
+        self.share.sample(u)
     }
 
     /// The power sampler's probability of `light`.
     pub fn pmf_by_power(&self, light: usize) -> f32 {
-        self.power.discrete_pmf(light)
+        self.share.pmf(light)
     }
 }
 
@@ -165,29 +149,6 @@ pub(super) fn pick(weights: &[f32], target: f32) -> Option<(usize, f32)> {
         below += w;
     }
     chosen
-}
-
-/// An infinite light chosen by power among `infinite`, for u in [0, P∞) (P∞ the sum of their
-/// power shares): its probability overall is its power's share.
-pub(super) fn pick_infinite(
-    power: &Distribution1D,
-    infinite: &[usize],
-    u: f32,
-) -> Option<(usize, f32)> {
-    let mut acc = 0.0;
-    let mut last = None;
-    for &i in infinite {
-        let p = power.discrete_pmf(i);
-        if p == 0.0 {
-            continue;
-        }
-        acc += p;
-        last = Some((i, p));
-        if u < acc {
-            break;
-        }
-    }
-    last
 }
 
 /// The bounded lights grouped by prim path (in order of first appearance), and each light's
@@ -341,7 +302,7 @@ mod tests {
             let total: f32 = pmf.iter().sum();
             // Where no bounded light can reach the receiver only the sun is ever chosen.
             let reached = s.importances(&ctx).1 > 0.0;
-            let expected = if reached { 1.0 } else { s.p_infinite };
+            let expected = if reached { 1.0 } else { s.share.p_infinite };
             assert!((total - expected).abs() < 1e-5, "{ctx:?}: Σ pmf = {total}");
             let mut count = vec![0usize; all.len()];
             for k in 0..N {
@@ -351,7 +312,7 @@ mod tests {
                         assert_eq!(p.to_bits(), pmf[i].to_bits(), "{ctx:?}: light {i}");
                         count[i] += 1;
                     }
-                    None => assert!(!reached && u >= s.p_infinite, "{ctx:?}: u {u}"),
+                    None => assert!(!reached && u >= s.share.p_infinite, "{ctx:?}: u {u}"),
                 }
             }
             for i in 0..all.len() {

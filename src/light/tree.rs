@@ -23,9 +23,9 @@
 //! probability `sample` did.
 
 use super::bounds::Bounds4;
-use super::spatial::{pick, pick_infinite};
+use super::power_share::PowerShare;
+use super::spatial::pick;
 use super::{Light, LightBounds, LightSampleContext};
-use crate::sampling::Distribution1D;
 use std::f32::consts::PI;
 
 /// Buckets of box centres per axis when a node's lights are split (PBR 4ed §12.6.3 uses 12).
@@ -45,22 +45,21 @@ struct Node {
 }
 
 /// Where a light sits: its trail of child slots from the root (two bits a level, the root's
-/// first) and the number of levels; `levels` 0 for a light outside the tree.
+/// first) and the number of levels; `levels` 0 for a light outside the tree (an infinite one,
+/// or one without power).
 #[derive(Clone, Copy, Debug, Default)]
 struct Trail {
     slots: u64,
     levels: u8,
+    infinite: bool,
 }
 
 #[derive(Clone, Debug)]
 pub struct LightTree {
     nodes: Vec<Node>,
     trail: Vec<Trail>,
-    /// Every light's luminous power: light subpaths' choice, and the infinite lights'.
-    power: Distribution1D,
-    infinite: Vec<usize>,
-    /// P∞: the infinite lights' share of the power.
-    p_infinite: f32,
+    /// Every light's power, and the infinite lights' share P∞.
+    share: PowerShare,
 }
 
 /// The binary tree the 4-wide one is made from.
@@ -83,19 +82,7 @@ impl LightTree {
         if bounded.len() <= min_lights {
             return None;
         }
-        let weights: Vec<f32> = lights
-            .iter()
-            .map(|l| l.luminous_power(scene_radius))
-            .collect();
-        let total: f64 = weights.iter().map(|&w| f64::from(w)).sum();
-        if !(total > 0.0 && total.is_finite()) {
-            return None;
-        }
-        let power = Distribution1D::new(&weights);
-        let infinite: Vec<usize> = (0..lights.len())
-            .filter(|&i| lights[i].is_infinite())
-            .collect();
-        let p_infinite = infinite.iter().map(|&i| power.discrete_pmf(i)).sum();
+        let share = PowerShare::new(lights, scene_radius)?;
         let mut items = bounded;
         let root = build(&mut items, 0);
         let by_light: Vec<Option<LightBounds>> = {
@@ -107,10 +94,14 @@ impl LightTree {
         };
         let mut tree = LightTree {
             nodes: Vec::new(),
-            trail: vec![Trail::default(); lights.len()],
-            power,
-            infinite,
-            p_infinite,
+            trail: lights
+                .iter()
+                .map(|l| Trail {
+                    infinite: l.is_infinite(),
+                    ..Trail::default()
+                })
+                .collect(),
+            share,
         };
         tree.flatten(&root, &by_light, Trail::default());
         Some(tree)
@@ -142,6 +133,7 @@ impl LightTree {
             let here = Trail {
                 slots: at.slots | (k as u64) << (2 * at.levels),
                 levels: at.levels + 1,
+                infinite: false,
             };
             match kid {
                 Binary::Leaf(i) => {
@@ -172,11 +164,12 @@ impl LightTree {
 
     /// (light index, probability) for the receiver `ctx`, or None when no light is chosen.
     pub fn sample(&self, ctx: &LightSampleContext, u: f32) -> Option<(usize, f32)> {
-        if u < self.p_infinite {
-            return pick_infinite(&self.power, &self.infinite, u);
+        let p_infinite = self.share.p_infinite;
+        if u < p_infinite {
+            return self.share.sample_infinite(u);
         }
-        let share = 1.0 - self.p_infinite;
-        let mut u = ((u - self.p_infinite) / share).min(ONE_MINUS_EPSILON);
+        let share = 1.0 - p_infinite;
+        let mut u = ((u - p_infinite) / share).min(ONE_MINUS_EPSILON);
         let mut p = share;
         let mut node = &self.nodes[0];
         loop {
@@ -202,13 +195,13 @@ impl LightTree {
         };
         if t.levels == 0 {
             // An infinite light (its power's share), or one outside the tree (no power).
-            return if self.infinite.contains(&light) {
-                self.power.discrete_pmf(light)
+            return if t.infinite {
+                self.share.pmf(light)
             } else {
                 0.0
             };
         }
-        let mut p = 1.0 - self.p_infinite;
+        let mut p = 1.0 - self.share.p_infinite;
         let mut node = &self.nodes[0];
         for level in 0..t.levels {
             let k = (t.slots >> (2 * level) & 3) as usize;
@@ -226,13 +219,12 @@ impl LightTree {
 
     /// The power sampler's choice, for light subpaths (they start without a receiver).
     pub fn sample_by_power(&self, u: f32) -> Option<(usize, f32)> {
-        let (i, pmf, _) = self.power.sample_discrete(u);
-        (pmf > 0.0).then_some((i, pmf))
+        self.share.sample(u)
     }
 
     /// The power sampler's probability of `light`.
     pub fn pmf_by_power(&self, light: usize) -> f32 {
-        self.power.discrete_pmf(light)
+        self.share.pmf(light)
     }
 
     /// Nodes and bytes held (for `info` and the tests).
@@ -499,7 +491,7 @@ mod tests {
                         count[i] += 1;
                     }
                     None => {
-                        assert!(u >= t.p_infinite, "{ctx:?}: u {u}");
+                        assert!(u >= t.share.p_infinite, "{ctx:?}: u {u}");
                         none += 1;
                     }
                 }
