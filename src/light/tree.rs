@@ -108,7 +108,7 @@ impl LightTree {
     }
 
     /// Appends the 4-wide node of binary node `b` (and its subtree) at trail `at`; returns its
-    /// index and bounds.
+    /// index.
     fn flatten(&mut self, b: &Binary, by_light: &[Option<LightBounds>], at: Trail) -> u32 {
         let index = self.nodes.len();
         self.nodes.push(Node {
