@@ -101,17 +101,33 @@ struct WideNode {
     leaves: u8,
 }
 
-/// A subtree waiting on the traversal stack, with the (widened) distance where the ray enters it.
+/// A subtree waiting on the traversal stack: the bits of the (widened) distance where the ray
+/// enters it above its node index, one 8-byte word to push and pop.
 #[derive(Clone, Copy, Debug, Default)]
-struct Entry {
-    node: u32,
-    t_enter: f32,
+struct Entry(u64);
+
+impl Entry {
+    /// The child of `node` in the slot of `key` (see [`order_key`]), entered at the key's distance.
+    #[inline(always)]
+    fn child(node: &WideNode, key: u64) -> Entry {
+        Entry(key & !0xffff_ffff | node.child[key as usize & 7] as u64)
+    }
+
+    #[inline(always)]
+    fn node(self) -> usize {
+        self.0 as u32 as usize
+    }
+
+    #[inline(always)]
+    fn t_enter(self) -> f32 {
+        f32::from_bits((self.0 >> 32) as u32)
+    }
 }
 
 /// Traversal stack entries kept on the call stack (256 bytes); deeper traversals spill to the
 /// heap. The worst case 7·depth − 6 (each ancestor of the visited node leaves at most 7 of its
 /// ≤ 8 children on the stack, the node pushes at most 8) is far above what rays meet.
-const STACK_PLACES: usize = 32;
+const STACK_PLACES: usize = 16;
 
 /// Triangles per leaf (the CWBVH maximum).
 const LEAF_SIZE: u32 = 3;
@@ -403,38 +419,101 @@ impl Bvh {
         // The root, then the nearest inner child met by each node, is visited without a push
         // and a pop; the other inner children wait on the stack. The visiting order is the
         // stack's: nearest first, then the rest near to far.
-        let mut next = Some(Entry::default());
-        while let Some(entry) = next.take().or_else(|| stack.pop()) {
-            if entry.t_enter > *t_max {
-                continue;
-            }
-            let node = &self.nodes[entry.node as usize];
-            tally.node();
-            let (hits, t_enter) = node.intersect(ray, *t_max);
-            let (slots, n) = by_entry(hits & node.leaves as u32, &t_enter);
-            for &slot in &slots[..n] {
-                let slot = slot as usize;
-                let (first, count) = (node.child[slot] as usize, node.count[slot] as usize);
-                if t_enter[slot] <= *t_max && leaf(first, count, t_max) {
+        let mut entry = Entry::default();
+        loop {
+            if entry.t_enter() <= *t_max {
+                let node = &self.nodes[entry.node()];
+                tally.node();
+                let (hits, t_enter) = node.intersect(ray, *t_max);
+                let leaves = hits & node.leaves as u32;
+                if leaves != 0 && node.leaves_near_to_far(leaves, &t_enter, t_max, &mut leaf) {
                     return;
                 }
+                if let Some(next) = node.push_inner(hits & !node.leaves as u32, &t_enter, stack) {
+                    entry = next;
+                    continue;
+                }
             }
-            let inner = hits & !node.leaves as u32;
-            let entry = |slot: usize| Entry {
-                node: node.child[slot],
-                t_enter: t_enter[slot],
-            };
-            if inner & inner.wrapping_sub(1) == 0 {
-                // None or one: nothing to order.
-                next = (inner != 0).then(|| entry(inner.trailing_zeros() as usize & 7));
-                continue;
+            match stack.pop() {
+                Some(next) => entry = next,
+                None => return,
             }
-            let (slots, n) = by_entry(inner, &t_enter);
-            for &slot in slots[1..n].iter().rev() {
-                stack.push(entry(slot as usize));
-            }
-            next = Some(entry(slots[0] as usize));
         }
+    }
+}
+
+/// The sort key of a met child: its entry distance's bits above its slot. Entry distances are
+/// ≥ 0 (clamped; +∞ at most, never NaN), and the bits of non-negative floats order as the floats
+/// do, so keys order children by entry distance, ties in slot order.
+#[inline(always)]
+fn order_key(t_enter: &[f32; 8], slot: u32) -> u64 {
+    (t_enter[slot as usize & 7].to_bits() as u64) << 32 | slot as u64
+}
+
+/// The entry distance of a key.
+#[inline(always)]
+fn key_t(key: u64) -> f32 {
+    f32::from_bits((key >> 32) as u32)
+}
+
+/// The smallest (`pick` = `u64::min`) or largest key among the slots set in `mask` (not empty).
+/// Picking children one at a time orders the few a node meets (one to three, mostly) without
+/// an array of keys in memory: a node meeting k children costs k(k − 1)/2 comparisons.
+#[inline(always)]
+fn pick_key(mut mask: u32, t_enter: &[f32; 8], pick: impl Fn(u64, u64) -> u64) -> u64 {
+    let mut best = order_key(t_enter, mask.trailing_zeros());
+    mask &= mask - 1;
+    while mask != 0 {
+        best = pick(best, order_key(t_enter, mask.trailing_zeros()));
+        mask &= mask - 1;
+    }
+    best
+}
+
+impl WideNode {
+    /// Calls `leaf` on the leaf children in `leaves` (not empty), near to far, skipping those
+    /// that start beyond `t_max` as `leaf` lowers it; true when `leaf` asks to stop.
+    #[inline(always)]
+    fn leaves_near_to_far(
+        &self,
+        mut leaves: u32,
+        t_enter: &[f32; 8],
+        t_max: &mut f32,
+        leaf: &mut impl FnMut(usize, usize, &mut f32) -> bool,
+    ) -> bool {
+        while leaves != 0 {
+            let key = pick_key(leaves, t_enter, u64::min);
+            let slot = key as usize & 7;
+            leaves &= !(1 << slot);
+            let (first, count) = (self.child[slot] as usize, self.count[slot] as usize);
+            if key_t(key) <= *t_max && leaf(first, count, t_max) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Pushes the inner children in `inner` but the nearest far to near, so they pop near to
+    /// far, and returns the nearest (None when `inner` is empty).
+    #[inline(always)]
+    fn push_inner<const N: usize>(
+        &self,
+        mut inner: u32,
+        t_enter: &[f32; 8],
+        stack: &mut Stack<Entry, N>,
+    ) -> Option<Entry> {
+        if inner == 0 {
+            return None;
+        }
+        while inner & (inner - 1) != 0 {
+            let key = pick_key(inner, t_enter, u64::max);
+            inner &= !(1 << (key & 7));
+            stack.push(Entry::child(self, key));
+        }
+        Some(Entry::child(
+            self,
+            order_key(t_enter, inner.trailing_zeros()),
+        ))
     }
 }
 
@@ -467,25 +546,6 @@ impl Tally for TraversalCount {
     fn triangles(&self, n: usize) {
         self.triangles.set(self.triangles.get() + n as u64);
     }
-}
-
-/// The slots set in `mask` by increasing entry distance (insertion sort of at most 8; ties in
-/// slot order). Slots are bytes, so the array is one 8-byte word to clear, not 64 bytes.
-#[inline(always)]
-fn by_entry(mut mask: u32, t_enter: &[f32; 8]) -> ([u8; 8], usize) {
-    let (mut slots, mut n) = ([0u8; 8], 0);
-    while mask != 0 {
-        let slot = mask.trailing_zeros() as usize & 7;
-        mask &= mask - 1;
-        let mut k = n;
-        while k > 0 && t_enter[slots[k - 1] as usize] > t_enter[slot] {
-            slots[k] = slots[k - 1];
-            k -= 1;
-        }
-        slots[k] = slot as u8;
-        n += 1;
-    }
-    (slots, n)
 }
 
 /// Per-ray part of the box test. Entry distances are computed as fl(fl(p − o)·fl(fl(1/d)·s))

@@ -29,14 +29,24 @@ impl<T: Copy + Default, const N: usize> Stack<T, N> {
                 *place = value;
                 self.len += 1;
             }
-            None => self.spill.push(value),
+            None => self.spill_push(value),
         }
+    }
+
+    /// The rare push past the `N` places, out of line so the common one stays short.
+    #[cold]
+    #[inline(never)]
+    fn spill_push(&mut self, value: T) {
+        self.spill.push(value);
     }
 
     #[inline(always)]
     pub fn pop(&mut self) -> Option<T> {
-        if let Some(value) = self.spill.pop() {
-            return Some(value);
+        // The spill is looked at only when every place is taken (the invariant above).
+        if self.len == N {
+            if let Some(value) = self.spill.pop() {
+                return Some(value);
+            }
         }
         self.len = self.len.checked_sub(1)?;
         self.places.get(self.len).copied()
