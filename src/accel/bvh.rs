@@ -548,26 +548,27 @@ impl Tally for TraversalCount {
     }
 }
 
-/// Per-ray part of the box test. Entry distances are computed as fl(fl(p − o)·fl(fl(1/d)·s))
-/// with s = 1 − 2γ(4), exit distances likewise with s = 1 + 2γ(4): four roundings, so each is
-/// within γ(4) (relative) of the exact (p − o)·s/d and of the same sign (standard model, PBR
-/// 4ed §6.8.1), and the widening by 2γ(4) makes the interval contain the exact one (PBR 4ed
-/// §6.8.2 scales the exit only; we also compare the entry with t_max). The scale is folded into
-/// the per-ray 1/d, so a node test does not multiply by it (the same four roundings as scaling
-/// fl(fl(p − o)·fl(1/d)) afterwards). Both are moved out by the smallest normal float as well,
-/// which covers products that underflow.
-/// An axis with a non-finite scaled 1/d (the ray is parallel to its slabs, or |d| < 2⁻¹²⁷
-/// there) constrains nothing: its near planes give 0 (entries are clamped at 0 anyway) and its
-/// far planes +∞, through the splatted terms below, so no NaN ever arises.
+/// Per-ray part of the box test. A plane's distance is r = fl(fl(p − o)·fl(1/d)); a child's
+/// entry is fl(max(0, r_near…)·s) with s = 1 − 2γ(4), its exit fl(min(t_max, r_far…)·s′) with
+/// s′ = 1 + 2γ(4): four roundings, so each is within γ(4) (relative) of the exact (p − o)·s/d
+/// and of the same sign (standard model, PBR 4ed §6.8.1; max, min and the clamps at 0 and t_max
+/// are exact and commute with the positive scale), and the widening by 2γ(4) makes the interval
+/// contain the exact one (PBR 4ed §6.8.2 scales the exit only; we also compare the entry with
+/// t_max). The scale is applied once to the nearest exit and the farthest entry, not per plane,
+/// so the node test keeps six splatted vectors (o and 1/d per axis) in registers instead of
+/// twelve. The exit is moved out by twice the smallest normal float as well, which covers
+/// products that underflow.
+/// An axis with a non-finite 1/d·s′ (the ray is parallel to its slabs, or |d| < 2⁻¹²⁷ there)
+/// constrains nothing: its splatted origin is NaN, so its planes' distances are NaN, which
+/// [`max_or_acc`] and [`min_or_acc`] skip. No other distance is NaN: p − o is finite or ±∞ and
+/// 1/d finite and non-zero elsewhere (a non-finite d never reaches the BVH).
 struct RayBoxes {
-    /// Per axis: the plane row (see [`WideNode::planes`]) of the near and the far slab.
+    /// Per axis: the plane row (see [`WideNode::planes`]) of the near slab; the far one is
+    /// `near ^ 1`.
     near: [usize; 3],
-    far: [usize; 3],
-    /// Per axis, splatted: near-plane distance = (plane − o_near)·inv_near, far likewise.
-    o_near: [Vec4; 3],
-    inv_near: [Vec4; 3],
-    o_far: [Vec4; 3],
-    inv_far: [Vec4; 3],
+    /// Per axis, splatted: a plane's distance is (plane − o)·inv.
+    o: [Vec4; 3],
+    inv: [Vec4; 3],
 }
 
 /// Widening factors of the slab distances (see [`RayBoxes`]).
@@ -578,19 +579,38 @@ impl RayBoxes {
     #[inline(always)]
     fn new(ray: &Ray) -> RayBoxes {
         let inv = Vec4::ONE / Vec4::from((ray.d, 1.0));
-        let (inv_enter, inv_exit) = (inv * ENTER_SCALE, inv * EXIT_SCALE);
-        // |inv_exit| ≥ |inv_enter|: where the exit factor is finite, so is the entry one.
-        let (o, finite) = (Vec4::from((ray.o, 0.0)), inv_exit.is_finite_mask());
+        // |1/d·s′| ≥ |1/d·s|: where the exit's factor is finite, so is the entry's.
+        let finite = (inv * EXIT_SCALE).is_finite_mask();
+        let o = Vec4::select(finite, Vec4::from((ray.o, 0.0)), Vec4::NAN);
         let neg = inv.cmplt(Vec4::ZERO).bitmask() as usize;
         let splats = |v: Vec4| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
         RayBoxes {
             near: [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)],
-            far: [1 ^ (neg & 1), 3 ^ (neg >> 1 & 1), 5 ^ (neg >> 2 & 1)],
-            o_near: splats(Vec4::select(finite, o, Vec4::ZERO)),
-            inv_near: splats(Vec4::select(finite, inv_enter, Vec4::ZERO)),
-            o_far: splats(Vec4::select(finite, o, Vec4::NEG_INFINITY)),
-            inv_far: splats(Vec4::select(finite, inv_exit, Vec4::ONE)),
+            o: splats(o),
+            inv: splats(Vec4::select(finite, inv, Vec4::ONE)),
         }
+    }
+}
+
+/// max(a, acc) per lane, and acc where a is NaN (`acc` is never NaN). SSE's `maxps`, which
+/// glam's `max` is on x86, returns its second operand when either is NaN (Intel SDM, MAXPS);
+/// elsewhere (NEON's `vmaxq_f32` propagates NaN) a compare and select says the same.
+#[inline(always)]
+fn max_or_acc(a: Vec4, acc: Vec4) -> Vec4 {
+    if cfg!(any(target_arch = "x86", target_arch = "x86_64")) {
+        a.max(acc)
+    } else {
+        Vec4::select(a.cmpgt(acc), a, acc)
+    }
+}
+
+/// min(a, acc) per lane, and acc where a is NaN (see [`max_or_acc`]; SSE's `minps` likewise).
+#[inline(always)]
+fn min_or_acc(a: Vec4, acc: Vec4) -> Vec4 {
+    if cfg!(any(target_arch = "x86", target_arch = "x86_64")) {
+        a.min(acc)
+    } else {
+        Vec4::select(a.cmplt(acc), a, acc)
     }
 }
 
@@ -607,6 +627,7 @@ impl WideNode {
     /// widened entry distance of each slot.
     #[inline(always)]
     fn intersect(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
+        let t_max = Vec4::splat(t_max);
         let (m0, t0) = slab_half(&self.planes[0], ray, t_max);
         let (m1, t1) = slab_half(&self.planes[1], ray, t_max);
         let (t0, t1) = (t0.to_array(), t1.to_array());
@@ -635,16 +656,17 @@ impl WideNode {
 }
 
 /// The slab test of four children (PBR 4ed §6.1.2, widened as described at [`RayBoxes`]):
-/// the overlap mask (4 bits) and the entry distances.
+/// the overlap mask (4 bits) and the entry distances (≥ +0, never NaN).
 #[inline(always)]
-fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: f32) -> (u32, Vec4) {
-    let near = |k: usize| (planes[ray.near[k]] - ray.o_near[k]) * ray.inv_near[k];
-    let far = |k: usize| (planes[ray.far[k]] - ray.o_far[k]) * ray.inv_far[k];
-    let enter = near(0).max(near(1)).max(near(2));
-    let exit = far(0).min(far(1)).min(far(2));
-    let margin = Vec4::splat(f32::MIN_POSITIVE);
-    let t_enter = (enter - margin).max(Vec4::ZERO);
-    let t_exit = (exit + margin).min(Vec4::splat(t_max));
+fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: Vec4) -> (u32, Vec4) {
+    let distance = |row: usize, k: usize| (planes[row] - ray.o[k]) * ray.inv[k];
+    let (mut enter, mut exit) = (Vec4::ZERO, t_max);
+    for k in 0..3 {
+        enter = max_or_acc(distance(ray.near[k], k), enter);
+        exit = min_or_acc(distance(ray.near[k] ^ 1, k), exit);
+    }
+    let t_enter = enter * ENTER_SCALE;
+    let t_exit = exit * EXIT_SCALE + Vec4::splat(2.0 * f32::MIN_POSITIVE);
     (t_enter.cmple(t_exit).bitmask(), t_enter)
 }
 
@@ -1102,6 +1124,22 @@ mod tests {
             assert!((hit.hit.t - 0.01 * scale).abs() <= 1e-6 * scale);
             assert!(bvh.occluded(&r, 1.0));
         }
+    }
+
+    /// The node test's max and min skip a NaN distance (an axis that constrains nothing) on
+    /// either side of the accumulator, and are max and min otherwise.
+    #[test]
+    fn nan_distances_are_skipped() {
+        let acc = Vec4::new(0.0, 1.0, -2.0, f32::INFINITY);
+        let a = Vec4::new(f32::NAN, 3.0, -5.0, f32::NAN);
+        assert_eq!(
+            max_or_acc(a, acc).to_array(),
+            [0.0, 3.0, -2.0, f32::INFINITY]
+        );
+        assert_eq!(
+            min_or_acc(a, acc).to_array(),
+            [0.0, 1.0, -5.0, f32::INFINITY]
+        );
     }
 
     /// Triangles at geometrically growing distances give a deep tree, a random soup a bushy
