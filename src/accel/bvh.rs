@@ -10,13 +10,14 @@
 //!
 //! **Traversal.** A node holds its eight child boxes in SIMD lanes (two halves of four), so a
 //! node test is two 4-wide slab tests (Kay, Kajiya 1986; PBR 4ed §6.1.2). The children met are
-//! sorted by entry distance: leaves are tested at once, near to far; the nearest inner child is
-//! visited next, and the others are pushed with their entry distance, far to near, so they are
-//! popped nearest first; a leaf or a subtree that starts beyond the closest hit found so far is
-//! skipped. (The ray-octant
-//! order of the CWBVH's child slots, Ylitie et al. 2017, §3.2, costs 3% more instructions per
-//! closest hit on the Cornell box and 7% on a 100k-triangle sphere.) Shadow rays (`occluded`)
-//! stop at the first hit and compute nothing else.
+//! ordered by entry distance (integer keys of the distance's bits and the slot, picked one at a
+//! time: a node meets one to three children, mostly): leaves are tested at once, near to far;
+//! the nearest inner child is visited next, and the others are pushed with their entry distance,
+//! far to near, so they are popped nearest first; a leaf or a subtree that starts beyond the
+//! closest hit found so far is skipped. (The ray-octant order of the CWBVH's child slots,
+//! Ylitie et al. 2017, §3.2, costs 3% more instructions per closest hit on the Cornell box and
+//! 7% on a 100k-triangle sphere.) Shadow rays (`occluded`) stop at the first hit and compute
+//! nothing else.
 //!
 //! **Robustness.**
 //! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored in
@@ -124,9 +125,12 @@ impl Entry {
     }
 }
 
-/// Traversal stack entries kept on the call stack (256 bytes); deeper traversals spill to the
-/// heap. The worst case 7·depth − 6 (each ancestor of the visited node leaves at most 7 of its
-/// ≤ 8 children on the stack, the node pushes at most 8) is far above what rays meet.
+/// Traversal stack entries kept on the call stack (128 bytes, eight 16-byte stores to clear per
+/// query; 32 places made the clear a `memset` call of ~35 instructions); deeper traversals
+/// spill to the heap. The worst case 7·depth − 6 (each ancestor of the visited node leaves at
+/// most 7 of its ≤ 8 children on the stack, the node pushes at most 8) is far above what rays
+/// meet: none of the primary, diffuse and shadow rays of `../shared/limit`'s box and 100k- and
+/// 1M-triangle spheres needed more than 16 (docs/design.md §8).
 const STACK_PLACES: usize = 16;
 
 /// Triangles per leaf (the CWBVH maximum).
