@@ -425,7 +425,7 @@ impl Bvh {
         // stack's: nearest first, then the rest near to far.
         let mut entry = Entry::default();
         loop {
-            if entry.t_enter() <= *t_max {
+            if starts_by(entry.t_enter(), *t_max) {
                 let node = &self.nodes[entry.node()];
                 tally.node();
                 let (hits, t_enter) = node.intersect(ray, *t_max);
@@ -452,6 +452,15 @@ impl Bvh {
 #[inline(always)]
 fn order_key(t_enter: &[f32; 8], slot: u32) -> u64 {
     (t_enter[slot as usize & 7].to_bits() as u64) << 32 | slot as u64
+}
+
+/// Whether a child entered at `t_enter` may hold a hit before `t_max` (which leaves lower).
+/// The entry is moved in by the smallest normal float, as the node test moves the exit out (see
+/// [`RayBoxes`]): a product that underflows has an absolute, not a relative, error. (Above
+/// 2⁻¹²⁵ the subtraction changes nothing.)
+#[inline(always)]
+fn starts_by(t_enter: f32, t_max: f32) -> bool {
+    t_enter - f32::MIN_POSITIVE <= t_max
 }
 
 /// The entry distance of a key.
@@ -490,7 +499,7 @@ impl WideNode {
             let slot = key as usize & 7;
             leaves &= !(1 << slot);
             let (first, count) = (self.child[slot] as usize, self.count[slot] as usize);
-            if key_t(key) <= *t_max && leaf(first, count, t_max) {
+            if starts_by(key_t(key), *t_max) && leaf(first, count, t_max) {
                 return true;
             }
         }
