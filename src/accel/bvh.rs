@@ -10,13 +10,14 @@
 //!
 //! **Traversal.** A node holds its eight child boxes in SIMD lanes (two halves of four), so a
 //! node test is two 4-wide slab tests (Kay, Kajiya 1986; PBR 4ed §6.1.2). The children met are
-//! sorted by entry distance: leaves are tested at once, near to far; the nearest inner child is
-//! visited next, and the others are pushed with their entry distance, far to near, so they are
-//! popped nearest first; a leaf or a subtree that starts beyond the closest hit found so far is
-//! skipped. (The ray-octant
-//! order of the CWBVH's child slots, Ylitie et al. 2017, §3.2, costs 3% more instructions per
-//! closest hit on the Cornell box and 7% on a 100k-triangle sphere.) Shadow rays (`occluded`)
-//! stop at the first hit and compute nothing else.
+//! ordered by entry distance (integer keys of the distance's bits and the slot, picked one at a
+//! time: a node meets one to three children, mostly): leaves are tested at once, near to far;
+//! the nearest inner child is visited next, and the others are pushed with their entry distance,
+//! far to near, so they are popped nearest first; a leaf or a subtree that starts beyond the
+//! closest hit found so far is skipped. (The ray-octant order of the CWBVH's child slots,
+//! Ylitie et al. 2017, §3.2, costs 3% more instructions per closest hit on the Cornell box and
+//! 7% on a 100k-triangle sphere.) Shadow rays (`occluded`) stop at the first hit and compute
+//! nothing else.
 //!
 //! **Robustness.**
 //! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored in
@@ -101,17 +102,36 @@ struct WideNode {
     leaves: u8,
 }
 
-/// A subtree waiting on the traversal stack, with the (widened) distance where the ray enters it.
+/// A subtree waiting on the traversal stack: the bits of the (widened) distance where the ray
+/// enters it above its node index, one 8-byte word to push and pop.
 #[derive(Clone, Copy, Debug, Default)]
-struct Entry {
-    node: u32,
-    t_enter: f32,
+struct Entry(u64);
+
+impl Entry {
+    /// The child of `node` in the slot of `key` (see [`order_key`]), entered at the key's distance.
+    #[inline(always)]
+    fn child(node: &WideNode, key: u64) -> Entry {
+        Entry(key & !0xffff_ffff | node.child[key as usize & 7] as u64)
+    }
+
+    #[inline(always)]
+    fn node(self) -> usize {
+        self.0 as u32 as usize
+    }
+
+    #[inline(always)]
+    fn t_enter(self) -> f32 {
+        f32::from_bits((self.0 >> 32) as u32)
+    }
 }
 
-/// Traversal stack entries kept on the call stack (256 bytes); deeper traversals spill to the
-/// heap. The worst case 7·depth − 6 (each ancestor of the visited node leaves at most 7 of its
-/// ≤ 8 children on the stack, the node pushes at most 8) is far above what rays meet.
-const STACK_PLACES: usize = 32;
+/// Traversal stack entries kept on the call stack (128 bytes, eight 16-byte stores to clear per
+/// query; 32 places made the clear a `memset` call of ~35 instructions); deeper traversals
+/// spill to the heap. The worst case 7·depth − 6 (each ancestor of the visited node leaves at
+/// most 7 of its ≤ 8 children on the stack, the node pushes at most 8) is far above what rays
+/// meet: none of the primary, diffuse and shadow rays of `../shared/limit`'s box and 100k- and
+/// 1M-triangle spheres needed more than 16 (docs/design.md §8).
+const STACK_PLACES: usize = 16;
 
 /// Triangles per leaf (the CWBVH maximum).
 const LEAF_SIZE: u32 = 3;
@@ -403,38 +423,110 @@ impl Bvh {
         // The root, then the nearest inner child met by each node, is visited without a push
         // and a pop; the other inner children wait on the stack. The visiting order is the
         // stack's: nearest first, then the rest near to far.
-        let mut next = Some(Entry::default());
-        while let Some(entry) = next.take().or_else(|| stack.pop()) {
-            if entry.t_enter > *t_max {
-                continue;
-            }
-            let node = &self.nodes[entry.node as usize];
-            tally.node();
-            let (hits, t_enter) = node.intersect(ray, *t_max);
-            let (slots, n) = by_entry(hits & node.leaves as u32, &t_enter);
-            for &slot in &slots[..n] {
-                let slot = slot as usize;
-                let (first, count) = (node.child[slot] as usize, node.count[slot] as usize);
-                if t_enter[slot] <= *t_max && leaf(first, count, t_max) {
+        let mut entry = Entry::default();
+        loop {
+            if starts_by(entry.t_enter(), *t_max) {
+                let node = &self.nodes[entry.node()];
+                tally.node();
+                let (hits, t_enter) = node.intersect(ray, *t_max);
+                let leaves = hits & node.leaves as u32;
+                if leaves != 0 && node.leaves_near_to_far(leaves, &t_enter, t_max, &mut leaf) {
                     return;
                 }
+                if let Some(next) = node.push_inner(hits & !node.leaves as u32, &t_enter, stack) {
+                    entry = next;
+                    continue;
+                }
             }
-            let inner = hits & !node.leaves as u32;
-            let entry = |slot: usize| Entry {
-                node: node.child[slot],
-                t_enter: t_enter[slot],
-            };
-            if inner & inner.wrapping_sub(1) == 0 {
-                // None or one: nothing to order.
-                next = (inner != 0).then(|| entry(inner.trailing_zeros() as usize & 7));
-                continue;
+            match stack.pop() {
+                Some(next) => entry = next,
+                None => return,
             }
-            let (slots, n) = by_entry(inner, &t_enter);
-            for &slot in slots[1..n].iter().rev() {
-                stack.push(entry(slot as usize));
-            }
-            next = Some(entry(slots[0] as usize));
         }
+    }
+}
+
+/// The sort key of a met child: its entry distance's bits above its slot. Entry distances are
+/// ≥ 0 (clamped; +∞ at most, never NaN), and the bits of non-negative floats order as the floats
+/// do, so keys order children by entry distance, ties in slot order.
+#[inline(always)]
+fn order_key(t_enter: &[f32; 8], slot: u32) -> u64 {
+    (t_enter[slot as usize & 7].to_bits() as u64) << 32 | slot as u64
+}
+
+/// Whether a child entered at `t_enter` may hold a hit before `t_max` (which leaves lower).
+/// The entry is moved in by the smallest normal float, as the node test moves the exit out (see
+/// [`RayBoxes`]): a product that underflows has an absolute, not a relative, error. (Above
+/// 2⁻¹²⁵ the subtraction changes nothing.)
+#[inline(always)]
+fn starts_by(t_enter: f32, t_max: f32) -> bool {
+    t_enter - f32::MIN_POSITIVE <= t_max
+}
+
+/// The entry distance of a key.
+#[inline(always)]
+fn key_t(key: u64) -> f32 {
+    f32::from_bits((key >> 32) as u32)
+}
+
+/// The smallest (`pick` = `u64::min`) or largest key among the slots set in `mask` (not empty).
+/// Picking children one at a time orders the few a node meets (one to three, mostly) without
+/// an array of keys in memory: a node meeting k children costs k(k − 1)/2 comparisons.
+#[inline(always)]
+fn pick_key(mut mask: u32, t_enter: &[f32; 8], pick: impl Fn(u64, u64) -> u64) -> u64 {
+    let mut best = order_key(t_enter, mask.trailing_zeros());
+    mask &= mask - 1;
+    while mask != 0 {
+        best = pick(best, order_key(t_enter, mask.trailing_zeros()));
+        mask &= mask - 1;
+    }
+    best
+}
+
+impl WideNode {
+    /// Calls `leaf` on the leaf children in `leaves` (not empty), near to far, skipping those
+    /// that start beyond `t_max` as `leaf` lowers it; true when `leaf` asks to stop.
+    #[inline(always)]
+    fn leaves_near_to_far(
+        &self,
+        mut leaves: u32,
+        t_enter: &[f32; 8],
+        t_max: &mut f32,
+        leaf: &mut impl FnMut(usize, usize, &mut f32) -> bool,
+    ) -> bool {
+        while leaves != 0 {
+            let key = pick_key(leaves, t_enter, u64::min);
+            let slot = key as usize & 7;
+            leaves &= !(1 << slot);
+            let (first, count) = (self.child[slot] as usize, self.count[slot] as usize);
+            if starts_by(key_t(key), *t_max) && leaf(first, count, t_max) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Pushes the inner children in `inner` but the nearest far to near, so they pop near to
+    /// far, and returns the nearest (None when `inner` is empty).
+    #[inline(always)]
+    fn push_inner<const N: usize>(
+        &self,
+        mut inner: u32,
+        t_enter: &[f32; 8],
+        stack: &mut Stack<Entry, N>,
+    ) -> Option<Entry> {
+        if inner == 0 {
+            return None;
+        }
+        while inner & (inner - 1) != 0 {
+            let key = pick_key(inner, t_enter, u64::max);
+            inner &= !(1 << (key & 7));
+            stack.push(Entry::child(self, key));
+        }
+        Some(Entry::child(
+            self,
+            order_key(t_enter, inner.trailing_zeros()),
+        ))
     }
 }
 
@@ -469,45 +561,27 @@ impl Tally for TraversalCount {
     }
 }
 
-/// The slots set in `mask` by increasing entry distance (insertion sort of at most 8; ties in
-/// slot order). Slots are bytes, so the array is one 8-byte word to clear, not 64 bytes.
-#[inline(always)]
-fn by_entry(mut mask: u32, t_enter: &[f32; 8]) -> ([u8; 8], usize) {
-    let (mut slots, mut n) = ([0u8; 8], 0);
-    while mask != 0 {
-        let slot = mask.trailing_zeros() as usize & 7;
-        mask &= mask - 1;
-        let mut k = n;
-        while k > 0 && t_enter[slots[k - 1] as usize] > t_enter[slot] {
-            slots[k] = slots[k - 1];
-            k -= 1;
-        }
-        slots[k] = slot as u8;
-        n += 1;
-    }
-    (slots, n)
-}
-
-/// Per-ray part of the box test. Entry distances are computed as fl(fl(p − o)·fl(fl(1/d)·s))
-/// with s = 1 − 2γ(4), exit distances likewise with s = 1 + 2γ(4): four roundings, so each is
-/// within γ(4) (relative) of the exact (p − o)·s/d and of the same sign (standard model, PBR
-/// 4ed §6.8.1), and the widening by 2γ(4) makes the interval contain the exact one (PBR 4ed
-/// §6.8.2 scales the exit only; we also compare the entry with t_max). The scale is folded into
-/// the per-ray 1/d, so a node test does not multiply by it (the same four roundings as scaling
-/// fl(fl(p − o)·fl(1/d)) afterwards). Both are moved out by the smallest normal float as well,
-/// which covers products that underflow.
-/// An axis with a non-finite scaled 1/d (the ray is parallel to its slabs, or |d| < 2⁻¹²⁷
-/// there) constrains nothing: its near planes give 0 (entries are clamped at 0 anyway) and its
-/// far planes +∞, through the splatted terms below, so no NaN ever arises.
+/// Per-ray part of the box test. A plane's distance is r = fl(fl(p − o)·fl(1/d)); a child's
+/// entry is fl(max(0, r_near…)·s) with s = 1 − 2γ(4), its exit fl(min(t_max, r_far…)·s′) with
+/// s′ = 1 + 2γ(4): four roundings, so each is within γ(4) (relative) of the exact (p − o)·s/d
+/// and of the same sign (standard model, PBR 4ed §6.8.1; max, min and the clamps at 0 and t_max
+/// are exact and commute with the positive scale), and the widening by 2γ(4) makes the interval
+/// contain the exact one (PBR 4ed §6.8.2 scales the exit only; we also compare the entry with
+/// t_max). The scale is applied once to the nearest exit and the farthest entry, not per plane,
+/// so the node test keeps six splatted vectors (o and 1/d per axis) in registers instead of
+/// twelve. The exit is moved out by twice the smallest normal float as well, which covers
+/// products that underflow.
+/// An axis with a non-finite 1/d·s′ (the ray is parallel to its slabs, or |d| < 2⁻¹²⁷ there)
+/// constrains nothing: its splatted origin is NaN, so its planes' distances are NaN, which
+/// [`max_or_acc`] and [`min_or_acc`] skip. No other distance is NaN: p − o is finite or ±∞ and
+/// 1/d finite and non-zero elsewhere (a non-finite d never reaches the BVH).
 struct RayBoxes {
-    /// Per axis: the plane row (see [`WideNode::planes`]) of the near and the far slab.
+    /// Per axis: the plane row (see [`WideNode::planes`]) of the near slab; the far one is
+    /// `near ^ 1`.
     near: [usize; 3],
-    far: [usize; 3],
-    /// Per axis, splatted: near-plane distance = (plane − o_near)·inv_near, far likewise.
-    o_near: [Vec4; 3],
-    inv_near: [Vec4; 3],
-    o_far: [Vec4; 3],
-    inv_far: [Vec4; 3],
+    /// Per axis, splatted: a plane's distance is (plane − o)·inv.
+    o: [Vec4; 3],
+    inv: [Vec4; 3],
 }
 
 /// Widening factors of the slab distances (see [`RayBoxes`]).
@@ -518,19 +592,38 @@ impl RayBoxes {
     #[inline(always)]
     fn new(ray: &Ray) -> RayBoxes {
         let inv = Vec4::ONE / Vec4::from((ray.d, 1.0));
-        let (inv_enter, inv_exit) = (inv * ENTER_SCALE, inv * EXIT_SCALE);
-        // |inv_exit| ≥ |inv_enter|: where the exit factor is finite, so is the entry one.
-        let (o, finite) = (Vec4::from((ray.o, 0.0)), inv_exit.is_finite_mask());
+        // |1/d·s′| ≥ |1/d·s|: where the exit's factor is finite, so is the entry's.
+        let finite = (inv * EXIT_SCALE).is_finite_mask();
+        let o = Vec4::select(finite, Vec4::from((ray.o, 0.0)), Vec4::NAN);
         let neg = inv.cmplt(Vec4::ZERO).bitmask() as usize;
         let splats = |v: Vec4| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
         RayBoxes {
             near: [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)],
-            far: [1 ^ (neg & 1), 3 ^ (neg >> 1 & 1), 5 ^ (neg >> 2 & 1)],
-            o_near: splats(Vec4::select(finite, o, Vec4::ZERO)),
-            inv_near: splats(Vec4::select(finite, inv_enter, Vec4::ZERO)),
-            o_far: splats(Vec4::select(finite, o, Vec4::NEG_INFINITY)),
-            inv_far: splats(Vec4::select(finite, inv_exit, Vec4::ONE)),
+            o: splats(o),
+            inv: splats(Vec4::select(finite, inv, Vec4::ONE)),
         }
+    }
+}
+
+/// max(a, acc) per lane, and acc where a is NaN (`acc` is never NaN). SSE's `maxps`, which
+/// glam's `max` is on x86, returns its second operand when either is NaN (Intel SDM, MAXPS);
+/// elsewhere (NEON's `vmaxq_f32` propagates NaN) a compare and select says the same.
+#[inline(always)]
+fn max_or_acc(a: Vec4, acc: Vec4) -> Vec4 {
+    if cfg!(any(target_arch = "x86", target_arch = "x86_64")) {
+        a.max(acc)
+    } else {
+        Vec4::select(a.cmpgt(acc), a, acc)
+    }
+}
+
+/// min(a, acc) per lane, and acc where a is NaN (see [`max_or_acc`]; SSE's `minps` likewise).
+#[inline(always)]
+fn min_or_acc(a: Vec4, acc: Vec4) -> Vec4 {
+    if cfg!(any(target_arch = "x86", target_arch = "x86_64")) {
+        a.min(acc)
+    } else {
+        Vec4::select(a.cmplt(acc), a, acc)
     }
 }
 
@@ -547,6 +640,7 @@ impl WideNode {
     /// widened entry distance of each slot.
     #[inline(always)]
     fn intersect(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
+        let t_max = Vec4::splat(t_max);
         let (m0, t0) = slab_half(&self.planes[0], ray, t_max);
         let (m1, t1) = slab_half(&self.planes[1], ray, t_max);
         let (t0, t1) = (t0.to_array(), t1.to_array());
@@ -575,16 +669,17 @@ impl WideNode {
 }
 
 /// The slab test of four children (PBR 4ed §6.1.2, widened as described at [`RayBoxes`]):
-/// the overlap mask (4 bits) and the entry distances.
+/// the overlap mask (4 bits) and the entry distances (≥ +0, never NaN).
 #[inline(always)]
-fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: f32) -> (u32, Vec4) {
-    let near = |k: usize| (planes[ray.near[k]] - ray.o_near[k]) * ray.inv_near[k];
-    let far = |k: usize| (planes[ray.far[k]] - ray.o_far[k]) * ray.inv_far[k];
-    let enter = near(0).max(near(1)).max(near(2));
-    let exit = far(0).min(far(1)).min(far(2));
-    let margin = Vec4::splat(f32::MIN_POSITIVE);
-    let t_enter = (enter - margin).max(Vec4::ZERO);
-    let t_exit = (exit + margin).min(Vec4::splat(t_max));
+fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: Vec4) -> (u32, Vec4) {
+    let distance = |row: usize, k: usize| (planes[row] - ray.o[k]) * ray.inv[k];
+    let (mut enter, mut exit) = (Vec4::ZERO, t_max);
+    for k in 0..3 {
+        enter = max_or_acc(distance(ray.near[k], k), enter);
+        exit = min_or_acc(distance(ray.near[k] ^ 1, k), exit);
+    }
+    let t_enter = enter * ENTER_SCALE;
+    let t_exit = exit * EXIT_SCALE + Vec4::splat(2.0 * f32::MIN_POSITIVE);
     (t_enter.cmple(t_exit).bitmask(), t_enter)
 }
 
@@ -1042,6 +1137,22 @@ mod tests {
             assert!((hit.hit.t - 0.01 * scale).abs() <= 1e-6 * scale);
             assert!(bvh.occluded(&r, 1.0));
         }
+    }
+
+    /// The node test's max and min skip a NaN distance (an axis that constrains nothing) on
+    /// either side of the accumulator, and are max and min otherwise.
+    #[test]
+    fn nan_distances_are_skipped() {
+        let acc = Vec4::new(0.0, 1.0, -2.0, f32::INFINITY);
+        let a = Vec4::new(f32::NAN, 3.0, -5.0, f32::NAN);
+        assert_eq!(
+            max_or_acc(a, acc).to_array(),
+            [0.0, 3.0, -2.0, f32::INFINITY]
+        );
+        assert_eq!(
+            min_or_acc(a, acc).to_array(),
+            [0.0, 1.0, -5.0, f32::INFINITY]
+        );
     }
 
     /// Triangles at geometrically growing distances give a deep tree, a random soup a bushy

@@ -1,7 +1,9 @@
 //! The BVH's traversal stack: `N` entries in place (on the call stack), then a heap spill for
 //! the rare traversal that needs more. A query so neither allocates (in practice) nor clears a
 //! stack sized for the tree's worst case: obvhs's `StackStack` zero-fills its whole array on
-//! every query, 2 KiB for a 1M-triangle tree, whose worst case is 7·depth − 6 entries.
+//! every query, 2 KiB for a 1M-triangle tree, whose worst case is 7·depth − 6 entries. The
+//! `N` places are still cleared per query (safe Rust has no uninitialised array), so `N` is
+//! kept small (`bvh.rs`'s `STACK_PLACES`).
 
 /// A LIFO stack of `Copy` entries: the first `N` in place, the rest in `spill`.
 /// Invariant: `spill` is empty unless all `N` places are taken, so the top is the spill's top
@@ -29,17 +31,21 @@ impl<T: Copy + Default, const N: usize> Stack<T, N> {
                 *place = value;
                 self.len += 1;
             }
-            None => self.spill.push(value),
+            None => spill_push(&mut self.spill, value),
         }
     }
 
     #[inline(always)]
     pub fn pop(&mut self) -> Option<T> {
-        if let Some(value) = self.spill.pop() {
-            return Some(value);
+        // The spill is looked at only when every place is taken (the invariant above).
+        if self.len == N {
+            if let Some(value) = self.spill.pop() {
+                return Some(value);
+            }
         }
         self.len = self.len.checked_sub(1)?;
-        self.places.get(self.len).copied()
+        // len < N here, so `% N` (a mask for the power of two in use) only spares the bound check.
+        Some(self.places[self.len % N])
     }
 
     /// Whether the stack ever went past its `N` places.
@@ -47,6 +53,14 @@ impl<T: Copy + Default, const N: usize> Stack<T, N> {
     pub fn spilled(&self) -> bool {
         self.spill.capacity() > 0
     }
+}
+
+/// The rare push past the `N` places, out of line so the common one stays short. It borrows
+/// the spill alone, so the stack's length and places never escape and can stay in registers.
+#[cold]
+#[inline(never)]
+fn spill_push<T>(spill: &mut Vec<T>, value: T) {
+    spill.push(value);
 }
 
 #[cfg(test)]
