@@ -24,6 +24,7 @@ pub mod bidir;
 pub mod cut;
 pub mod estimator;
 pub(crate) mod gathered;
+pub(crate) mod radiance_memo;
 pub mod light_tracer;
 pub mod meter;
 pub mod path;
