@@ -421,7 +421,15 @@ mod tests {
             1.0,
             -1.0,
         ];
-        let offsets = [1e-7, -1e-7, 0.0, -0.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY];
+        let offsets = [
+            1e-7,
+            -1e-7,
+            0.0,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
         let mut values: Vec<f32> = special.to_vec();
         values.extend((0..100_000).map(|_| f32::from_bits(rng.next_u64() as u32)));
         for &v in &values {
@@ -458,8 +466,14 @@ mod tests {
                 let sp = SpawnPoint::new(p, err, n);
                 for w in [rng.unit_vector(), n, -n, Vec3::ZERO, rng.vec3(-1.0, 1.0)] {
                     let want = reference_origin(p, err, n, w);
-                    assert_eq!(sp.origin(w).to_array().map(f32::to_bits), want.to_array().map(f32::to_bits));
-                    assert_eq!(offset_ray_origin(p, err, n, w).to_array().map(f32::to_bits), want.to_array().map(f32::to_bits));
+                    assert_eq!(
+                        sp.origin(w).to_array().map(f32::to_bits),
+                        want.to_array().map(f32::to_bits)
+                    );
+                    assert_eq!(
+                        offset_ray_origin(p, err, n, w).to_array().map(f32::to_bits),
+                        want.to_array().map(f32::to_bits)
+                    );
                     assert_eq!(sp.ray(w).o, spawn_ray(p, err, n, w).o);
                 }
                 let to = rng.vec3(-10.0, 10.0) * scale;

@@ -24,10 +24,10 @@ pub mod bidir;
 pub mod cut;
 pub mod estimator;
 pub(crate) mod gathered;
-pub(crate) mod radiance_memo;
 pub mod light_tracer;
 pub mod meter;
 pub mod path;
+pub(crate) mod radiance_memo;
 pub mod roulette;
 pub mod vcm;
 

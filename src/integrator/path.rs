@@ -73,8 +73,8 @@ struct PathState {
     depth: u32,
     /// Surfaces passed through (opacity) so far.
     pass_throughs: u32,
-    /// The last light next event estimation sampled, with its radiance at the path's
-    /// wavelengths (`radiance_memo.rs`).
+    /// The radiance at the path's wavelengths of the light class next event estimation
+    /// sampled last (`radiance_memo.rs`).
     le: RadianceMemo,
 }
 
@@ -634,7 +634,12 @@ fn shadow_ray(from: &SpawnPoint, ls: &LightLiSample) -> (Ray, f32) {
 /// The fraction of the light sample's radiance that reaches the surface point `from`: 0
 /// behind an opaque surface, the product of (1 − opacity) over the translucent surfaces in
 /// between, else 1.
-pub(crate) fn transmittance(scene: &Scene, from: &SpawnPoint, ls: &LightLiSample, light: u32) -> f32 {
+pub(crate) fn transmittance(
+    scene: &Scene,
+    from: &SpawnPoint,
+    ls: &LightLiSample,
+    light: u32,
+) -> f32 {
     if !scene.casts_shadows(light) {
         return 1.0;
     }

@@ -58,10 +58,7 @@ mod tests {
 
     fn triangle(kelvin: f32) -> Light {
         let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
-        let radiance = Spectrum::Blackbody {
-            kelvin,
-            scale: 1.0,
-        };
+        let radiance = Spectrum::Blackbody { kelvin, scale: 1.0 };
         Light::Triangle(TriangleLight::new("/L".into(), p, radiance, false))
     }
 

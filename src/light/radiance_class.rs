@@ -44,8 +44,14 @@ fn same_bits(s: &Spectrum, t: &Spectrum) -> bool {
                         .all(|(u, v)| u.to_bits() == v.to_bits()))
         }
         (
-            Spectrum::Blackbody { kelvin: a, scale: x },
-            Spectrum::Blackbody { kelvin: b, scale: y },
+            Spectrum::Blackbody {
+                kelvin: a,
+                scale: x,
+            },
+            Spectrum::Blackbody {
+                kelvin: b,
+                scale: y,
+            },
         ) => a.to_bits() == b.to_bits() && x.to_bits() == y.to_bits(),
         _ => false,
     }
@@ -96,7 +102,10 @@ mod tests {
         };
         assert_eq!(radiance_classes(&[sun(), sun()]), vec![0, 1]);
         let t = triangle(Spectrum::Constant(1.0));
-        assert_eq!(radiance_classes(&[sun(), t.clone(), sun(), t]), vec![0, 1, 2, 3]);
+        assert_eq!(
+            radiance_classes(&[sun(), t.clone(), sun(), t]),
+            vec![0, 1, 2, 3]
+        );
         assert!(radiance_classes(&[]).is_empty());
     }
 }

@@ -222,7 +222,7 @@ impl TriangleLight {
     /// Uniform by area: p_w = d² / (A |cos θ_light|) (eq. 4.9); `le` as in
     /// [`Self::sample_li_given`].
     #[inline]
-    fn sample_area(
+    pub(crate) fn sample_area(
         &self,
         ctx: &LightSampleContext,
         u: [f32; 2],
