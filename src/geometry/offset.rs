@@ -131,7 +131,9 @@ fn rounded(po: Vec3, offset: Vec3) -> Vec3 {
 /// offset have the same sign, down otherwise (±0, the infinities and NaN take the std
 /// functions; tested against them).
 #[inline]
+#[allow(clippy::double_comparisons)]
 fn round_away(v: f32, offset: f32) -> f32 {
+    // Not `offset != 0.0` (clippy's double_comparisons): a NaN offset leaves `v` as it is.
     if !(offset > 0.0 || offset < 0.0) {
         return v;
     }
