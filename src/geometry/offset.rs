@@ -116,7 +116,7 @@ impl SpawnPoint {
 }
 
 /// `po` with each coordinate moved one ulp further in the direction of `offset`'s.
-#[inline]
+#[inline(always)]
 fn rounded(po: Vec3, offset: Vec3) -> Vec3 {
     Vec3::new(
         round_away(po.x, offset.x),

@@ -306,9 +306,9 @@ impl PathIntegrator {
                 }
                 Hit::Surface(si) => si,
             };
-            let material = &scene.materials[si.material as usize];
             // An all-opaque scene has every surface present (no draw either way).
-            if !scene.all_opaque && !surface_present(material, si.uv, sampler) {
+            let material = || &scene.materials[si.material as usize];
+            if !scene.all_opaque && !surface_present(material(), si.uv, sampler) {
                 st.pass_throughs += 1;
                 if st.pass_throughs > MAX_PASS_THROUGHS {
                     return None;
