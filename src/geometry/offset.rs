@@ -50,16 +50,74 @@ pub fn next_float_down(v: f32) -> f32 {
 /// (PBR 4ed §6.8.6, pbrt-v4 `OffsetRayOrigin`).
 ///
 /// `n` need not be unit length; a zero or non-finite `n` gives no offset. If `w` is tangent to
-/// the surface (`w·n = 0`) the point moves to the `+n` side.
+/// the surface (`w·n = 0`) the point moves to the `+n` side. [`SpawnPoint`] is the same
+/// computation with the per-point part done once for every ray leaving the point.
 #[inline]
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
-    let n = n.normalize_or_zero();
-    let d = n.abs().dot(p_error);
-    let mut offset = n * d;
-    if w.dot(n) < 0.0 {
-        offset = -offset;
+    SpawnPoint::new(p, p_error, n).origin(w)
+}
+
+/// A surface point that rays leave from: [`offset_ray_origin`]'s unit normal, offset vector and
+/// the origin on the `+n` side computed once, so that the rays a vertex spawns (next event
+/// estimation's shadow ray and the BSDF-sampled ray, PBR 4ed §6.8.6) share them. The origins
+/// are `offset_ray_origin`'s, bit for bit: the same operations in the same order.
+#[derive(Clone, Copy, Debug)]
+pub struct SpawnPoint {
+    p: Vec3,
+    /// `n` normalised (zero when it cannot be).
+    n: Vec3,
+    /// `n · (|n|·p_error)`: the move to the `+n` side before rounding.
+    offset: Vec3,
+    /// The origin of rays leaving to the `+n` side (w·n ≥ 0).
+    above: Vec3,
+}
+
+impl SpawnPoint {
+    /// The point `p` with absolute error `p_error` on a surface of geometric normal `n` (any
+    /// length).
+    #[inline]
+    pub fn new(p: Vec3, p_error: Vec3, n: Vec3) -> SpawnPoint {
+        let n = n.normalize_or_zero();
+        let d = n.abs().dot(p_error);
+        let offset = n * d;
+        SpawnPoint {
+            p,
+            n,
+            offset,
+            above: rounded(p + offset, offset),
+        }
     }
-    let po = p + offset;
+
+    /// The origin of a ray leaving in direction `w` (any length): `offset_ray_origin(p,
+    /// p_error, n, w)`.
+    #[inline]
+    pub fn origin(&self, w: Vec3) -> Vec3 {
+        if w.dot(self.n) < 0.0 {
+            let offset = -self.offset;
+            rounded(self.p + offset, offset)
+        } else {
+            self.above
+        }
+    }
+
+    /// A ray leaving in direction `w` ([`spawn_ray`]).
+    #[inline]
+    pub fn ray(&self, w: Vec3) -> Ray {
+        Ray::new(self.origin(w), w)
+    }
+
+    /// A shadow ray to a point `p_to` of error 0 (a light sample's point):
+    /// [`spawn_ray_to`] with `err_to` = 0, or [`spawn_ray_to_point`].
+    #[inline]
+    pub fn ray_to_exact(&self, p_to: Vec3) -> (Ray, f32) {
+        let from = self.origin(p_to - self.p);
+        (Ray::new(from, p_to - from), 1.0 - SHADOW_EPSILON)
+    }
+}
+
+/// `po` with each coordinate moved one ulp further in the direction of `offset`'s.
+#[inline(always)]
+fn rounded(po: Vec3, offset: Vec3) -> Vec3 {
     Vec3::new(
         round_away(po.x, offset.x),
         round_away(po.y, offset.y),
@@ -67,15 +125,28 @@ pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     )
 }
 
-/// Moves `v` one ulp further in the direction of `offset` (unchanged when `offset` is zero).
+/// Moves `v` one ulp further in the direction of `offset` (unchanged when `offset` is zero or
+/// NaN): [`next_float_up`] for a positive offset, [`next_float_down`] for a negative one. For a
+/// finite non-zero `v` that is one step of its bit pattern: up in magnitude when `v` and the
+/// offset have the same sign, down otherwise (±0, the infinities and NaN take the std
+/// functions; tested against them).
 #[inline]
+#[allow(clippy::double_comparisons)]
 fn round_away(v: f32, offset: f32) -> f32 {
+    // Not `offset != 0.0` (clippy's double_comparisons): a NaN offset leaves `v` as it is.
+    if !(offset > 0.0 || offset < 0.0) {
+        return v;
+    }
+    let bits = v.to_bits();
+    let magnitude = bits & 0x7fff_ffff;
+    if magnitude.wrapping_sub(1) < 0x7f80_0000 - 1 {
+        let same_sign = (bits ^ offset.to_bits()) & 0x8000_0000 == 0;
+        return f32::from_bits(if same_sign { bits + 1 } else { bits - 1 });
+    }
     if offset > 0.0 {
         next_float_up(v)
-    } else if offset < 0.0 {
-        next_float_down(v)
     } else {
-        v
+        next_float_down(v)
     }
 }
 
@@ -306,6 +377,114 @@ mod tests {
             1.0
         } else {
             -1.0
+        }
+    }
+
+    /// `offset_ray_origin` as first written (PBR 4ed §6.8.6): the std ulp steps per axis.
+    fn reference_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
+        let n = n.normalize_or_zero();
+        let d = n.abs().dot(p_error);
+        let mut offset = n * d;
+        if w.dot(n) < 0.0 {
+            offset = -offset;
+        }
+        let po = p + offset;
+        let step = |v: f32, o: f32| {
+            if o > 0.0 {
+                next_float_up(v)
+            } else if o < 0.0 {
+                next_float_down(v)
+            } else {
+                v
+            }
+        };
+        Vec3::new(
+            step(po.x, offset.x),
+            step(po.y, offset.y),
+            step(po.z, offset.z),
+        )
+    }
+
+    #[test]
+    fn round_away_is_the_std_ulp_step() {
+        let mut rng = Rng::new(24);
+        let special = [
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1.0,
+            -1.0,
+        ];
+        let offsets = [
+            1e-7,
+            -1e-7,
+            0.0,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let mut values: Vec<f32> = special.to_vec();
+        values.extend((0..100_000).map(|_| f32::from_bits(rng.next_u64() as u32)));
+        for &v in &values {
+            for &o in &offsets {
+                let want = if o > 0.0 {
+                    next_float_up(v)
+                } else if o < 0.0 {
+                    next_float_down(v)
+                } else {
+                    v
+                };
+                let got = round_away(v, o);
+                assert!(
+                    got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                    "round_away({v:e}, {o:e}) = {got:e}, not {want:e}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn spawn_points_give_the_reference_origins_bit_for_bit() {
+        let mut rng = Rng::new(25);
+        for scale in [1e-4f32, 1.0, 1e5] {
+            for _ in 0..50_000 {
+                let p = rng.vec3(-10.0, 10.0) * scale;
+                let err = rng.vec3(0.0, 1e-6) * scale;
+                let n = match rng.below(8) {
+                    0 => Vec3::Z,
+                    1 => -Vec3::X,
+                    2 => rng.unit_vector() * 3.0,
+                    _ => rng.unit_vector(),
+                };
+                let sp = SpawnPoint::new(p, err, n);
+                for w in [rng.unit_vector(), n, -n, Vec3::ZERO, rng.vec3(-1.0, 1.0)] {
+                    let want = reference_origin(p, err, n, w);
+                    assert_eq!(
+                        sp.origin(w).to_array().map(f32::to_bits),
+                        want.to_array().map(f32::to_bits)
+                    );
+                    assert_eq!(
+                        offset_ray_origin(p, err, n, w).to_array().map(f32::to_bits),
+                        want.to_array().map(f32::to_bits)
+                    );
+                    assert_eq!(sp.ray(w).o, spawn_ray(p, err, n, w).o);
+                }
+                let to = rng.vec3(-10.0, 10.0) * scale;
+                let (a, ta) = sp.ray_to_exact(to);
+                let (b, tb) = spawn_ray_to(p, err, n, to, Vec3::ZERO, rng.unit_vector());
+                let (c, tc) = spawn_ray_to_point(p, err, n, to);
+                assert_eq!((a.o, a.d, ta), (b.o, b.d, tb));
+                assert_eq!((a.o, a.d, ta), (c.o, c.d, tc));
+            }
         }
     }
 

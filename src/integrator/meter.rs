@@ -30,7 +30,7 @@
 use super::cut::CutSample;
 use super::path::{transmittance, PathIntegrator, Previous};
 use super::Workspace;
-use crate::geometry::offset::spawn_ray;
+use crate::geometry::offset::{spawn_ray, SpawnPoint};
 use crate::light::LightSampleContext;
 use crate::math::{Frame, INV_PI};
 use crate::sampling::warp::cosine_hemisphere;
@@ -141,7 +141,8 @@ fn light_sample(
     if cos <= 0.0 || ls.l.is_black() || ls.pdf_w == 0.0 {
         return SampledSpectrum::ZERO;
     }
-    let tr = transmittance(scene, ctx.p, p_error, ctx.n, &ls, light as u32);
+    let from = SpawnPoint::new(ctx.p, p_error, ctx.n);
+    let tr = transmittance(scene, &from, &ls, light as u32);
     if tr == 0.0 {
         return SampledSpectrum::ZERO;
     }

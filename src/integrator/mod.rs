@@ -27,6 +27,7 @@ pub(crate) mod gathered;
 pub mod light_tracer;
 pub mod meter;
 pub mod path;
+pub(crate) mod radiance_memo;
 pub mod roulette;
 pub mod vcm;
 

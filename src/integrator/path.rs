@@ -22,10 +22,11 @@ use super::bidir::Contribution;
 use super::cut::{continuation, continuation_limit, CutSample};
 use super::gathered::Gathered;
 use super::meter::MeterIntegrator;
+use super::radiance_memo::RadianceMemo;
 use super::roulette;
 use super::{Estimator, Settings, Workspace};
 use crate::bxdf::{Bsdf, TransportMode};
-use crate::geometry::offset::{spawn_ray, spawn_ray_to, spawn_ray_to_point};
+use crate::geometry::offset::{spawn_ray, SpawnPoint};
 use crate::geometry::Ray;
 use crate::light::emission_layers::LayerSource;
 use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
@@ -72,6 +73,9 @@ struct PathState {
     depth: u32,
     /// Surfaces passed through (opacity) so far.
     pass_throughs: u32,
+    /// The radiance at the path's wavelengths of the light class next event estimation
+    /// sampled last (`radiance_memo.rs`).
+    le: RadianceMemo,
 }
 
 impl PathState {
@@ -84,6 +88,7 @@ impl PathState {
             eta_scale: 1.0,
             depth: 0,
             pass_throughs: 0,
+            le: RadianceMemo::EMPTY,
         }
     }
 }
@@ -301,9 +306,9 @@ impl PathIntegrator {
                 }
                 Hit::Surface(si) => si,
             };
-            let material = &scene.materials[si.material as usize];
             // An all-opaque scene has every surface present (no draw either way).
-            if !scene.all_opaque && !surface_present(material, si.uv, sampler) {
+            let material = || &scene.materials[si.material as usize];
+            if !scene.all_opaque && !surface_present(material(), si.uv, sampler) {
                 st.pass_throughs += 1;
                 if st.pass_throughs > MAX_PASS_THROUGHS {
                     return None;
@@ -349,9 +354,13 @@ impl PathIntegrator {
         }
         let tc = scene.tex_coord(si, self.filter);
         let bsdf = spectra.bsdf(material, index, tc, si.ns, lambda);
+        // The offset off the surface, shared by the shadow ray and the next ray.
+        let from = SpawnPoint::new(si.p, si.p_error, si.ng);
         if !bsdf.is_specular() {
             sampler.set_dimension(dimensions::bounce(bounce, LIGHT));
-            self.sample_ld(scene, si, &bsdf, wo, lambda, sampler, st.beta, g);
+            let v = (si, &from);
+            let l = (st.beta, &mut st.le);
+            self.sample_ld(scene, v, &bsdf, wo, lambda, sampler, l, g);
         }
         sampler.set_dimension(dimensions::bounce(bounce, BSDF));
         let (uc, u) = (sampler.get_1d(), sampler.get_2d());
@@ -367,7 +376,7 @@ impl PathIntegrator {
             pdf_bsdf_w: bs.pdf_w,
             specular: bs.specular,
         });
-        st.ray = spawn_ray(si.p, si.p_error, si.ng, bs.wi);
+        st.ray = from.ray(bs.wi);
         st.t_max = f32::INFINITY;
         sampler.set_dimension(dimensions::bounce(bounce, ROULETTE));
         roulette::survives(&mut st.beta, st.eta_scale, st.depth, self.rr_depth, sampler)
@@ -496,17 +505,18 @@ impl PathIntegrator {
     /// against BSDF sampling (Veach 1997 eq. 9.13 with β = 2), × `beta` into the image and
     /// every layer. A replacing layer samples its own light with the same numbers (the same
     /// point: only the spectrum differs) and shares the BSDF value, the shadow ray and the
-    /// MIS weight, computed once.
+    /// MIS weight, computed once. `from` is the vertex's [`SpawnPoint`], `le` the path's memo
+    /// of the light's radiance.
     #[allow(clippy::too_many_arguments)]
     fn sample_ld(
         &self,
         scene: &Scene,
-        si: &SurfaceHit,
+        (si, from): (&SurfaceHit, &SpawnPoint),
         bsdf: &Bsdf,
         wo: Vec3,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
-        beta: SampledSpectrum,
+        (beta, le): (SampledSpectrum, &mut RadianceMemo),
         g: &mut Gathered,
     ) {
         let (ul, u) = (sampler.get_1d(), sampler.get_2d());
@@ -517,14 +527,16 @@ impl PathIntegrator {
         let nee = Nee {
             scene,
             si,
+            from,
             bsdf,
             wo,
             light,
             pmf,
         };
         let mut shared = None;
+        let le = le.get((&scene.lights, &scene.radiance_class), light, lambda);
         let main = scene.lights[light]
-            .sample_li(&ctx, u, lambda)
+            .sample_li_given(&ctx, u, lambda, le)
             .map_or(SampledSpectrum::ZERO, |ls| nee.term(&ls, &mut shared));
         g.l += beta * main;
         for (layer, sum) in g.layers.iter().zip(g.sums.iter_mut()) {
@@ -545,6 +557,8 @@ impl PathIntegrator {
 struct Nee<'a> {
     scene: &'a Scene,
     si: &'a SurfaceHit,
+    /// Where the shadow ray leaves `si` from.
+    from: &'a SpawnPoint,
     bsdf: &'a Bsdf,
     wo: Vec3,
     light: usize,
@@ -580,7 +594,7 @@ impl Nee<'_> {
         if f.is_black() {
             return (f, 0.0, 0.0, 0.0);
         }
-        let tr = transmittance(self.scene, si.p, si.p_error, si.ng, ls, self.light as u32);
+        let tr = transmittance(self.scene, self.from, ls, self.light as u32);
         let pdf_light = self.pmf * ls.pdf_w;
         // A shadowless light's direct light is all next event estimation's (its BSDF-sampled
         // hits count nothing, `emitted`), so its weight is 1 as a delta light's.
@@ -605,33 +619,31 @@ fn surface_present(material: &Material, uv: Vec2, sampler: &mut Sampler) -> bool
     a >= 1.0 || (a > 0.0 && sampler.get_1d_free() < a)
 }
 
-/// The shadow ray from a surface point to a light sample, and its t_max.
+/// The shadow ray from a surface point to a light sample, and its t_max: towards an infinite
+/// light's direction, else to the sample's point, which has no error to offset (a light's
+/// sampled point is exact: `spawn_ray_to` with error 0 there, `geometry::offset`).
 #[inline]
-fn shadow_ray(p: Vec3, p_error: Vec3, ng: Vec3, ls: &LightLiSample, lgt: &Light) -> (Ray, f32) {
+fn shadow_ray(from: &SpawnPoint, ls: &LightLiSample) -> (Ray, f32) {
     if ls.infinite {
-        (spawn_ray(p, p_error, ng, ls.wi), f32::INFINITY)
-    } else if matches!(lgt, Light::Triangle(_)) {
-        spawn_ray_to(p, p_error, ng, ls.p_light, Vec3::ZERO, ls.n_light)
+        (from.ray(ls.wi), f32::INFINITY)
     } else {
-        spawn_ray_to_point(p, p_error, ng, ls.p_light)
+        from.ray_to_exact(ls.p_light)
     }
 }
 
-/// The fraction of the light sample's radiance that reaches `p`: 0 behind an opaque surface,
-/// the product of (1 − opacity) over the translucent surfaces in between, else 1.
+/// The fraction of the light sample's radiance that reaches the surface point `from`: 0
+/// behind an opaque surface, the product of (1 − opacity) over the translucent surfaces in
+/// between, else 1.
 pub(crate) fn transmittance(
     scene: &Scene,
-    p: Vec3,
-    p_error: Vec3,
-    ng: Vec3,
+    from: &SpawnPoint,
     ls: &LightLiSample,
     light: u32,
 ) -> f32 {
     if !scene.casts_shadows(light) {
         return 1.0;
     }
-    let lgt = &scene.lights[light as usize];
-    let (mut ray, mut t) = shadow_ray(p, p_error, ng, ls, lgt);
+    let (mut ray, mut t) = shadow_ray(from, ls);
     if !scene.occluded(&ray, t, Some(light)) {
         return 1.0;
     }
@@ -650,7 +662,7 @@ pub(crate) fn transmittance(
         if tr == 0.0 {
             return 0.0;
         }
-        (ray, t) = shadow_ray(si.p, si.p_error, si.ng, ls, lgt);
+        (ray, t) = shadow_ray(&SpawnPoint::new(si.p, si.p_error, si.ng), ls);
         if !scene.occluded(&ray, t, Some(light)) {
             return tr;
         }

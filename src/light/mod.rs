@@ -22,6 +22,7 @@ pub mod line;
 pub mod point;
 pub mod portal;
 pub mod power_share;
+pub mod radiance_class;
 pub mod rect;
 pub mod report;
 pub mod sampler;
@@ -114,6 +115,34 @@ impl Light {
             Light::Dome(l) => l.sample_li(ctx, u, lambda),
             Light::Point(l) => l.sample_li(ctx, lambda),
             Light::Line(l) => l.sample_li(ctx, u, lambda),
+        }
+    }
+
+    /// The radiance the light emits at every point and towards every direction it emits in, at
+    /// `lambda`, when that is one spectrum (an untextured triangle); None otherwise. What
+    /// [`Self::sample_li_given`] takes.
+    #[inline]
+    pub fn uniform_radiance(&self, lambda: &SampledWavelengths) -> Option<SampledSpectrum> {
+        match self {
+            Light::Triangle(l) => l.uniform_radiance(lambda),
+            _ => None,
+        }
+    }
+
+    /// [`Self::sample_li`] given `le`, the light's [`Self::uniform_radiance`] at `lambda` (or
+    /// None): a caller that keeps it per wavelength tuple spares its evaluation per sample,
+    /// with the same result bit for bit.
+    #[inline]
+    pub fn sample_li_given(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+        le: Option<SampledSpectrum>,
+    ) -> Option<LightLiSample> {
+        match (self, le) {
+            (Light::Triangle(l), le) => l.sample_li_given(ctx, u, lambda, le),
+            _ => self.sample_li(ctx, u, lambda),
         }
     }
 

@@ -84,7 +84,7 @@ pub fn warp(u: [f32; 2], weights: Option<[f32; 4]>) -> ([f32; 2], f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::light::{LightHit, LightSampleContext, RectLight, TriangleLight};
+    use crate::light::{LightHit, LightLiSample, LightSampleContext, RectLight, TriangleLight};
     use crate::spectral::{SampledWavelengths, Spectrum};
     use crate::testing::rng::Rng;
     use glam::DVec3;
@@ -199,7 +199,7 @@ mod tests {
                     });
                     let area = estimate(count, n, |u| {
                         let ls = match name {
-                            "triangle" => tri.sample_area(&ctx, u, &lambda)?,
+                            "triangle" => tri.sample_area(&ctx, u, &lambda, None)?,
                             _ => r.sample_area(&ctx, u, &lambda)?,
                         };
                         Some((ls.l[0], ls.wi, ls.pdf_w))
@@ -258,6 +258,22 @@ mod tests {
             let ctx = LightSampleContext { p, n };
             let u = [rng.f32(), rng.f32()];
             for t in &tris {
+                // A caller's radiance (`sample_li_given`) changes nothing but the radiance.
+                let plain = format!("{:?}", t.sample_li(&ctx, u, &lambda));
+                let le = t.uniform_radiance(&lambda);
+                assert_eq!(
+                    format!("{:?}", t.sample_li_given(&ctx, u, &lambda, le)),
+                    plain
+                );
+                let marked = crate::spectral::SampledSpectrum::splat(7.0);
+                if let Some(m) = t.sample_li_given(&ctx, u, &lambda, Some(marked)) {
+                    assert_eq!(m.l, marked);
+                    let m = LightLiSample {
+                        l: le.unwrap(),
+                        ..m
+                    };
+                    assert_eq!(format!("{:?}", Some(m)), plain);
+                }
                 if let Some(ls) = t.sample_li(&ctx, u, &lambda) {
                     assert!(ls.pdf_w.is_finite() && ls.pdf_w > 0.0, "{p} {n}: {ls:?}");
                     assert!(ls.wi.is_finite() && ls.p_light.is_finite() && ls.l.is_finite());

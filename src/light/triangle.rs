@@ -169,15 +169,39 @@ impl TriangleLight {
         u: [f32; 2],
         lambda: &SampledWavelengths,
     ) -> Option<LightLiSample> {
+        self.sample_li_given(ctx, u, lambda, None)
+    }
+
+    /// The radiance an untextured triangle emits everywhere, at `lambda` (None when textured:
+    /// it varies over the triangle).
+    #[inline]
+    pub fn uniform_radiance(&self, lambda: &SampledWavelengths) -> Option<SampledSpectrum> {
+        match self.texture {
+            Some(_) => None,
+            None => Some(self.radiance.sample(lambda)),
+        }
+    }
+
+    /// [`Self::sample_li`] with `le`, when given, as the radiance at the sampled point: it must
+    /// be [`Self::uniform_radiance`] at `lambda` (a caller that keeps it for the wavelength
+    /// tuple spares the evaluation per sample; the same bits).
+    #[inline]
+    pub fn sample_li_given(
+        &self,
+        ctx: &LightSampleContext,
+        u: [f32; 2],
+        lambda: &SampledWavelengths,
+        le: Option<SampledSpectrum>,
+    ) -> Option<LightLiSample> {
         if self.area == 0.0 {
             return None;
         }
         if self.near(ctx) {
-            if let Some(ls) = self.sample_near(ctx, u, lambda) {
+            if let Some(ls) = self.sample_near(ctx, u, lambda, le) {
                 return ls;
             }
         }
-        self.sample_area(ctx, u, lambda)
+        self.sample_area(ctx, u, lambda, le)
     }
 
     /// The solid-angle sample when [`Self::solid_angle`] gives a spherical triangle, None when
@@ -189,23 +213,26 @@ impl TriangleLight {
         ctx: &LightSampleContext,
         u: [f32; 2],
         lambda: &SampledWavelengths,
+        le: Option<SampledSpectrum>,
     ) -> Option<Option<LightLiSample>> {
         let t = self.solid_angle(ctx)?;
-        Some(self.sample_solid_angle(ctx, &t, u, lambda))
+        Some(self.sample_solid_angle(ctx, &t, u, lambda, le))
     }
 
-    /// Uniform by area: p_w = d² / (A |cos θ_light|) (eq. 4.9).
+    /// Uniform by area: p_w = d² / (A |cos θ_light|) (eq. 4.9); `le` as in
+    /// [`Self::sample_li_given`].
     #[inline]
     pub(crate) fn sample_area(
         &self,
         ctx: &LightSampleContext,
         u: [f32; 2],
         lambda: &SampledWavelengths,
+        le: Option<SampledSpectrum>,
     ) -> Option<LightLiSample> {
         let b = uniform_triangle(u);
         let p = b[0] * self.p[0] + b[1] * self.p[1] + b[2] * self.p[2];
         sample_by_area(ctx, p, self.n, self.area, self.two_sided, |_| {
-            self.radiance_at(b, lambda)
+            le.unwrap_or_else(|| self.radiance_at(b, lambda))
         })
     }
 
@@ -217,6 +244,7 @@ impl TriangleLight {
         t: &SphericalTriangle,
         u: [f32; 2],
         lambda: &SampledWavelengths,
+        le: Option<SampledSpectrum>,
     ) -> Option<LightLiSample> {
         let (u, warp) = solid_angle::warp(u, Self::weights(ctx, t));
         let wi = t.sample(u);
@@ -233,7 +261,7 @@ impl TriangleLight {
             return None;
         }
         Some(LightLiSample {
-            l: self.radiance_from(p, lambda),
+            l: le.unwrap_or_else(|| self.radiance_from(p, lambda)),
             wi,
             pdf_w,
             p_light: p,

@@ -77,7 +77,7 @@ impl Sampler {
     }
 
     /// A uniform point in [0, 1)²: the next two dimensions.
-    #[inline]
+    #[inline(always)]
     pub fn get_2d(&mut self) -> [f32; 2] {
         match &mut self.lds {
             Some(q) => q.next_2d().map(unit),

@@ -191,6 +191,8 @@ pub(super) fn assemble(
         time: desc.time,
     };
     let all_opaque = materials.iter().all(Material::is_opaque);
+    let any_textured = materials.iter().any(Material::is_textured);
+    let radiance_class = crate::light::radiance_class::radiance_classes(&lights);
     let dispersive = machinery.dispersion_checks || materials.iter().any(Material::is_dispersive);
     let specular_like = materials
         .iter()
@@ -202,11 +204,13 @@ pub(super) fn assemble(
         tri_refs,
         bvh,
         all_opaque,
+        any_textured,
         dispersive,
         specular_like,
         materials,
         lights,
         light_sampler,
+        radiance_class,
         infinite_lights,
         shape_lights,
         shadowless,

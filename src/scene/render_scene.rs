@@ -92,6 +92,9 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
     pub light_sampler: LightSampler,
+    /// Per light, the first light of its run with the same uniform radiance
+    /// (`light::radiance_class`): the key of a path's memo of a light's radiance.
+    pub radiance_class: Vec<u32>,
     /// Indices of lights met by escaping rays.
     pub infinite_lights: Vec<u32>,
     /// Indices of lights that are analytic shapes.
@@ -105,6 +108,9 @@ pub struct Scene {
     pub summary: Summary,
     /// True when no material has an opacity below 1 (shadow rays then need no pass-through).
     pub all_opaque: bool,
+    /// True when some material's BSDF is textured (`Material::is_textured`): only then does a
+    /// hit's texture footprint need computing (`Scene::tex_coord`).
+    pub any_textured: bool,
     /// True when a material refracts wavelengths apart (`Material::is_dispersive`): only then
     /// do the integrators check at each vertex whether to terminate the secondary
     /// wavelengths.
@@ -137,23 +143,36 @@ impl Scene {
     /// still sum to one estimate: of the light's unshadowed direct illumination).
     #[inline]
     pub fn casts_shadows(&self, light: u32) -> bool {
-        !self.shadowless.contains(&light)
+        // Most scenes have no shadowless light: one test rather than `contains`'s loop setup
+        // at every next-event estimate.
+        self.shadowless.is_empty() || !self.shadowless.contains(&light)
     }
 
     /// Closest hit with t in (0, t_max).
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         super::ray_count::count();
-        let mut best = self
-            .bvh
-            .intersect(ray, t_max)
-            .map(|h| (h.hit.t, Hit::Surface(self.surface_hit(h.prim, &h.hit))));
-        for &li in &self.shape_lights {
-            let limit = best.as_ref().map_or(t_max, |b| b.0);
-            if let Some(hit) = self.lights[li as usize].intersect(ray.o, ray.d, limit) {
-                best = Some((hit.t, Hit::Light { light: li, hit }));
+        let tri = self.bvh.intersect(ray, t_max);
+        if !self.shape_lights.is_empty() {
+            let limit = tri.as_ref().map_or(t_max, |h| h.hit.t);
+            if let Some((light, hit)) = self.nearest_shape(ray, limit) {
+                return Some(Hit::Light { light, hit });
             }
         }
-        best.map(|b| b.1)
+        // The surface's hit is built only when it is the answer.
+        tri.map(|h| Hit::Surface(self.surface_hit(h.prim, &h.hit)))
+    }
+
+    /// The nearest analytic light shape the ray meets before `limit` (the triangles' nearest
+    /// hit or t_max), if any.
+    fn nearest_shape(&self, ray: &Ray, mut limit: f32) -> Option<(u32, LightHit)> {
+        let mut best = None;
+        for &li in &self.shape_lights {
+            if let Some(hit) = self.lights[li as usize].intersect(ray.o, ray.d, limit) {
+                limit = hit.t;
+                best = Some((li, hit));
+            }
+        }
+        best
     }
 
     /// True when something blocks the ray before t_max; `skip` is the light being sampled

@@ -17,7 +17,8 @@ impl Scene {
         let TextureFilter::Camera { spp_scale } = filter else {
             return TexCoord::point(si.uv);
         };
-        if !self.materials[si.material as usize].is_textured() {
+        // A scene without textured materials (found once at build) skips the per-hit test.
+        if !self.any_textured || !self.materials[si.material as usize].is_textured() {
             return TexCoord::point(si.uv);
         }
         let dpdxy = self.camera.approximate_dp_dxy(si.p, si.ng, spp_scale);
