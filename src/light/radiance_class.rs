@@ -4,8 +4,6 @@
 //! its triangles next event estimation picks.
 
 use super::Light;
-use crate::spectral::Spectrum;
-use std::sync::Arc;
 
 /// Per light, the first light of its run of consecutive lights whose
 /// [`Light::uniform_radiance`] is the same function of λ, bit for bit (the same spectrum:
@@ -24,35 +22,8 @@ pub fn radiance_classes(lights: &[Light]) -> Vec<u32> {
 fn same_uniform_radiance(a: &Light, b: &Light) -> bool {
     match (a, b) {
         (Light::Triangle(s), Light::Triangle(t)) => {
-            s.texture.is_none() && t.texture.is_none() && same_bits(&s.radiance, &t.radiance)
+            s.texture.is_none() && t.texture.is_none() && s.radiance.same_bits(&t.radiance)
         }
-        _ => false,
-    }
-}
-
-/// The same spectrum, compared by bits (so that +0 and −0 differ): constants, tables and
-/// blackbodies; any other pair is not taken as the same.
-fn same_bits(s: &Spectrum, t: &Spectrum) -> bool {
-    match (s, t) {
-        (Spectrum::Constant(a), Spectrum::Constant(b)) => a.to_bits() == b.to_bits(),
-        (Spectrum::Dense { data: a, scale: x }, Spectrum::Dense { data: b, scale: y }) => {
-            x.to_bits() == y.to_bits()
-                && (Arc::ptr_eq(a, b)
-                    || a.values
-                        .iter()
-                        .zip(b.values.iter())
-                        .all(|(u, v)| u.to_bits() == v.to_bits()))
-        }
-        (
-            Spectrum::Blackbody {
-                kelvin: a,
-                scale: x,
-            },
-            Spectrum::Blackbody {
-                kelvin: b,
-                scale: y,
-            },
-        ) => a.to_bits() == b.to_bits() && x.to_bits() == y.to_bits(),
         _ => false,
     }
 }
@@ -61,6 +32,7 @@ fn same_bits(s: &Spectrum, t: &Spectrum) -> bool {
 mod tests {
     use super::*;
     use crate::light::{DistantLight, TriangleLight};
+    use crate::spectral::Spectrum;
     use glam::Vec3;
 
     fn triangle(radiance: Spectrum) -> Light {

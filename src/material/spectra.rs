@@ -28,7 +28,7 @@
 
 use super::{ColorInput, Material, PlasticMaterial, PreviewMaterial};
 use crate::bxdf::{Bsdf, PlasticBase};
-use crate::spectral::{SampledSpectrum, SampledWavelengths, Spectrum, N_LAMBDA};
+use crate::spectral::{SampledSpectrum, SampledWavelengths, N_LAMBDA};
 use crate::texture::TexCoord;
 use glam::Vec3;
 
@@ -189,7 +189,7 @@ impl SpectraCache {
 
 /// True when `a` and `b` have the same [`Material::constant_spectra`] at every wavelength
 /// tuple: the same model with bit-identical inputs to them. Conservative: false for
-/// representations it does not compare (blackbodies, RGB illuminants).
+/// representations it does not compare (RGB illuminants: `Spectrum::same_bits`).
 pub fn same_spectra(a: &Material, b: &Material) -> bool {
     use Material as M;
     match (a, b) {
@@ -198,7 +198,7 @@ pub fn same_spectra(a: &Material, b: &Material) -> bool {
             same_input(x, y)
         }
         (M::Conductor { eta: e, k, .. }, M::Conductor { eta: f, k: l, .. }) => {
-            same_spectrum(e, f) && same_spectrum(k, l)
+            e.same_bits(f) && k.same_bits(l)
         }
         (M::Dielectric { ior: x, .. }, M::Dielectric { ior: y, .. })
         | (M::ThinDielectric { ior: x }, M::ThinDielectric { ior: y }) => {
@@ -220,12 +220,12 @@ fn same_plastic(p: &PlasticMaterial, q: &PlasticMaterial) -> bool {
 fn same_preview(p: &PreviewMaterial, q: &PreviewMaterial) -> bool {
     let (tp, tq) = (&p.textures, &q.textures);
     let diffuse = match (&tp.diffuse, &tq.diffuse) {
-        (None, None) => same_spectrum(&p.diffuse, &q.diffuse),
+        (None, None) => p.diffuse.same_bits(&q.diffuse),
         (Some(_), Some(_)) => true,
         _ => false,
     };
     let specular = match ((&p.specular, &tp.specular), (&q.specular, &tq.specular)) {
-        ((Some(s), None), (Some(t), None)) => same_spectrum(s, t),
+        ((Some(s), None), (Some(t), None)) => s.same_bits(t),
         ((Some(_), None), _) | (_, (Some(_), None)) => false,
         _ => true,
     };
@@ -240,25 +240,8 @@ fn same_preview(p: &PreviewMaterial, q: &PreviewMaterial) -> bool {
 /// Both constants of bit-identical spectra, or both textures (no constant).
 fn same_input(x: &ColorInput, y: &ColorInput) -> bool {
     match (x, y) {
-        (ColorInput::Constant(s), ColorInput::Constant(t)) => same_spectrum(s, t),
+        (ColorInput::Constant(s), ColorInput::Constant(t)) => s.same_bits(t),
         (ColorInput::Texture(_), ColorInput::Texture(_)) => true,
-        _ => false,
-    }
-}
-
-/// Bit-identical spectra of the representations materials use.
-fn same_spectrum(s: &Spectrum, t: &Spectrum) -> bool {
-    match (s, t) {
-        (Spectrum::Constant(a), Spectrum::Constant(b)) => a.to_bits() == b.to_bits(),
-        (Spectrum::Sigmoid(a), Spectrum::Sigmoid(b)) => bits(&a.c) == bits(&b.c),
-        (Spectrum::Dense { data: a, scale: x }, Spectrum::Dense { data: b, scale: y }) => {
-            x.to_bits() == y.to_bits()
-                && (std::sync::Arc::ptr_eq(a, b)
-                    || a.values
-                        .iter()
-                        .zip(b.values.iter())
-                        .all(|(u, v)| u.to_bits() == v.to_bits()))
-        }
         _ => false,
     }
 }
@@ -271,6 +254,7 @@ fn bits(v: &[f32; 3]) -> [u32; 3] {
 mod tests {
     use super::*;
     use crate::bxdf::TransportMode;
+    use crate::spectral::Spectrum;
 
     /// The bits of f(ωo, ωi) of material `i`'s BSDF through `cache` and without it, at one
     /// fixed pair of directions.

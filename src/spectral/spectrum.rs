@@ -27,6 +27,36 @@ pub enum Spectrum {
 }
 
 impl Spectrum {
+    /// True when both are the same representation with bit-identical parameters (so +0 and
+    /// −0 differ): then they evaluate to the same bits at every λ. Conservative: false for
+    /// RGB illuminants, and for any two representations of one function.
+    pub fn same_bits(&self, other: &Spectrum) -> bool {
+        let bits = |v: &[f32; 3]| v.map(f32::to_bits);
+        match (self, other) {
+            (Spectrum::Constant(a), Spectrum::Constant(b)) => a.to_bits() == b.to_bits(),
+            (Spectrum::Sigmoid(a), Spectrum::Sigmoid(b)) => bits(&a.c) == bits(&b.c),
+            (Spectrum::Dense { data: a, scale: x }, Spectrum::Dense { data: b, scale: y }) => {
+                x.to_bits() == y.to_bits()
+                    && (Arc::ptr_eq(a, b)
+                        || a.values
+                            .iter()
+                            .zip(b.values.iter())
+                            .all(|(u, v)| u.to_bits() == v.to_bits()))
+            }
+            (
+                Spectrum::Blackbody {
+                    kelvin: a,
+                    scale: x,
+                },
+                Spectrum::Blackbody {
+                    kelvin: b,
+                    scale: y,
+                },
+            ) => a.to_bits() == b.to_bits() && x.to_bits() == y.to_bits(),
+            _ => false,
+        }
+    }
+
     #[inline]
     pub fn eval(&self, lambda: f32) -> f32 {
         match self {
