@@ -44,6 +44,16 @@ struct Node {
     count: u8,
 }
 
+impl Node {
+    /// The importances of the children at `ctx` and their sum (in lane order, the same sum in
+    /// `sample` and `pmf`).
+    #[inline]
+    fn weights(&self, ctx: &LightSampleContext) -> ([f32; 4], f32) {
+        let imp = self.bounds.importance(ctx.p, ctx.n);
+        (imp, imp[0] + imp[1] + imp[2] + imp[3])
+    }
+}
+
 /// Where a light sits: its trail of child slots from the root (two bits a level, the root's
 /// first) and the number of levels; `levels` 0 for a light outside the tree (an infinite one,
 /// or one without power).
@@ -64,8 +74,18 @@ pub struct LightTree {
 
 /// The binary tree the 4-wide one is made from.
 enum Binary {
-    Leaf(usize),
-    Inner(Box<Binary>, Box<Binary>),
+    /// A light and its bounds.
+    Leaf(usize, LightBounds),
+    /// Two subtrees and the union of their bounds.
+    Inner(Box<Binary>, Box<Binary>, LightBounds),
+}
+
+impl Binary {
+    fn bounds(&self) -> &LightBounds {
+        match self {
+            Binary::Leaf(_, b) | Binary::Inner(_, _, b) => b,
+        }
+    }
 }
 
 impl LightTree {
@@ -85,13 +105,6 @@ impl LightTree {
         let share = PowerShare::new(lights, scene_radius)?;
         let mut items = bounded;
         let root = build(&mut items, 0);
-        let by_light: Vec<Option<LightBounds>> = {
-            let mut v = vec![None; lights.len()];
-            for (i, b) in &items {
-                v[*i] = Some(*b);
-            }
-            v
-        };
         let mut tree = LightTree {
             nodes: Vec::new(),
             trail: lights
@@ -103,13 +116,13 @@ impl LightTree {
                 .collect(),
             share,
         };
-        tree.flatten(&root, &by_light, Trail::default());
+        tree.flatten(&root, Trail::default());
         Some(tree)
     }
 
     /// Appends the 4-wide node of binary node `b` (and its subtree) at trail `at`; returns its
     /// index.
-    fn flatten(&mut self, b: &Binary, by_light: &[Option<LightBounds>], at: Trail) -> u32 {
+    fn flatten(&mut self, b: &Binary, at: Trail) -> u32 {
         let index = self.nodes.len();
         self.nodes.push(Node {
             bounds: Bounds4::default(),
@@ -118,12 +131,12 @@ impl LightTree {
             count: 0,
         });
         let kids: Vec<&Binary> = match b {
-            Binary::Leaf(_) => vec![b],
-            Binary::Inner(l, r) => [l, r]
+            Binary::Leaf(..) => vec![b],
+            Binary::Inner(l, r, _) => [l, r]
                 .into_iter()
                 .flat_map(|c| match c.as_ref() {
-                    Binary::Leaf(_) => vec![c.as_ref()],
-                    Binary::Inner(a, z) => vec![a.as_ref(), z.as_ref()],
+                    Binary::Leaf(..) => vec![c.as_ref()],
+                    Binary::Inner(a, z, _) => vec![a.as_ref(), z.as_ref()],
                 })
                 .collect(),
         };
@@ -136,14 +149,14 @@ impl LightTree {
                 infinite: false,
             };
             match kid {
-                Binary::Leaf(i) => {
+                Binary::Leaf(i, _) => {
                     child[k] = *i as u32;
                     leaves |= 1 << k;
                     self.trail[*i] = here;
                 }
-                Binary::Inner(..) => child[k] = self.flatten(kid, by_light, here),
+                Binary::Inner(..) => child[k] = self.flatten(kid, here),
             }
-            bounds.push(subtree_bounds(kid, by_light));
+            bounds.push(*kid.bounds());
         }
         self.nodes[index] = Node {
             bounds: Bounds4::new(&bounds),
@@ -152,14 +165,6 @@ impl LightTree {
             count: kids.len() as u8,
         };
         index as u32
-    }
-
-    /// The importances of node `node`'s children at `ctx` and their sum (in lane order, the
-    /// same sum in `sample` and `pmf`).
-    #[inline]
-    fn weights(&self, node: &Node, ctx: &LightSampleContext) -> ([f32; 4], f32) {
-        let imp = node.bounds.importance(ctx.p, ctx.n);
-        (imp, imp[0] + imp[1] + imp[2] + imp[3])
     }
 
     /// (light index, probability) for the receiver `ctx`, or None when no light is chosen.
@@ -173,7 +178,7 @@ impl LightTree {
         let mut p = share;
         let mut node = &self.nodes[0];
         loop {
-            let (imp, sum) = self.weights(node, ctx);
+            let (imp, sum) = node.weights(ctx);
             if sum <= 0.0 {
                 return None;
             }
@@ -205,7 +210,7 @@ impl LightTree {
         let mut node = &self.nodes[0];
         for level in 0..t.levels {
             let k = (t.slots >> (2 * level) & 3) as usize;
-            let (imp, sum) = self.weights(node, ctx);
+            let (imp, sum) = node.weights(ctx);
             if sum <= 0.0 || imp[k] == 0.0 {
                 return 0.0;
             }
@@ -227,8 +232,9 @@ impl LightTree {
         self.share.pmf(light)
     }
 
-    /// Nodes and bytes held (for `info` and the tests).
-    pub fn memory(&self) -> (usize, usize) {
+    /// Nodes and bytes held.
+    #[cfg(test)]
+    fn memory(&self) -> (usize, usize) {
         (
             self.nodes.len(),
             self.nodes.len() * std::mem::size_of::<Node>()
@@ -245,22 +251,16 @@ fn usable(b: &LightBounds) -> bool {
     b.phi > 0.0 && b.phi.is_finite() && b.lo.is_finite() && b.hi.is_finite()
 }
 
-/// The bounds of a binary subtree's lights.
-fn subtree_bounds(b: &Binary, by_light: &[Option<LightBounds>]) -> LightBounds {
-    match b {
-        Binary::Leaf(i) => by_light[*i].expect("a leaf holds a bounded light"),
-        Binary::Inner(l, r) => subtree_bounds(l, by_light).union(&subtree_bounds(r, by_light)),
-    }
-}
-
 /// The binary tree over `items` (light index, bounds), at binary depth `depth`.
 fn build(items: &mut [(usize, LightBounds)], depth: usize) -> Binary {
     if items.len() == 1 {
-        return Binary::Leaf(items[0].0);
+        return Binary::Leaf(items[0].0, items[0].1);
     }
     let mid = split(items, depth);
     let (l, r) = items.split_at_mut(mid);
-    Binary::Inner(Box::new(build(l, depth + 1)), Box::new(build(r, depth + 1)))
+    let (l, r) = (build(l, depth + 1), build(r, depth + 1));
+    let bounds = l.bounds().union(r.bounds());
+    Binary::Inner(Box::new(l), Box::new(r), bounds)
 }
 
 /// Reorders `items` and returns where its two halves meet (1 ≤ mid < len): at the bucket
