@@ -378,7 +378,7 @@ impl Bvh {
             tally.triangles(count);
             for i in first..first + count {
                 let tri = PackedTriangle::load(&self.rows, i);
-                if let Some(hit) = intersect_packed(triangle, &tri, *t_max) {
+                if let Some(hit) = intersect_packed(triangle, tri, *t_max) {
                     *t_max = hit.t;
                     best = Some((i, hit));
                 }
@@ -402,7 +402,7 @@ impl Bvh {
             hit = (first..first + count).any(|i| {
                 tally.triangles(1);
                 let tri = PackedTriangle::load(&self.rows, i);
-                intersect_packed(triangle, &tri, *t_max).is_some()
+                intersect_packed(triangle, tri, *t_max).is_some()
             });
             hit
         });
@@ -600,7 +600,8 @@ impl RayBoxes {
         RayBoxes {
             near: [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)],
             o: splats(o),
-            inv: splats(Vec4::select(finite, inv, Vec4::ONE)),
+            // A non-finite axis's 1/d (±∞ or huge) needs no replacing: (p − NaN)·anything is NaN.
+            inv: splats(inv),
         }
     }
 }
