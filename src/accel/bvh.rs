@@ -1155,6 +1155,39 @@ mod tests {
         );
     }
 
+    /// `key_limit` admits every child entered at or before t_max + `f32::MIN_POSITIVE`, in
+    /// every slot, from subnormal to infinite distances, and nothing entered beyond it.
+    #[test]
+    fn key_limit_admits_exactly_up_to_the_margin() {
+        let t_maxes = [
+            1e-44,
+            f32::MIN_POSITIVE,
+            3e-30,
+            0.5,
+            1.0,
+            7.25e3,
+            3e38,
+            f32::INFINITY,
+        ];
+        for t_max in t_maxes {
+            let limit = key_limit(t_max);
+            let edge = t_max + f32::MIN_POSITIVE;
+            let below = [0.0, t_max * 0.5, t_max, edge.next_down(), edge];
+            for slot in 0..8 {
+                for t_enter in below {
+                    let key = order_key(&[t_enter; 8], slot);
+                    assert!(key <= limit, "t_max {t_max}: {t_enter} in slot {slot}");
+                    let entry = Entry::child(&WideNode::EMPTY, key);
+                    assert!(entry.0 <= limit, "t_max {t_max}: entry at {t_enter}");
+                }
+                if edge < f32::INFINITY {
+                    let key = order_key(&[edge.next_up(); 8], slot);
+                    assert!(key > limit, "t_max {t_max}: {} admitted", edge.next_up());
+                }
+            }
+        }
+    }
+
     /// Triangles at geometrically growing distances give a deep tree, a random soup a bushy
     /// one. Traversals with 1, 2 and the default number of in-place stack entries (the first
     /// two spill to the heap) all find brute force's hit.
