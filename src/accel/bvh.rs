@@ -118,11 +118,6 @@ impl Entry {
     fn node(self) -> usize {
         self.0 as u32 as usize
     }
-
-    #[inline(always)]
-    fn t_enter(self) -> f32 {
-        f32::from_bits((self.0 >> 32) as u32)
-    }
 }
 
 /// Traversal stack entries kept on the call stack (128 bytes, eight 16-byte stores to clear per
@@ -378,7 +373,7 @@ impl Bvh {
             tally.triangles(count);
             for i in first..first + count {
                 let tri = PackedTriangle::load(&self.rows, i);
-                if let Some(hit) = intersect_packed(triangle, &tri, *t_max) {
+                if let Some(hit) = intersect_packed(triangle, tri, *t_max) {
                     *t_max = hit.t;
                     best = Some((i, hit));
                 }
@@ -402,7 +397,7 @@ impl Bvh {
             hit = (first..first + count).any(|i| {
                 tally.triangles(1);
                 let tri = PackedTriangle::load(&self.rows, i);
-                intersect_packed(triangle, &tri, *t_max).is_some()
+                intersect_packed(triangle, tri, *t_max).is_some()
             });
             hit
         });
@@ -424,13 +419,16 @@ impl Bvh {
         // and a pop; the other inner children wait on the stack. The visiting order is the
         // stack's: nearest first, then the rest near to far.
         let mut entry = Entry::default();
+        let mut limit = key_limit(*t_max);
         loop {
-            if starts_by(entry.t_enter(), *t_max) {
+            if entry.0 <= limit {
                 let node = &self.nodes[entry.node()];
                 tally.node();
                 let (hits, t_enter) = node.intersect(ray, *t_max);
                 let leaves = hits & node.leaves as u32;
-                if leaves != 0 && node.leaves_near_to_far(leaves, &t_enter, t_max, &mut leaf) {
+                if leaves != 0
+                    && node.leaves_near_to_far(leaves, &t_enter, (t_max, &mut limit), &mut leaf)
+                {
                     return;
                 }
                 if let Some(next) = node.push_inner(hits & !node.leaves as u32, &t_enter, stack) {
@@ -454,19 +452,16 @@ fn order_key(t_enter: &[f32; 8], slot: u32) -> u64 {
     (t_enter[slot as usize & 7].to_bits() as u64) << 32 | slot as u64
 }
 
-/// Whether a child entered at `t_enter` may hold a hit before `t_max` (which leaves lower).
-/// The entry is moved in by the smallest normal float, as the node test moves the exit out (see
-/// [`RayBoxes`]): a product that underflows has an absolute, not a relative, error. (Above
-/// 2⁻¹²⁵ the subtraction changes nothing.)
+/// The largest key (an [`Entry`]'s word or an [`order_key`]) of a child that may hold a hit
+/// before `t_max` (> 0; leaves lower it): entered at t_enter ≤ fl(t_max + `f32::MIN_POSITIVE`).
+/// The margin is the one the node test adds to the exit (see [`RayBoxes`]): a product that
+/// underflows has an absolute, not a relative, error; above 2⁻¹⁰⁰ the sum is t_max itself. Keys
+/// hold the entry distance's bits above 32 low bits, and the bits of non-negative floats order
+/// as the floats, so one integer comparison per pop and per leaf tells; the limit is recomputed
+/// only when t_max falls.
 #[inline(always)]
-fn starts_by(t_enter: f32, t_max: f32) -> bool {
-    t_enter - f32::MIN_POSITIVE <= t_max
-}
-
-/// The entry distance of a key.
-#[inline(always)]
-fn key_t(key: u64) -> f32 {
-    f32::from_bits((key >> 32) as u32)
+fn key_limit(t_max: f32) -> u64 {
+    ((t_max + f32::MIN_POSITIVE).to_bits() as u64) << 32 | 0xffff_ffff
 }
 
 /// The smallest (`pick` = `u64::min`) or largest key among the slots set in `mask` (not empty).
@@ -485,13 +480,14 @@ fn pick_key(mut mask: u32, t_enter: &[f32; 8], pick: impl Fn(u64, u64) -> u64) -
 
 impl WideNode {
     /// Calls `leaf` on the leaf children in `leaves` (not empty), near to far, skipping those
-    /// that start beyond `t_max` as `leaf` lowers it; true when `leaf` asks to stop.
+    /// that start beyond `t_max` (keys above `limit`, [`key_limit`]) as `leaf` lowers it; true
+    /// when `leaf` asks to stop.
     #[inline(always)]
     fn leaves_near_to_far(
         &self,
         mut leaves: u32,
         t_enter: &[f32; 8],
-        t_max: &mut f32,
+        (t_max, limit): (&mut f32, &mut u64),
         leaf: &mut impl FnMut(usize, usize, &mut f32) -> bool,
     ) -> bool {
         while leaves != 0 {
@@ -499,8 +495,11 @@ impl WideNode {
             let slot = key as usize & 7;
             leaves &= !(1 << slot);
             let (first, count) = (self.child[slot] as usize, self.count[slot] as usize);
-            if starts_by(key_t(key), *t_max) && leaf(first, count, t_max) {
-                return true;
+            if key <= *limit {
+                if leaf(first, count, t_max) {
+                    return true;
+                }
+                *limit = key_limit(*t_max);
             }
         }
         false
@@ -600,7 +599,8 @@ impl RayBoxes {
         RayBoxes {
             near: [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)],
             o: splats(o),
-            inv: splats(Vec4::select(finite, inv, Vec4::ONE)),
+            // A non-finite axis's 1/d (±∞ or huge) needs no replacing: (p − NaN)·anything is NaN.
+            inv: splats(inv),
         }
     }
 }
@@ -1153,6 +1153,39 @@ mod tests {
             min_or_acc(a, acc).to_array(),
             [0.0, 1.0, -5.0, f32::INFINITY]
         );
+    }
+
+    /// `key_limit` admits every child entered at or before t_max + `f32::MIN_POSITIVE`, in
+    /// every slot, from subnormal to infinite distances, and nothing entered beyond it.
+    #[test]
+    fn key_limit_admits_exactly_up_to_the_margin() {
+        let t_maxes = [
+            1e-44,
+            f32::MIN_POSITIVE,
+            3e-30,
+            0.5,
+            1.0,
+            7.25e3,
+            3e38,
+            f32::INFINITY,
+        ];
+        for t_max in t_maxes {
+            let limit = key_limit(t_max);
+            let edge = t_max + f32::MIN_POSITIVE;
+            let below = [0.0, t_max * 0.5, t_max, edge.next_down(), edge];
+            for slot in 0..8 {
+                for t_enter in below {
+                    let key = order_key(&[t_enter; 8], slot);
+                    assert!(key <= limit, "t_max {t_max}: {t_enter} in slot {slot}");
+                    let entry = Entry::child(&WideNode::EMPTY, key);
+                    assert!(entry.0 <= limit, "t_max {t_max}: entry at {t_enter}");
+                }
+                if edge < f32::INFINITY {
+                    let key = order_key(&[edge.next_up(); 8], slot);
+                    assert!(key > limit, "t_max {t_max}: {} admitted", edge.next_up());
+                }
+            }
+        }
     }
 
     /// Triangles at geometrically growing distances give a deep tree, a random soup a bushy

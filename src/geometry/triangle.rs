@@ -30,7 +30,7 @@
 //!
 //! Barycentric convention: `p = b0 p0 + b1 p1 + b2 p2`, `b0 + b1 + b2 = 1`, `bi ≥ 0`.
 
-use glam::{Vec3, Vec4, Vec4Swizzles};
+use glam::{Vec3, Vec3Swizzles, Vec4, Vec4Swizzles};
 
 use super::offset::gamma;
 use super::ray::Ray;
@@ -61,12 +61,13 @@ pub fn is_degenerate(p0: Vec3, p1: Vec3, p2: Vec3) -> bool {
     !finite || (p1 - p0).cross(p2 - p0) == Vec3::ZERO
 }
 
-/// A triangle by coordinate: `rows[k]` holds coordinate k of p0, p1, p2 in lanes 0–2. Lane 3 is
-/// ignored by every test: 0 from [`PackedTriangle::new`], the next stored float from
-/// [`PackedTriangle::load`].
+/// A triangle by coordinate, borrowed from a row store ([`PackedTriangle::push_rows`]): floats
+/// 0–2 are x of p0, p1, p2, floats 3–5 their y, 6–8 their z, and float 9 is the next stored one.
+/// A coordinate's row is loaded as four lanes from its first float ([`Row`]); lane 3 is ignored
+/// by every test.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct PackedTriangle {
-    rows: [Vec4; 3],
+pub(crate) struct PackedTriangle<'a> {
+    floats: &'a [f32; ROW_FLOATS + ROW_PADDING],
 }
 
 /// Floats per triangle in a row store ([`PackedTriangle::push_rows`]).
@@ -74,14 +75,36 @@ pub(crate) const ROW_FLOATS: usize = 9;
 /// Floats that end a row store, so the last row's four-lane load stays inside it.
 pub(crate) const ROW_PADDING: usize = 1;
 
-impl PackedTriangle {
+/// A coordinate axis as the first float of its row in a [`PackedTriangle`]. Its values are
+/// 0, 3 and 6, so a row's four floats are in bounds without a check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+enum Row {
+    X = 0,
+    Y = 3,
+    Z = 6,
+}
+
+/// What a row store of no triangle holds: the zero triangle, which nothing hits.
+const ZERO_TRIANGLE: [f32; ROW_FLOATS + ROW_PADDING] = [0.0; ROW_FLOATS + ROW_PADDING];
+
+impl<'a> PackedTriangle<'a> {
+    /// The floats of a one-triangle row store of `p0`, `p1`, `p2` (for [`PackedTriangle::from`]).
     #[cfg(any(test, feature = "testing"))]
     #[inline]
-    pub fn new(p0: Vec3, p1: Vec3, p2: Vec3) -> PackedTriangle {
-        let row = |k: usize| Vec4::new(p0[k], p1[k], p2[k], 0.0);
-        PackedTriangle {
-            rows: [row(0), row(1), row(2)],
+    pub fn floats(p0: Vec3, p1: Vec3, p2: Vec3) -> [f32; ROW_FLOATS + ROW_PADDING] {
+        let mut floats = [0.0; ROW_FLOATS + ROW_PADDING];
+        for k in 0..3 {
+            floats[3 * k..3 * k + 3].copy_from_slice(&[p0[k], p1[k], p2[k]]);
         }
+        floats
+    }
+
+    /// The triangle of a one-triangle row store ([`PackedTriangle::floats`]).
+    #[cfg(any(test, feature = "testing"))]
+    #[inline]
+    pub fn from(floats: &'a [f32; ROW_FLOATS + ROW_PADDING]) -> PackedTriangle<'a> {
+        PackedTriangle { floats }
     }
 
     /// Appends the triangle to a row store, 36 bytes: x, y, z of p0, p1, p2, by coordinate.
@@ -95,31 +118,30 @@ impl PackedTriangle {
     /// [`ROW_PADDING`] floats (each row is loaded as four lanes). Out of range (not built so):
     /// the zero triangle, which nothing hits.
     #[inline(always)]
-    pub fn load(rows: &[f32], i: usize) -> PackedTriangle {
+    pub fn load(rows: &'a [f32], i: usize) -> PackedTriangle<'a> {
         let start = ROW_FLOATS * i;
         let stored = rows.get(start..start + ROW_FLOATS + ROW_PADDING);
-        match stored.and_then(|r| <&[f32; ROW_FLOATS + ROW_PADDING]>::try_from(r).ok()) {
-            Some(r) => PackedTriangle {
-                rows: [
-                    Vec4::from_slice(&r[0..4]),
-                    Vec4::from_slice(&r[3..7]),
-                    Vec4::from_slice(&r[6..10]),
-                ],
-            },
-            None => PackedTriangle {
-                rows: [Vec4::ZERO; 3],
-            },
+        let floats = stored.and_then(|r| r.try_into().ok());
+        PackedTriangle {
+            floats: floats.unwrap_or(&ZERO_TRIANGLE),
         }
+    }
+
+    /// The coordinate `row` of p0, p1, p2 in lanes 0–2.
+    #[inline(always)]
+    fn row(&self, row: Row) -> Vec4 {
+        let first = row as usize;
+        Vec4::from_slice(&self.floats[first..first + 4])
     }
 
     /// `[p0, p1, p2]`.
     #[inline]
     pub fn vertices(&self) -> [Vec3; 3] {
-        let [x, y, z] = self.rows;
+        let f = self.floats;
         [
-            Vec3::new(x.x, y.x, z.x),
-            Vec3::new(x.y, y.y, z.y),
-            Vec3::new(x.z, y.z, z.z),
+            Vec3::new(f[0], f[3], f[6]),
+            Vec3::new(f[1], f[4], f[7]),
+            Vec3::new(f[2], f[5], f[8]),
         ]
     }
 }
@@ -131,7 +153,7 @@ pub struct WatertightRay {
     o: Vec3,
     d: Vec3,
     /// Rows of a [`PackedTriangle`] that become x, y, z: the ray's largest |d| component is z.
-    axes: [usize; 3],
+    rows: [Row; 3],
     /// The origin's permuted coordinates, each splatted.
     o_perm: [Vec4; 3],
     /// Shear taking the permuted direction to (0, 0, 1): x' = x + sx z, y' = y + sy z,
@@ -143,37 +165,44 @@ impl WatertightRay {
     /// None for a zero or non-finite direction or a non-finite origin (such a ray hits nothing).
     #[inline(always)]
     pub fn new(ray: &Ray) -> Option<WatertightRay> {
-        let (o, d) = (ray.o.to_array(), ray.d.to_array());
-        if !(Vec4::from((ray.o, 0.0)).is_finite() && Vec4::from((ray.d, 0.0)).is_finite()) {
+        let (o, d) = (ray.o, ray.d);
+        // The six coordinates in two registers, one finiteness test.
+        let finite = Vec4::new(o.x, o.y, o.z, d.x).is_finite_mask()
+            & Vec4::new(d.y, d.z, d.y, d.z).is_finite_mask();
+        if !finite.all() {
             return None;
         }
-        // The cyclic successors of kz, computed rather than looked up in a table of pairs (which
-        // the compiler built on the stack and bounds-checked on every query).
-        let kz = ray.d.abs().max_position();
-        let kx = if kz == 2 { 0 } else { kz + 1 };
-        let ky = if kx == 2 { 0 } else { kx + 1 };
-        let dz = d[kz];
-        if dz == 0.0 {
+        // z is the largest |d| component (the first of equal ones), x and y its cyclic
+        // successors; the permutation is a swizzle of the registers, not an index into arrays
+        // stored for it.
+        let (rows, o_p, d_p) = match d.abs().max_position() {
+            0 => ([Row::Y, Row::Z, Row::X], o.yzx(), d.yzx()),
+            1 => ([Row::Z, Row::X, Row::Y], o.zxy(), d.zxy()),
+            _ => ([Row::X, Row::Y, Row::Z], o, d),
+        };
+        if d_p.z == 0.0 {
             return None;
         }
+        // −dx/dz, −dy/dz, 1/dz: each lane one correctly rounded division, as in scalar.
+        let s = Vec4::new(-d_p.x, -d_p.y, 1.0, 1.0) / d_p.z;
         Some(WatertightRay {
-            o: ray.o,
-            d: ray.d,
-            axes: [kx, ky, kz],
-            o_perm: [o[kx], o[ky], o[kz]].map(Vec4::splat),
-            shear: [-d[kx] / dz, -d[ky] / dz, 1.0 / dz].map(Vec4::splat),
+            o,
+            d,
+            rows,
+            o_perm: [o_p.x, o_p.y, o_p.z].map(Vec4::splat),
+            shear: [s.x, s.y, s.z].map(Vec4::splat),
         })
     }
 
     /// Translates, permutes and shears the three vertices; z is scaled by `sz` (a vertex's t is
     /// its z).
     #[inline(always)]
-    fn transform(&self, tri: &PackedTriangle) -> Sheared {
-        let [kx, ky, kz] = self.axes;
-        let z = tri.rows[kz] - self.o_perm[2];
+    fn transform(&self, tri: PackedTriangle) -> Sheared {
+        let [kx, ky, kz] = self.rows;
+        let z = tri.row(kz) - self.o_perm[2];
         Sheared {
-            x: (tri.rows[kx] - self.o_perm[0]) + self.shear[0] * z,
-            y: (tri.rows[ky] - self.o_perm[1]) + self.shear[1] * z,
+            x: (tri.row(kx) - self.o_perm[0]) + self.shear[0] * z,
+            y: (tri.row(ky) - self.o_perm[1]) + self.shear[1] * z,
             z: z * self.shear[2],
         }
     }
@@ -223,9 +252,10 @@ pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3, t_max: f32) -> Option<
     if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
         return None;
     }
+    let floats = PackedTriangle::floats(p0, p1, p2);
     intersect_packed(
         &WatertightRay::new(ray)?,
-        &PackedTriangle::new(p0, p1, p2),
+        PackedTriangle::from(&floats),
         t_max,
     )
 }
@@ -236,7 +266,7 @@ pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3, t_max: f32) -> Option<
 #[inline(always)]
 pub(crate) fn intersect_packed(
     ray: &WatertightRay,
-    tri: &PackedTriangle,
+    tri: PackedTriangle,
     t_max: f32,
 ) -> Option<TriangleHit> {
     let v = ray.transform(tri);
@@ -248,13 +278,9 @@ pub(crate) fn intersect_packed(
     }
     let det = e.x + e.y + e.z;
     if neg | pos != 0b111 || !det.is_finite() {
-        return intersect_f64(ray, tri, v, t_max);
+        return intersect_f64((ray.o, ray.d), tri, v, t_max);
     }
-    let t = woop_t(ray, tri, &v, e, det)?;
-    // t is finite and positive here; a NaN t_max rejects the hit.
-    if t_max.is_nan() || t >= t_max {
-        return None;
-    }
+    let t = woop_t(ray, tri, &v, (e, det), t_max)?;
     // |eᵢ| ≤ |det| (same signs), so the correctly rounded quotients lie in [0, 1].
     let b = e / det;
     Some(TriangleHit {
@@ -266,27 +292,33 @@ pub(crate) fn intersect_packed(
 }
 
 /// Woop's t = Σ eᵢ zᵢ / det when all three vertices lie in front of the origin (t > 0 is then
-/// certain, see the module docs), None when none does, else the f64 plane t.
+/// certain, see the module docs), None when none does, else the f64 plane t; None unless
+/// 0 < t < `t_max` (exclusive; a NaN `t_max` rejects).
 #[inline(always)]
 fn woop_t(
     ray: &WatertightRay,
-    tri: &PackedTriangle,
+    tri: PackedTriangle,
     v: &Sheared,
-    e: Vec4,
-    det: f32,
+    (e, det): (Vec4, f32),
+    t_max: f32,
 ) -> Option<f32> {
     if mask3(v.z.cmpgt(Vec4::ZERO)) == 0b111 {
         let ez = e * v.z;
         let t = (ez.x + ez.y + ez.z) / det;
-        // A zero (underflow) or infinite (overflow) t goes to the f64 path.
-        if t > 0.0 && t < f32::INFINITY {
+        // The common case first, two comparisons: t_max ≤ +∞, so such a t is also finite.
+        if t > 0.0 && t < t_max {
             return Some(t);
+        }
+        // A finite positive t at or beyond t_max is a miss; a zero (underflow) or infinite
+        // (overflow) t goes to the f64 path.
+        if t > 0.0 && t < f32::INFINITY {
+            return None;
         }
     } else if mask3(v.z.cmple(Vec4::ZERO)) == 0b111 {
         return None;
     }
-    let t = plane_t(ray, tri)? as f32;
-    (t > 0.0).then_some(t)
+    let t = plane_t((ray.o, ray.d), tri)? as f32;
+    (t > 0.0 && t < t_max).then_some(t)
 }
 
 /// The test with f64 edge functions (pbrt-v4's fallback when an f32 edge function is zero) and
@@ -295,8 +327,8 @@ fn woop_t(
 #[cold]
 #[inline(never)]
 fn intersect_f64(
-    ray: &WatertightRay,
-    tri: &PackedTriangle,
+    ray: (Vec3, Vec3),
+    tri: PackedTriangle,
     v: Sheared,
     t_max: f32,
 ) -> Option<TriangleHit> {
@@ -338,8 +370,9 @@ pub(crate) fn intersect_reference(
     if (p1 - p0).cross(p2 - p0) == Vec3::ZERO {
         return None;
     }
-    let tri = PackedTriangle::new(p0, p1, p2);
-    intersect_f64(&ray, &tri, ray.transform(&tri), t_max)
+    let floats = PackedTriangle::floats(p0, p1, p2);
+    let tri = PackedTriangle::from(&floats);
+    intersect_f64((ray.o, ray.d), tri, ray.transform(tri), t_max)
 }
 
 /// Edge function `u.x v.y − u.y v.x` of the transformed vertices. Both products of f32 are exact
@@ -372,10 +405,10 @@ const fn gamma64(n: i32) -> f64 {
 /// plane, and inlined, the compiler hoisted its f64 conversions of the ray into every query's
 /// set-up (about 20 instructions a ray in the BVH's queries, session 31).
 #[inline(never)]
-fn plane_t(ray: &WatertightRay, tri: &PackedTriangle) -> Option<f64> {
+fn plane_t((o, d): (Vec3, Vec3), tri: PackedTriangle) -> Option<f64> {
     let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
     let [p0, p1, p2] = tri.vertices();
-    let (q0, q1, q2, o, d) = (f(p0), f(p1), f(p2), f(ray.o), f(ray.d));
+    let (q0, q1, q2, o, d) = (f(p0), f(p1), f(p2), f(o), f(d));
     let e1 = [q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]];
     let e2 = [q2[0] - q0[0], q2[1] - q0[1], q2[2] - q0[2]];
     let v = [q0[0] - o[0], q0[1] - o[1], q0[2] - o[2]];
