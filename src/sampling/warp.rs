@@ -2,43 +2,21 @@
 
 use crate::math::{safe_sqrt, INV_4PI, INV_PI};
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
 /// Concentric map of the square to the unit disk (Shirley & Chiu 1997; PBR 4ed §A.5.1).
-///
-/// The angle is π/4 · t with t = the ratio of the smaller to the larger coordinate, in
-/// [−1, 1], measured from the x axis (|x| > |y|) or from the y axis (θ = π/2 − π/4 · t, whose
-/// cosine and sine are the sine and cosine of π/4 · t). Both cases take one evaluation of
-/// [`sin_cos_quarter`], the pair swapped for the second: no libm call. (The case split stays a
-/// branch, taken half the time at random: the compiler makes one of the selects, written as
-/// bit masks too; docs/design.md §8 "The per-hit shading cost".)
 #[inline]
 pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
     let o = Vec2::new(2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let from_y = o.x.abs() <= o.y.abs();
-    let (r, other) = if from_y { (o.y, o.x) } else { (o.x, o.y) };
-    let (sin, cos) = sin_cos_quarter(FRAC_PI_4 * (other / r));
-    r * if from_y {
-        Vec2::new(sin, cos)
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, FRAC_PI_4 * (o.y / o.x))
     } else {
-        Vec2::new(cos, sin)
-    }
-}
-
-/// (sin x, cos x) for |x| ≤ π/4 by the minimax polynomials of Cephes `sinf`/`cosf` on that
-/// interval (S. L. Moshier, "Methods and Programs for Mathematical Functions", 1989; Cephes
-/// `sinf.c`): x + x³ P(x²) and 1 − x²/2 + x⁴ Q(x²). Absolute error below 10⁻⁷ on the
-/// interval (5.7·10⁻⁸ at most over 2¹⁶ + 1 points, against f64:
-/// `sin_cos_quarter_is_within_its_bound`), about an ulp of 1.
-#[inline]
-pub fn sin_cos_quarter(x: f32) -> (f32, f32) {
-    let z = x * x;
-    let sin = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
-    let cos = ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z + 1.0;
-    (sin, cos)
+        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
 }
 
 /// Cosine-weighted hemisphere around +Z by Malley's method (PBR 4ed §A.5.3).
@@ -125,50 +103,6 @@ mod tests {
             let b = uniform_triangle(u);
             assert!(b.iter().all(|&x| x >= -1e-6) && (b.iter().sum::<f32>() - 1.0).abs() < 1e-6);
         }
-    }
-
-    #[test]
-    fn sin_cos_quarter_is_within_its_bound() {
-        // Every f32 step of 2⁻¹⁶ over [−π/4, π/4] and the ends, against f64.
-        let mut worst = 0.0f64;
-        let n = 1 << 16;
-        for k in 0..=n {
-            let x = (-FRAC_PI_4 + (std::f32::consts::FRAC_PI_2 * k as f32) / n as f32)
-                .clamp(-FRAC_PI_4, FRAC_PI_4);
-            let (s, c) = sin_cos_quarter(x);
-            let (es, ec) = (x as f64).sin_cos();
-            worst = worst.max((s as f64 - es).abs()).max((c as f64 - ec).abs());
-            assert!(s.abs() <= 1.0 && c <= 1.0, "{x}");
-        }
-        assert!(worst < 1e-7, "{worst}");
-    }
-
-    #[test]
-    fn the_concentric_map_is_the_definitions_up_to_round_off() {
-        // The definition (PBR 4ed §A.5.1) with cos and sin in f64: within 2.4·10⁻⁷ (the
-        // polynomials' bound and the f32 ratio's and product's roundings), on the
-        // stratified grid, its diagonals and axes, and random points.
-        let reference = |u: [f32; 2]| {
-            let (x, y) = (2.0 * u[0] as f64 - 1.0, 2.0 * u[1] as f64 - 1.0);
-            if x == 0.0 && y == 0.0 {
-                return (0.0, 0.0);
-            }
-            let q = std::f64::consts::FRAC_PI_4;
-            let (r, t) = if x.abs() > y.abs() {
-                (x, q * (y / x))
-            } else {
-                (y, 2.0 * q - q * (x / y))
-            };
-            (r * t.cos(), r * t.sin())
-        };
-        let mut s = Sampler::new(9, 0, 0);
-        let grid = (0..=64).flat_map(|i| (0..=64).map(move |j| [i as f32 / 64.0, j as f32 / 64.0]));
-        for u in grid.chain((0..100_000).map(|_| s.get_2d())) {
-            let (d, (x, y)) = (concentric_disk(u), reference(u));
-            assert!((d.x as f64 - x).abs() < 2.4e-7 && (d.y as f64 - y).abs() < 2.4e-7, "{u:?}");
-            assert!(d.length_squared() <= 1.0 + 4.8e-7, "{u:?}");
-        }
-        assert_eq!(concentric_disk([0.5, 0.5]), Vec2::ZERO);
     }
 
     #[test]
