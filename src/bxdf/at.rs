@@ -88,7 +88,7 @@ mod tests {
     /// the bits of the BSDF's own `f` and `pdf` (computed without shared terms), its samples
     /// those of a fresh `at` (the plastic's samples carry their direction's `f` and `pdf`:
     /// `bxdf::tests`). ωo and ωi on either side, and at the horizon.
-#[test]
+    #[test]
     fn shared_terms_of_wo_change_no_bit() {
         let mut rng = Rng::new(33);
         let mut samples = 0;
@@ -106,7 +106,12 @@ mod tests {
                     let wi = rng.unit_vector();
                     let (f, pdf) = at.f_pdf(wi, mode);
                     assert_eq!(bits(f), bits(bsdf.f(wo, wi, mode)), "{} f", ex.name);
-                    assert_eq!(pdf.to_bits(), bsdf.pdf(wo, wi, mode).to_bits(), "{}", ex.name);
+                    assert_eq!(
+                        pdf.to_bits(),
+                        bsdf.pdf(wo, wi, mode).to_bits(),
+                        "{}",
+                        ex.name
+                    );
                     let (uc, u) = (rng.f32(), [rng.f32(), rng.f32()]);
                     let s = at.sample_f(uc, u, mode);
                     let fresh = bsdf.sample_f(wo, uc, u, mode);
@@ -114,7 +119,10 @@ mod tests {
                     let (Some(s), Some(t)) = (s, fresh) else {
                         continue;
                     };
-                    assert_eq!(s.wi.to_array().map(f32::to_bits), t.wi.to_array().map(f32::to_bits));
+                    assert_eq!(
+                        s.wi.to_array().map(f32::to_bits),
+                        t.wi.to_array().map(f32::to_bits)
+                    );
                     assert_eq!(bits(s.f), bits(t.f), "{}", ex.name);
                     assert_eq!(s.pdf_w.to_bits(), t.pdf_w.to_bits(), "{}", ex.name);
                     samples += 1;
