@@ -105,7 +105,9 @@ impl CoatAlbedo {
             CoatAlbedo::Smooth(f) => f.eval(mu),
             CoatAlbedo::Table(t) => {
                 let x = mu.abs().min(1.0).sqrt() * (TABLE_SIZE - 1) as f32;
-                let i = (x as usize).min(TABLE_SIZE - 2);
+                // x ∈ [0, N − 1] (NaN.min(1) is 1): through i32 the conversion is one
+                // instruction, where `as usize` saturates in several; the same index.
+                let i = (x as i32).min(TABLE_SIZE as i32 - 2) as usize;
                 let a = x - i as f32;
                 (1.0 - a) * t[i] + a * t[i + 1]
             }
@@ -221,6 +223,19 @@ impl SpecularCoat {
     pub fn f_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
         let (f, pdf, _) = self.eval_pair(wo, wi);
         (f, pdf)
+    }
+
+    /// [`Self::f_pdf`] given `s_o` = `self.distrib.wo_term(wo)`, the term of ωo alone that a
+    /// vertex shares between its pairs: the same bits.
+    #[inline]
+    pub fn f_pdf_at(&self, wo: Vec3, s_o: f32, wi: Vec3) -> (SampledSpectrum, f32) {
+        if self.is_delta() {
+            return (SampledSpectrum::ZERO, 0.0);
+        }
+        match self.distrib.reflection_eval_pair_at(wo, s_o, wi) {
+            Some(r) => (self.fresnel.eval(wo.dot(r.wm)) * r.dg, r.pdf_fwd),
+            None => (SampledSpectrum::ZERO, 0.0),
+        }
     }
 
     /// (f, pdf of ωi from ωo, pdf of ωo from ωi): bit for bit `f(wo, wi)`, `pdf(wo, wi)` and

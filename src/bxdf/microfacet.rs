@@ -193,7 +193,34 @@ impl TrowbridgeReitz {
             return None;
         }
         if self.is_isotropic() {
-            self.isotropic_pair(wo, wi)
+            self.isotropic_pair(wo, wi, self.smith_root(wo))
+        } else {
+            self.anisotropic_pair(wo, wi)
+        }
+    }
+
+    /// What [`Self::reflection_eval_pair_at`] takes of ωo alone: s(ωo) of an isotropic
+    /// distribution (the module header), unused (0) for an anisotropic one. A vertex that
+    /// evaluates several pairs from one ωo (next event estimation, then BSDF sampling)
+    /// computes it once.
+    #[inline]
+    pub fn wo_term(&self, wo: Vec3) -> f32 {
+        if self.is_isotropic() {
+            self.smith_root(wo)
+        } else {
+            0.0
+        }
+    }
+
+    /// [`Self::reflection_eval_pair`] given `s_o` = [`Self::wo_term`] of `wo`: the same
+    /// operations, so the same bits.
+    #[inline(always)]
+    pub fn reflection_eval_pair_at(&self, wo: Vec3, s_o: f32, wi: Vec3) -> Option<ReflectionPair> {
+        if wo.z * wi.z <= 0.0 {
+            return None;
+        }
+        if self.is_isotropic() {
+            self.isotropic_pair(wo, wi, s_o)
         } else {
             self.anisotropic_pair(wo, wi)
         }
@@ -227,9 +254,10 @@ impl TrowbridgeReitz {
     }
 
     /// The isotropic [`Self::reflection_eval_pair`] by the closed forms of the module's
-    /// header: two square roots for s(ωo), s(ωi), one for the Fresnel's ωo·ωm, no tangent.
+    /// header, given s(ωo) = `s_o`: a square root for s(ωi), one for the Fresnel's ωo·ωm, no
+    /// tangent.
     #[inline(always)]
-    fn isotropic_pair(&self, wo: Vec3, wi: Vec3) -> Option<ReflectionPair> {
+    fn isotropic_pair(&self, wo: Vec3, wi: Vec3, s_o: f32) -> Option<ReflectionPair> {
         let h = wo + wi;
         let (rho2, hz2) = (h.x * h.x + h.y * h.y, h.z * h.z);
         let len2 = rho2 + hz2;
@@ -246,7 +274,7 @@ impl TrowbridgeReitz {
             a2 * (1.0 / PI) * (r * r)
         };
         let (cos_o, cos_i) = (wo.z.abs(), wi.z.abs());
-        let (s_o, s_i) = (self.smith_root(wo), self.smith_root(wi));
+        let s_i = self.smith_root(wi);
         Some(ReflectionPair {
             wm,
             dg: d / (2.0 * (cos_i * s_o + cos_o * s_i)),

@@ -23,6 +23,7 @@
 //! `specular: true`, f = reflectance/|cos θi| and pdf = the probability of choosing them.
 //! Every model accepts ωo on either side of the surface.
 
+mod at;
 pub mod coat;
 pub mod conductor;
 pub mod dielectric;
@@ -39,6 +40,7 @@ use crate::math::Frame;
 use crate::spectral::SampledSpectrum;
 use glam::Vec3;
 
+pub use at::BsdfAt;
 pub use coat::{CoatAlbedo, CoatFresnel, SpecularCoat};
 pub use conductor::ConductorBxdf;
 pub use dielectric::DielectricBxdf;
@@ -258,18 +260,7 @@ impl Bsdf {
         u: [f32; 2],
         mode: TransportMode,
     ) -> Option<BsdfSample> {
-        let wo_local = self.frame.to_local(wo);
-        if wo_local.z == 0.0 {
-            return None;
-        }
-        let s = self.bxdf.sample_f(wo_local, uc, u, mode)?;
-        if s.pdf_w == 0.0 || s.f.is_black() || s.wi.z == 0.0 || !s.pdf_w.is_finite() {
-            return None;
-        }
-        Some(BsdfSample {
-            wi: self.frame.to_world(s.wi),
-            ..s
-        })
+        self.at(wo).sample_f(uc, u, mode)
     }
 
     #[inline]
@@ -282,14 +273,10 @@ impl Bsdf {
     }
 
     /// Bit for bit (`f(wo, wi, mode)`, `pdf(wo, wi, mode)`), one frame change and the
-    /// model's shared terms ([`Bxdf::f_pdf`]).
+    /// model's shared terms ([`Bxdf::f_pdf`]; [`BsdfAt::f_pdf`] for several `wi`).
     #[inline]
     pub fn f_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (SampledSpectrum, f32) {
-        let (wo, wi) = (self.frame.to_local(wo), self.frame.to_local(wi));
-        if wo.z == 0.0 {
-            return (SampledSpectrum::ZERO, 0.0);
-        }
-        self.bxdf.f_pdf(wo, wi, mode)
+        self.at(wo).f_pdf(wi, mode)
     }
 
     /// [`BsdfEval`] of the pair: bit for bit `f(wo, wi, mode)`, `pdf(wo, wi, mode)` and

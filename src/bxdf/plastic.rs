@@ -163,25 +163,46 @@ impl PlasticBxdf {
         pc * self.coat.pdf(wo, wi) + (1.0 - pc) * cosine_hemisphere_pdf(wi.z)
     }
 
-    /// `f_upper` and `pdf_upper` of one pair, bit for bit, with the coat's microfacet terms
-    /// shared and the coat's (E(μo), t(μo)) given (`at_o`, one lookup).
+    /// The terms of ωo alone ([`PlasticAt`]): what next event estimation's `f_pdf` and
+    /// `sample_f` at one vertex share.
     #[inline]
-    fn f_pdf_upper(&self, wo: Vec3, wi: Vec3, at_o: (f32, f32)) -> (SampledSpectrum, f32) {
+    pub fn at(&self, wo: Vec3) -> PlasticAt {
+        let flip = wo.z < 0.0;
+        let wo = mirror_z(wo, flip);
+        let at_o = self.albedo.eval_and_transmittance(wo.z);
+        PlasticAt {
+            wo,
+            flip,
+            t_o: at_o.1,
+            pc: self.coat_probability_at(at_o),
+            s_o: self.coat.distrib.wo_term(wo),
+        }
+    }
+
+    /// `f_upper` and `pdf_upper` of one pair, bit for bit, with the coat's microfacet terms
+    /// shared and the terms of ωo given (`at`; `wi` mirrored as ωo was).
+    #[inline]
+    fn f_pdf_upper(&self, at: &PlasticAt, wi: Vec3) -> (SampledSpectrum, f32) {
+        let wo = at.wo;
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (SampledSpectrum::ZERO, 0.0);
         }
-        let (coat_f, coat_pdf) = self.coat.f_pdf(wo, wi);
-        let f = coat_f + self.diffuse * (at_o.1 * self.albedo.transmittance(wi.z));
-        let pc = self.coat_probability_at(at_o);
+        let (coat_f, coat_pdf) = self.coat.f_pdf_at(wo, at.s_o, wi);
+        let f = coat_f + self.diffuse * (at.t_o * self.albedo.transmittance(wi.z));
+        let pc = at.pc;
         (f, pc * coat_pdf + (1.0 - pc) * cosine_hemisphere_pdf(wi.z))
     }
 
     /// Bit for bit (`f(wo, wi)`, `pdf(wo, wi)`) at about the cost of `f` alone.
     #[inline]
     pub fn f_pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> (SampledSpectrum, f32) {
-        let flip = wo.z < 0.0;
-        let (wo, wi) = (mirror_z(wo, flip), mirror_z(wi, flip));
-        self.f_pdf_upper(wo, wi, self.albedo.eval_and_transmittance(wo.z))
+        self.f_pdf_at(&self.at(wo), wi)
+    }
+
+    /// [`Self::f_pdf`] of (ωo, `wi`) given ωo's terms `at = self.at(wo)`.
+    #[inline]
+    pub fn f_pdf_at(&self, at: &PlasticAt, wi: Vec3) -> (SampledSpectrum, f32) {
+        self.f_pdf_upper(at, mirror_z(wi, at.flip))
     }
 
     #[inline]
@@ -227,13 +248,16 @@ impl PlasticBxdf {
         u: [f32; 2],
         _mode: TransportMode,
     ) -> Option<BsdfSample> {
-        let flip = wo.z < 0.0;
-        let wo = mirror_z(wo, flip);
+        self.sample_f_at(&self.at(wo), uc, u)
+    }
+
+    /// [`Self::sample_f`] from ωo given its terms `at = self.at(wo)`.
+    #[inline]
+    pub fn sample_f_at(&self, at: &PlasticAt, uc: f32, u: [f32; 2]) -> Option<BsdfSample> {
+        let (wo, flip, pc) = (at.wo, at.flip, at.pc);
         if wo.z == 0.0 {
             return None;
         }
-        let at_o = self.albedo.eval_and_transmittance(wo.z);
-        let pc = self.coat_probability_at(at_o);
         let wi = if uc < pc {
             if self.coat.is_delta() {
                 let wi = Vec3::new(-wo.x, -wo.y, wo.z);
@@ -244,9 +268,23 @@ impl PlasticBxdf {
         } else {
             cosine_hemisphere(u)
         };
-        let (f, pdf) = self.f_pdf_upper(wo, wi, at_o);
+        let (f, pdf) = self.f_pdf_upper(at, wi);
         Some(BsdfSample::reflection(f, mirror_z(wi, flip), pdf, false))
     }
+}
+
+/// A plastic's terms of one ωo, which every pair (ωo, ωi) from it shares: ωo mirrored into
+/// the upper hemisphere, the coat's transmittance t(μo) and sampling probability (from one
+/// albedo lookup, `coat_probability`), and the microfacet term s(ωo)
+/// ([`TrowbridgeReitz::wo_term`]). Computed once per vertex, they give next event
+/// estimation's f and pdf and the BSDF sample the same bits as computing them per call.
+#[derive(Clone, Copy, Debug)]
+pub struct PlasticAt {
+    wo: Vec3,
+    flip: bool,
+    t_o: f32,
+    pc: f32,
+    s_o: f32,
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ use super::meter::MeterIntegrator;
 use super::radiance_memo::RadianceMemo;
 use super::roulette;
 use super::{Estimator, Settings, Workspace};
-use crate::bxdf::{Bsdf, TransportMode};
+use crate::bxdf::{BsdfAt, TransportMode};
 use crate::geometry::offset::{spawn_ray, SpawnPoint};
 use crate::geometry::Ray;
 use crate::light::emission_layers::LayerSource;
@@ -356,15 +356,17 @@ impl PathIntegrator {
         let bsdf = spectra.bsdf(material, index, tc, si.ns, lambda);
         // The offset off the surface, shared by the shadow ray and the next ray.
         let from = SpawnPoint::new(si.p, si.p_error, si.ng);
+        // The BSDF's terms of ωo, shared by next event estimation and the BSDF sample.
+        let at = bsdf.at(wo);
         if !bsdf.is_specular() {
             sampler.set_dimension(dimensions::bounce(bounce, LIGHT));
             let v = (si, &from);
             let l = (st.beta, &mut st.le);
-            self.sample_ld(scene, v, &bsdf, wo, lambda, sampler, l, g);
+            self.sample_ld(scene, v, &at, lambda, sampler, l, g);
         }
         sampler.set_dimension(dimensions::bounce(bounce, BSDF));
         let (uc, u) = (sampler.get_1d(), sampler.get_2d());
-        let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
+        let Some(bs) = at.sample_f(uc, u, TransportMode::Radiance) else {
             return false;
         };
         st.beta *= bs.f * (bs.wi.dot(si.ns).abs() / bs.pdf_w);
@@ -505,15 +507,14 @@ impl PathIntegrator {
     /// against BSDF sampling (Veach 1997 eq. 9.13 with β = 2), × `beta` into the image and
     /// every layer. A replacing layer samples its own light with the same numbers (the same
     /// point: only the spectrum differs) and shares the BSDF value, the shadow ray and the
-    /// MIS weight, computed once. `from` is the vertex's [`SpawnPoint`], `le` the path's memo
-    /// of the light's radiance.
+    /// MIS weight, computed once. `from` is the vertex's [`SpawnPoint`], `bsdf` the BSDF at
+    /// the path's ωo, `le` the path's memo of the light's radiance.
     #[allow(clippy::too_many_arguments)]
     fn sample_ld(
         &self,
         scene: &Scene,
         (si, from): (&SurfaceHit, &SpawnPoint),
-        bsdf: &Bsdf,
-        wo: Vec3,
+        bsdf: &BsdfAt,
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
         (beta, le): (SampledSpectrum, &mut RadianceMemo),
@@ -529,7 +530,6 @@ impl PathIntegrator {
             si,
             from,
             bsdf,
-            wo,
             light,
             pmf,
         };
@@ -559,8 +559,8 @@ struct Nee<'a> {
     si: &'a SurfaceHit,
     /// Where the shadow ray leaves `si` from.
     from: &'a SpawnPoint,
-    bsdf: &'a Bsdf,
-    wo: Vec3,
+    /// The BSDF at the path's ωo.
+    bsdf: &'a BsdfAt<'a>,
     light: usize,
     pmf: f32,
 }
@@ -589,7 +589,7 @@ impl Nee<'_> {
     fn shared(&self, ls: &LightLiSample) -> Shared {
         let si = self.si;
         // f and the BSDF's pdf of ωi together: one frame change, shared microfacet terms.
-        let (f, pdf_bsdf) = self.bsdf.f_pdf(self.wo, ls.wi, TransportMode::Radiance);
+        let (f, pdf_bsdf) = self.bsdf.f_pdf(ls.wi, TransportMode::Radiance);
         let f = f * ls.wi.dot(si.ns).abs();
         if f.is_black() {
             return (f, 0.0, 0.0, 0.0);
