@@ -217,16 +217,8 @@ impl SpecularCoat {
     }
 
     /// (f, pdf of ωi from ωo): bit for bit `f(wo, wi)` and `pdf(wo, wi)`, sharing the
-    /// microfacet terms ([`TrowbridgeReitz::reflection_eval_pair`]; its reverse pdf, unused,
-    /// is dropped by the compiler once inlined).
-    #[inline]
-    pub fn f_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
-        let (f, pdf, _) = self.eval_pair(wo, wi);
-        (f, pdf)
-    }
-
-    /// [`Self::f_pdf`] given `s_o` = `self.distrib.wo_term(wo)`, the term of ωo alone that a
-    /// vertex shares between its pairs: the same bits.
+    /// microfacet terms, given `s_o` = `self.distrib.wo_term(wo)`, the term of ωo alone that a
+    /// vertex shares between its pairs (`PlasticAt`).
     #[inline]
     pub fn f_pdf_at(&self, wo: Vec3, s_o: f32, wi: Vec3) -> (SampledSpectrum, f32) {
         if self.is_delta() {

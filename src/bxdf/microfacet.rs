@@ -192,11 +192,7 @@ impl TrowbridgeReitz {
         if wo.z * wi.z <= 0.0 {
             return None;
         }
-        if self.is_isotropic() {
-            self.isotropic_pair(wo, wi, self.smith_root(wo))
-        } else {
-            self.anisotropic_pair(wo, wi)
-        }
+        self.reflection_eval_pair_at(wo, self.wo_term(wo), wi)
     }
 
     /// What [`Self::reflection_eval_pair_at`] takes of ωo alone: s(ωo) of an isotropic
