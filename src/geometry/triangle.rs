@@ -404,6 +404,7 @@ const fn gamma64(n: i32) -> f64 {
 /// Not inlined: its callers' hot paths take it only for triangles that straddle the origin's
 /// plane, and inlined, the compiler hoisted its f64 conversions of the ray into every query's
 /// set-up (about 20 instructions a ray in the BVH's queries, session 31).
+#[cold]
 #[inline(never)]
 fn plane_t((o, d): (Vec3, Vec3), tri: PackedTriangle) -> Option<f64> {
     let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
