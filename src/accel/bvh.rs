@@ -59,7 +59,6 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::triangle::Triangle;
 
-use super::isa::{Isa, Query};
 use super::sah;
 use super::stack::Stack;
 use crate::geometry::offset::gamma;
@@ -86,16 +85,13 @@ pub struct Bvh {
     input_index: Vec<u32>,
     input_count: usize,
     bounds: (Vec3, Vec3),
-    /// The build of the queries this CPU runs ([`Isa`]).
-    isa: Isa,
 }
 
 /// A node with up to eight children. Slot `s` is lane `s % 4` of half `s / 4`.
 #[derive(Clone, Copy, Debug)]
 struct WideNode {
-    /// `planes[2k][h]` / `planes[2k + 1][h]`: min / max along axis k of the children of half h
-    /// (each row's eight slots contiguous, for the 8-wide test).
-    planes: [[Vec4; 2]; 6],
+    /// `planes[h][2k]` / `planes[h][2k + 1]`: min / max along axis k of the children of half h.
+    planes: [[Vec4; 6]; 2],
     /// Inner child: its node index; leaf child: its first triangle (BVH order).
     child: [u32; 8],
     /// Triangles of each leaf child (0 for inner children and empty slots).
@@ -235,7 +231,6 @@ impl Bvh {
             bounds: bounds_of(&ordered),
             input_index,
             input_count: triangles.len(),
-            isa: Isa::detect(),
         }
     }
 
@@ -246,49 +241,50 @@ impl Bvh {
             input_index: Vec::new(),
             input_count,
             bounds: (Vec3::ZERO, Vec3::ZERO),
-            isa: Isa::detect(),
         }
     }
 
     /// Closest hit with t in (0, t_max).
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<BvhHit> {
-        self.isa.run(ClosestQuery((self, ray, t_max, &())))
+        if !self.may_hit(t_max) {
+            return None;
+        }
+        let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
+        let (prim, hit) =
+            self.closest(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max, &())?;
+        Some(BvhHit { prim, hit })
     }
 
     /// [`Bvh::intersect`], adding the nodes and triangles it tests to `count` (for benchmarks;
     /// the queries above count nothing).
     pub fn count_closest(&self, ray: &Ray, t_max: f32, count: &TraversalCount) -> Option<BvhHit> {
-        self.isa.run(ClosestQuery((self, ray, t_max, count)))
+        self.may_hit(t_max).then_some(())?;
+        let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
+        let (prim, hit) = self.closest(
+            &mut Stack::<Entry, STACK_PLACES>::new(),
+            query,
+            t_max,
+            count,
+        )?;
+        Some(BvhHit { prim, hit })
     }
 
     /// [`Bvh::occluded`], adding the nodes and triangles it tests to `count`.
     pub fn count_any(&self, ray: &Ray, t_max: f32, count: &TraversalCount) -> bool {
-        self.isa.run(AnyQuery((self, ray, t_max, count)))
+        let Some(triangle) = WatertightRay::new(ray).filter(|_| self.may_hit(t_max)) else {
+            return false;
+        };
+        let query = (&triangle, &RayBoxes::new(ray));
+        self.any(
+            &mut Stack::<Entry, STACK_PLACES>::new(),
+            query,
+            t_max,
+            count,
+        )
     }
 
     /// Whether anything is hit with t in (0, t_max) (shadow rays; stops at the first hit).
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.isa.run(AnyQuery((self, ray, t_max, &())))
-    }
-
-    /// [`Bvh::intersect`] with its per-ray set-up, inlined into each [`Isa`]'s build.
-    #[inline(always)]
-    fn closest_query<const WIDE: bool>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        tally: &impl Tally,
-    ) -> Option<BvhHit> {
-        self.may_hit(t_max).then_some(())?;
-        let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
-        let stack = &mut Stack::<Entry, STACK_PLACES>::new();
-        let (prim, hit) = self.closest::<WIDE, _>(stack, query, t_max, tally)?;
-        Some(BvhHit { prim, hit })
-    }
-
-    /// [`Bvh::occluded`] with its per-ray set-up, inlined into each [`Isa`]'s build.
-    #[inline(always)]
-    fn any_query<const WIDE: bool>(&self, ray: &Ray, t_max: f32, tally: &impl Tally) -> bool {
         if !self.may_hit(t_max) {
             return false;
         }
@@ -296,8 +292,7 @@ impl Bvh {
             return false;
         };
         let query = (&triangle, &RayBoxes::new(ray));
-        let stack = &mut Stack::<Entry, STACK_PLACES>::new();
-        self.any::<WIDE, _>(stack, query, t_max, tally)
+        self.any(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max, &())
     }
 
     /// Number of triangles given to [`Bvh::build`] (degenerate ones included).
@@ -366,54 +361,59 @@ impl Bvh {
     }
 
     /// Closest-hit traversal: the input index and the hit.
-    #[inline(always)]
-    fn closest<const WIDE: bool, const N: usize>(
+    fn closest<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
         tally: &impl Tally,
     ) -> Option<(u32, TriangleHit)> {
-        let mut leaves = Closest {
-            rows: &self.rows,
-            ray: triangle,
-            tally,
-            best: None,
-        };
-        self.traverse::<WIDE, N>(stack, boxes, &mut t_max, tally, &mut leaves);
-        let (i, hit) = leaves.best?;
+        let mut best: Option<(usize, TriangleHit)> = None;
+        self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
+            tally.triangles(count);
+            for i in first..first + count {
+                let tri = PackedTriangle::load(&self.rows, i);
+                if let Some(hit) = intersect_packed(triangle, tri, *t_max) {
+                    *t_max = hit.t;
+                    best = Some((i, hit));
+                }
+            }
+            false
+        });
+        let (i, hit) = best?;
         Some((*self.input_index.get(i)?, hit))
     }
 
     /// Any-hit traversal with early exit.
-    #[inline(always)]
-    fn any<const WIDE: bool, const N: usize>(
+    fn any<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
         tally: &impl Tally,
     ) -> bool {
-        let mut leaves = Any {
-            rows: &self.rows,
-            ray: triangle,
-            tally,
-            hit: false,
-        };
-        self.traverse::<WIDE, N>(stack, boxes, &mut t_max, tally, &mut leaves);
-        leaves.hit
+        let mut hit = false;
+        self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
+            hit = (first..first + count).any(|i| {
+                tally.triangles(1);
+                let tri = PackedTriangle::load(&self.rows, i);
+                intersect_packed(triangle, tri, *t_max).is_some()
+            });
+            hit
+        });
+        hit
     }
 
-    /// Calls `leaf.test(first, count, t_max)` for the leaves whose boxes the ray meets before
+    /// Calls `leaf(first, count, t_max)` for the leaves whose boxes the ray meets before
     /// `t_max`, near to far within each node; `leaf` may lower `t_max` and returns true to stop.
     #[inline(always)]
-    fn traverse<const WIDE: bool, const N: usize>(
+    fn traverse<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
         ray: &RayBoxes,
         t_max: &mut f32,
         tally: &impl Tally,
-        leaf: &mut impl LeafTest,
+        mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
     ) {
         // The root, then the nearest inner child met by each node, is visited without a push
         // and a pop; the other inner children wait on the stack. The visiting order is the
@@ -424,10 +424,10 @@ impl Bvh {
             if entry.0 <= limit {
                 let node = &self.nodes[entry.node()];
                 tally.node();
-                let (hits, t_enter) = node.intersect::<WIDE>(ray, *t_max);
+                let (hits, t_enter) = node.intersect(ray, *t_max);
                 let leaves = hits & node.leaves as u32;
                 if leaves != 0
-                    && node.leaves_near_to_far(leaves, &t_enter, (t_max, &mut limit), leaf)
+                    && node.leaves_near_to_far(leaves, &t_enter, (t_max, &mut limit), &mut leaf)
                 {
                     return;
                 }
@@ -488,7 +488,7 @@ impl WideNode {
         mut leaves: u32,
         t_enter: &[f32; 8],
         (t_max, limit): (&mut f32, &mut u64),
-        leaf: &mut impl LeafTest,
+        leaf: &mut impl FnMut(usize, usize, &mut f32) -> bool,
     ) -> bool {
         while leaves != 0 {
             let key = pick_key(leaves, t_enter, u64::min);
@@ -496,7 +496,7 @@ impl WideNode {
             leaves &= !(1 << slot);
             let (first, count) = (self.child[slot] as usize, self.count[slot] as usize);
             if key <= *limit {
-                if leaf.test(first, count, t_max) {
+                if leaf(first, count, t_max) {
                     return true;
                 }
                 *limit = key_limit(*t_max);
@@ -526,83 +526,6 @@ impl WideNode {
             self,
             order_key(t_enter, inner.trailing_zeros()),
         ))
-    }
-}
-
-/// [`Bvh::intersect`]'s arguments, for [`Isa::run`].
-struct ClosestQuery<'a, T>((&'a Bvh, &'a Ray, f32, &'a T));
-
-impl<T: Tally> Query for ClosestQuery<'_, T> {
-    type Output = Option<BvhHit>;
-    #[inline(always)]
-    fn run<const WIDE: bool>(self) -> Option<BvhHit> {
-        let (bvh, ray, t_max, tally) = self.0;
-        bvh.closest_query::<WIDE>(ray, t_max, tally)
-    }
-}
-
-/// [`Bvh::occluded`]'s arguments, for [`Isa::run`].
-struct AnyQuery<'a, T>((&'a Bvh, &'a Ray, f32, &'a T));
-
-impl<T: Tally> Query for AnyQuery<'_, T> {
-    type Output = bool;
-    #[inline(always)]
-    fn run<const WIDE: bool>(self) -> bool {
-        let (bvh, ray, t_max, tally) = self.0;
-        bvh.any_query::<WIDE>(ray, t_max, tally)
-    }
-}
-
-/// What a traversal does at a leaf of `count` triangles from `first` (BVH order): tests them
-/// against `t_max`, which it may lower, and returns true to stop the traversal. Implemented by
-/// structs with an `#[inline(always)]` method, not closures, so that the test is inlined into
-/// each [`Isa`]'s build of the loop (a closure was compiled once, in the baseline build, and
-/// called per leaf).
-trait LeafTest {
-    fn test(&mut self, first: usize, count: usize, t_max: &mut f32) -> bool;
-}
-
-/// The closest hit's leaves: every triangle, keeping the nearest hit.
-struct Closest<'a, T> {
-    rows: &'a [f32],
-    ray: &'a WatertightRay,
-    tally: &'a T,
-    /// BVH index and hit of the nearest hit so far.
-    best: Option<(usize, TriangleHit)>,
-}
-
-impl<T: Tally> LeafTest for Closest<'_, T> {
-    #[inline(always)]
-    fn test(&mut self, first: usize, count: usize, t_max: &mut f32) -> bool {
-        self.tally.triangles(count);
-        for i in first..first + count {
-            let tri = PackedTriangle::load(self.rows, i);
-            if let Some(hit) = intersect_packed(self.ray, tri, *t_max) {
-                *t_max = hit.t;
-                self.best = Some((i, hit));
-            }
-        }
-        false
-    }
-}
-
-/// The any hit's leaves: triangles up to the first hit, which stops the traversal.
-struct Any<'a, T> {
-    rows: &'a [f32],
-    ray: &'a WatertightRay,
-    tally: &'a T,
-    hit: bool,
-}
-
-impl<T: Tally> LeafTest for Any<'_, T> {
-    #[inline(always)]
-    fn test(&mut self, first: usize, count: usize, t_max: &mut f32) -> bool {
-        self.hit = (first..first + count).any(|i| {
-            self.tally.triangles(1);
-            let tri = PackedTriangle::load(self.rows, i);
-            intersect_packed(self.ray, tri, *t_max).is_some()
-        });
-        self.hit
     }
 }
 
@@ -706,7 +629,7 @@ fn min_or_acc(a: Vec4, acc: Vec4) -> Vec4 {
 
 impl WideNode {
     const EMPTY: WideNode = WideNode {
-        planes: [[Vec4::ZERO; 2]; 6],
+        planes: [[Vec4::ZERO; 6]; 2],
         child: [0; 8],
         count: [0; 8],
         present: 0,
@@ -715,16 +638,11 @@ impl WideNode {
 
     /// Mask of the children (bit = slot) whose boxes the ray meets within [0, t_max], and the
     /// widened entry distance of each slot.
-    /// `WIDE`: all eight children lane by lane ([`slab_wide`]), else two 4-wide halves.
     #[inline(always)]
-    fn intersect<const WIDE: bool>(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
-        if WIDE {
-            let (mask, t_enter) = slab_wide(&self.planes, ray, t_max);
-            return (mask & self.present as u32, t_enter);
-        }
+    fn intersect(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
         let t_max = Vec4::splat(t_max);
-        let (m0, t0) = slab_half(&self.planes, 0, ray, t_max);
-        let (m1, t1) = slab_half(&self.planes, 1, ray, t_max);
+        let (m0, t0) = slab_half(&self.planes[0], ray, t_max);
+        let (m1, t1) = slab_half(&self.planes[1], ray, t_max);
         let (t0, t1) = (t0.to_array(), t1.to_array());
         let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
         ((m0 | m1 << 4) & self.present as u32, t_enter)
@@ -733,7 +651,7 @@ impl WideNode {
     /// Slot `slot`'s box `(min, max)`.
     fn child_box(&self, slot: usize) -> (Vec3, Vec3) {
         let (half, lane) = (slot / 4, slot % 4);
-        let plane = |row: usize| self.planes[row][half][lane];
+        let plane = |row: usize| self.planes[half][row][lane];
         (
             Vec3::new(plane(0), plane(2), plane(4)),
             Vec3::new(plane(1), plane(3), plane(5)),
@@ -743,8 +661,8 @@ impl WideNode {
     fn set_box(&mut self, slot: usize, (lo, hi): (Vec3, Vec3)) {
         let (half, lane) = (slot / 4, slot % 4);
         for k in 0..3 {
-            self.planes[2 * k][half][lane] = lo[k];
-            self.planes[2 * k + 1][half][lane] = hi[k];
+            self.planes[half][2 * k][lane] = lo[k];
+            self.planes[half][2 * k + 1][lane] = hi[k];
         }
         self.present |= 1 << slot;
     }
@@ -753,8 +671,8 @@ impl WideNode {
 /// The slab test of four children (PBR 4ed §6.1.2, widened as described at [`RayBoxes`]):
 /// the overlap mask (4 bits) and the entry distances (≥ +0, never NaN).
 #[inline(always)]
-fn slab_half(planes: &[[Vec4; 2]; 6], half: usize, ray: &RayBoxes, t_max: Vec4) -> (u32, Vec4) {
-    let distance = |row: usize, k: usize| (planes[row][half] - ray.o[k]) * ray.inv[k];
+fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: Vec4) -> (u32, Vec4) {
+    let distance = |row: usize, k: usize| (planes[row] - ray.o[k]) * ray.inv[k];
     let (mut enter, mut exit) = (Vec4::ZERO, t_max);
     for k in 0..3 {
         enter = max_or_acc(distance(ray.near[k], k), enter);
@@ -763,38 +681,6 @@ fn slab_half(planes: &[[Vec4; 2]; 6], half: usize, ray: &RayBoxes, t_max: Vec4) 
     let t_enter = enter * ENTER_SCALE;
     let t_exit = exit * EXIT_SCALE + Vec4::splat(2.0 * f32::MIN_POSITIVE);
     (t_enter.cmple(t_exit).bitmask(), t_enter)
-}
-
-/// [`slab_half`] on all eight children at once, written lane by lane over arrays for the
-/// compiler to vectorise: in the AVX build ([`Isa`]) each loop is one 8-wide operation. Each
-/// lane computes exactly what `slab_half` computes in its lane (the same operations in the
-/// same order; `a > acc ? a : acc` is `maxps`' rule, `a < acc ? a : acc` `minps`'), so the
-/// mask and entry distances are bit for bit the same.
-#[inline(always)]
-fn slab_wide(planes: &[[Vec4; 2]; 6], ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
-    let row = |r: usize| {
-        let [a, b] = planes[r].map(|v| v.to_array());
-        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
-    };
-    let (mut enter, mut exit) = ([0.0f32; 8], [t_max; 8]);
-    for k in 0..3 {
-        let (o, inv) = (ray.o[k].x, ray.inv[k].x);
-        let near = row(ray.near[k]);
-        for i in 0..8 {
-            let a = (near[i] - o) * inv;
-            enter[i] = if a > enter[i] { a } else { enter[i] };
-        }
-        let far = row(ray.near[k] ^ 1);
-        for i in 0..8 {
-            let b = (far[i] - o) * inv;
-            exit[i] = if b < exit[i] { b } else { exit[i] };
-        }
-    }
-    let t_enter = enter.map(|t| t * ENTER_SCALE);
-    let t_exit = exit.map(|t| t * EXIT_SCALE + 2.0 * f32::MIN_POSITIVE);
-    let half = |t: &[f32; 8], h: usize| Vec4::from_slice(&t[4 * h..4 * h + 4]);
-    let met = |h: usize| half(&t_enter, h).cmple(half(&t_exit, h)).bitmask();
-    (met(0) | met(1) << 4, t_enter)
 }
 
 /// Our nodes from obvhs's: same indices and slots, exact child boxes. obvhs appends a node's
@@ -972,54 +858,6 @@ mod tests {
         match rng.below(3) {
             0 => f32::INFINITY,
             _ => rng.range(0.0, 3.0) * extent,
-        }
-    }
-
-    /// The AVX build of the queries (8-wide node test, [`Isa`]) and the baseline build (two SSE
-    /// halves) give the same hits bit for bit (t, barycentrics, triangle), the same any-hit
-    /// answers and the same node and triangle counts, on soups, axis-aligned scenes and rays
-    /// spawned off their hits. (Where the CPU has no AVX, both runs are the baseline's.)
-    #[test]
-    fn every_isa_gives_the_same_hits() {
-        let mut rng = Rng::new(34);
-        for (k, scale) in [1.0, 1e-4, 1e5].into_iter().enumerate() {
-            let tris = match k {
-                1 => axis_aligned_scene(&mut rng, 400, scale),
-                _ => random_soup(&mut rng, 2000, scale),
-            };
-            let best = Bvh::build(&tris);
-            let baseline = Bvh {
-                isa: Isa::baseline(),
-                ..Bvh::build(&tris)
-            };
-            let (lo, hi) = best.bounds();
-            let (center, extent) = (0.5 * (lo + hi), (hi - lo).max_element());
-            let bits = |h: Option<BvhHit>| {
-                h.map(|h| {
-                    (
-                        h.prim,
-                        [h.hit.t, h.hit.b0, h.hit.b1, h.hit.b2].map(f32::to_bits),
-                    )
-                })
-            };
-            let counts = |c: TraversalCount| (c.nodes.get(), c.triangles.get());
-            for _ in 0..6000 {
-                let mut r = random_ray(&mut rng, center, extent);
-                let t_max = random_t_max(&mut rng, extent);
-                if let Some(h) = best.intersect(&r, t_max) {
-                    // Spawned off the hit, as the renderer's next bounce.
-                    r = Ray::new(r.at(h.hit.t), rng.unit_vector());
-                }
-                let query = |bvh: &Bvh| {
-                    let (c, a) = (TraversalCount::default(), TraversalCount::default());
-                    let hit = bits(bvh.count_closest(&r, t_max, &c));
-                    let any = bvh.count_any(&r, t_max, &a);
-                    (hit, any, counts(c), counts(a))
-                };
-                assert_eq!(query(&best), query(&baseline), "{r:?} t_max {t_max}");
-                assert_eq!(bits(best.intersect(&r, t_max)), query(&baseline).0);
-                assert_eq!(best.occluded(&r, t_max), query(&baseline).1);
-            }
         }
     }
 
@@ -1384,9 +1222,9 @@ mod tests {
                 let q = (&tri, &boxes);
                 let (mut one, mut two) = (Stack::<Entry, 1>::new(), Stack::<Entry, 2>::new());
                 let results = [
-                    bvh.closest::<false, _>(&mut one, q, f32::INFINITY, &()),
-                    bvh.closest::<true, _>(&mut two, q, f32::INFINITY, &()),
-                    bvh.closest::<false, _>(
+                    bvh.closest(&mut one, q, f32::INFINITY, &()),
+                    bvh.closest(&mut two, q, f32::INFINITY, &()),
+                    bvh.closest(
                         &mut Stack::<Entry, STACK_PLACES>::new(),
                         q,
                         f32::INFINITY,

@@ -1,6 +1,5 @@
 //! Ray acceleration structures. Only `bvh.rs` and `sah.rs` name obvhs.
 
 pub mod bvh;
-mod isa;
 mod sah;
 mod stack;
