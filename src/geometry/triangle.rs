@@ -403,7 +403,9 @@ const fn gamma64(n: i32) -> f64 {
 ///
 /// Not inlined: its callers' hot paths take it only for triangles that straddle the origin's
 /// plane, and inlined, the compiler hoisted its f64 conversions of the ray into every query's
-/// set-up (about 20 instructions a ray in the BVH's queries, session 31).
+/// set-up (about 20 instructions a ray in the BVH's queries, session 31). Cold, so that the
+/// leaf test's call of it is not a hot block to lay out and allocate registers around: 1.5 %
+/// fewer instructions per ray on the spheres of `../shared/limit` (session 34).
 #[cold]
 #[inline(never)]
 fn plane_t((o, d): (Vec3, Vec3), tri: PackedTriangle) -> Option<f64> {
