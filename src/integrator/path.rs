@@ -643,13 +643,28 @@ pub(crate) fn transmittance(
     if !scene.casts_shadows(light) {
         return 1.0;
     }
-    let (mut ray, mut t) = shadow_ray(from, ls);
+    let (ray, t) = shadow_ray(from, ls);
     if !scene.occluded(&ray, t, Some(light)) {
         return 1.0;
     }
     if scene.all_opaque {
         return 0.0;
     }
+    translucent_transmittance(scene, ray, t, ls, light)
+}
+
+/// [`transmittance`] past the first surface the shadow ray `(ray, t)` met, in a scene that
+/// is not all opaque: its own function, so that the common answers above (unshadowed, or
+/// opaque scenes' blocked rays) take no frame for this loop.
+#[cold]
+#[inline(never)]
+fn translucent_transmittance(
+    scene: &Scene,
+    mut ray: Ray,
+    mut t: f32,
+    ls: &LightLiSample,
+    light: u32,
+) -> f32 {
     let mut tr = 1.0;
     for _ in 0..MAX_PASS_THROUGHS {
         let si = match scene.intersect(&ray, t) {
