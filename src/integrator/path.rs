@@ -422,7 +422,13 @@ impl PathIntegrator {
         g: &mut Gathered,
     ) {
         let (d, prev) = (st.ray.d, st.prev);
-        g.l += st.beta * self.escaped(scene, &scene.lights, |_| true, d, prev, lambda);
+        // `escaped`'s sum over no infinite lights, without setting up its loop.
+        let le = if scene.infinite_lights.is_empty() {
+            SampledSpectrum::ZERO
+        } else {
+            self.escaped(scene, &scene.lights, |_| true, d, prev, lambda)
+        };
+        g.l += st.beta * le;
         for (layer, sum) in g.layers.iter().zip(g.sums.iter_mut()) {
             let le = match &layer.source {
                 LayerSource::Group(mask) => {
