@@ -75,7 +75,7 @@ pub struct SpawnPoint {
 impl SpawnPoint {
     /// The point `p` with absolute error `p_error` on a surface of geometric normal `n` (any
     /// length).
-    #[inline]
+    #[inline(always)]
     pub fn new(p: Vec3, p_error: Vec3, n: Vec3) -> SpawnPoint {
         let n = n.normalize_or_zero();
         let d = n.abs().dot(p_error);
