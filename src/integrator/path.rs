@@ -515,6 +515,7 @@ impl PathIntegrator {
     /// point: only the spectrum differs) and shares the BSDF value, the shadow ray and the
     /// MIS weight, computed once. `from` is the vertex's [`SpawnPoint`], `bsdf` the BSDF at
     /// the path's ωo, `le` the path's memo of the light's radiance.
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn sample_ld(
         &self,
