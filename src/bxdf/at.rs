@@ -55,7 +55,7 @@ impl BsdfAt<'_> {
     }
 
     /// A sampled direction from ωo ([`Bsdf::sample_f`]).
-    #[inline]
+    #[inline(always)]
     pub fn sample_f(&self, uc: f32, u: [f32; 2], mode: TransportMode) -> Option<BsdfSample> {
         if self.wo.z == 0.0 {
             return None;

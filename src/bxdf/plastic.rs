@@ -165,7 +165,7 @@ impl PlasticBxdf {
 
     /// The terms of ωo alone ([`PlasticAt`]): what next event estimation's `f_pdf` and
     /// `sample_f` at one vertex share.
-    #[inline]
+    #[inline(always)]
     pub fn at(&self, wo: Vec3) -> PlasticAt {
         let flip = wo.z < 0.0;
         let wo = mirror_z(wo, flip);

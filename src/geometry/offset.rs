@@ -75,7 +75,7 @@ pub struct SpawnPoint {
 impl SpawnPoint {
     /// The point `p` with absolute error `p_error` on a surface of geometric normal `n` (any
     /// length).
-    #[inline]
+    #[inline(always)]
     pub fn new(p: Vec3, p_error: Vec3, n: Vec3) -> SpawnPoint {
         let n = n.normalize_or_zero();
         let d = n.abs().dot(p_error);
@@ -90,14 +90,22 @@ impl SpawnPoint {
 
     /// The origin of a ray leaving in direction `w` (any length): `offset_ray_origin(p,
     /// p_error, n, w)`.
-    #[inline]
+    /// Inlined: the common case is the precomputed `above`; the rounding to the `−n` side
+    /// (transmission, shadow rays to lights behind the surface) is a call of its own.
+    #[inline(always)]
     pub fn origin(&self, w: Vec3) -> Vec3 {
         if w.dot(self.n) < 0.0 {
-            let offset = -self.offset;
-            rounded(self.p + offset, offset)
+            self.below()
         } else {
             self.above
         }
+    }
+
+    /// The origin of rays leaving to the `−n` side (w·n < 0).
+    #[inline(never)]
+    fn below(&self) -> Vec3 {
+        let offset = -self.offset;
+        rounded(self.p + offset, offset)
     }
 
     /// A ray leaving in direction `w` ([`spawn_ray`]).

@@ -422,7 +422,13 @@ impl PathIntegrator {
         g: &mut Gathered,
     ) {
         let (d, prev) = (st.ray.d, st.prev);
-        g.l += st.beta * self.escaped(scene, &scene.lights, |_| true, d, prev, lambda);
+        // `escaped`'s sum over no infinite lights, without setting up its loop.
+        let le = if scene.infinite_lights.is_empty() {
+            SampledSpectrum::ZERO
+        } else {
+            self.escaped(scene, &scene.lights, |_| true, d, prev, lambda)
+        };
+        g.l += st.beta * le;
         for (layer, sum) in g.layers.iter().zip(g.sums.iter_mut()) {
             let le = match &layer.source {
                 LayerSource::Group(mask) => {
@@ -509,6 +515,7 @@ impl PathIntegrator {
     /// point: only the spectrum differs) and shares the BSDF value, the shadow ray and the
     /// MIS weight, computed once. `from` is the vertex's [`SpawnPoint`], `bsdf` the BSDF at
     /// the path's ωo, `le` the path's memo of the light's radiance.
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn sample_ld(
         &self,
@@ -643,13 +650,28 @@ pub(crate) fn transmittance(
     if !scene.casts_shadows(light) {
         return 1.0;
     }
-    let (mut ray, mut t) = shadow_ray(from, ls);
+    let (ray, t) = shadow_ray(from, ls);
     if !scene.occluded(&ray, t, Some(light)) {
         return 1.0;
     }
     if scene.all_opaque {
         return 0.0;
     }
+    translucent_transmittance(scene, ray, t, ls, light)
+}
+
+/// [`transmittance`] past the first surface the shadow ray `(ray, t)` met, in a scene that
+/// is not all opaque: its own function, so that the common answers above (unshadowed, or
+/// opaque scenes' blocked rays) take no frame for this loop.
+#[cold]
+#[inline(never)]
+fn translucent_transmittance(
+    scene: &Scene,
+    mut ray: Ray,
+    mut t: f32,
+    ls: &LightLiSample,
+    light: u32,
+) -> f32 {
     let mut tr = 1.0;
     for _ in 0..MAX_PASS_THROUGHS {
         let si = match scene.intersect(&ray, t) {

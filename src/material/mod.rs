@@ -241,32 +241,47 @@ impl Material {
         lambda: &SampledWavelengths,
         c: &MaterialSpectra,
     ) -> Bsdf {
-        let bxdf = match self {
-            Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf {
-                r: reflectance.reflectance_with(tc, lambda, c.s0),
-            }),
-            Material::OrenNayar { reflectance, sigma } => Bxdf::OrenNayar(OrenNayarBxdf::new(
-                reflectance.reflectance_with(tc, lambda, c.s0),
-                sigma.eval(tc),
-            )),
+        // Each arm builds its Bsdf in place (as `PreviewMaterial::bsdf_with`): a match over a
+        // Bxdf and then `Bsdf::new` copies the model twice more.
+        match self {
+            Material::Diffuse { reflectance } => Bsdf::new(
+                Bxdf::Diffuse(DiffuseBxdf {
+                    r: reflectance.reflectance_with(tc, lambda, c.s0),
+                }),
+                ns,
+            ),
+            Material::OrenNayar { reflectance, sigma } => Bsdf::new(
+                Bxdf::OrenNayar(OrenNayarBxdf::new(
+                    reflectance.reflectance_with(tc, lambda, c.s0),
+                    sigma.eval(tc),
+                )),
+                ns,
+            ),
             Material::Conductor {
                 distrib, roughness, ..
-            } => Bxdf::Conductor(ConductorBxdf::new(
-                AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
-                c.s0,
-                c.s1,
-            )),
+            } => Bsdf::new(
+                Bxdf::Conductor(ConductorBxdf::new(
+                    AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
+                    c.s0,
+                    c.s1,
+                )),
+                ns,
+            ),
             Material::Dielectric {
                 distrib, roughness, ..
-            } => Bxdf::Dielectric(DielectricBxdf::new(
-                AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
-                c.s0[0],
-            )),
-            Material::ThinDielectric { .. } => Bxdf::ThinDielectric(ThinDielectricBxdf::new(c.s0)),
-            Material::Plastic(p) => Bxdf::Plastic(p.bxdf(tc, lambda, c)),
-            Material::Preview(p) => return p.bsdf_with(tc, ns, lambda, c),
-        };
-        Bsdf::new(bxdf, ns)
+            } => Bsdf::new(
+                Bxdf::Dielectric(DielectricBxdf::new(
+                    AlphaTexture::distrib(roughness.as_ref(), *distrib, tc),
+                    c.s0[0],
+                )),
+                ns,
+            ),
+            Material::ThinDielectric { .. } => {
+                Bsdf::new(Bxdf::ThinDielectric(ThinDielectricBxdf::new(c.s0)), ns)
+            }
+            Material::Plastic(p) => Bsdf::new(Bxdf::Plastic(p.bxdf(tc, lambda, c)), ns),
+            Material::Preview(p) => p.bsdf_with(tc, ns, lambda, c),
+        }
     }
 
     /// True when the BSDF reads a texture: only then do the integrators compute the hit's

@@ -411,12 +411,13 @@ impl PreviewMaterial {
         c: &MaterialSpectra,
     ) -> Bsdf {
         let rho = self.rho(tc, lambda, c);
-        let bxdf = match self.lobes {
-            PreviewLobes::Lambert => Bxdf::Diffuse(DiffuseBxdf { r: rho }),
-            PreviewLobes::Plastic => Bxdf::Plastic(self.plastic(tc, rho, lambda, c)),
-            PreviewLobes::Full => Bxdf::Preview(self.composite(tc, rho, lambda, c)),
-        };
-        Bsdf::new(bxdf, ns)
+        // Each arm builds its Bsdf in place: one match over a Bxdf then `Bsdf::new` copied
+        // the plastic's 116 bytes twice more (design.md §8, session 34).
+        match self.lobes {
+            PreviewLobes::Lambert => Bsdf::new(Bxdf::Diffuse(DiffuseBxdf { r: rho }), ns),
+            PreviewLobes::Plastic => Bsdf::new(Bxdf::Plastic(self.plastic(tc, rho, lambda, c)), ns),
+            PreviewLobes::Full => Bsdf::new(Bxdf::Preview(self.composite(tc, rho, lambda, c)), ns),
+        }
     }
 
     /// The plastic (coat over the diffuse base) at `tc` with diffuse reflectance `rho`.

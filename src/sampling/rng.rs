@@ -17,6 +17,11 @@ use super::zsobol::Stream;
 pub struct Sampler {
     state: u64,
     inc: u64,
+    /// The (seed, index, sample) of a PCG32 state not derived yet: a low-discrepancy sampler
+    /// derives it at its first draw outside the sequence (a fork, a detached or free draw),
+    /// which most of the path tracer's samples never make. None once derived, and always
+    /// for the independent sampler.
+    pending: Option<[u64; 3]>,
     /// The low-discrepancy stream, if this sample draws from one.
     lds: Option<Stream>,
 }
@@ -31,6 +36,7 @@ impl Sampler {
         let mut s = Sampler {
             state: 0,
             inc,
+            pending: None,
             lds: None,
         };
         s.next_u32();
@@ -41,11 +47,23 @@ impl Sampler {
 
     /// The sampler of sample `sample` of pixel `index` that draws from the low-discrepancy
     /// `stream`; its forks and [`get_1d_free`](Self::get_1d_free) are those of
-    /// `Sampler::new(seed, index, sample)`.
+    /// `Sampler::new(seed, index, sample)`, whose state it derives at the first of them.
+    #[inline]
     pub fn low_discrepancy(seed: u64, index: u64, sample: u64, stream: Stream) -> Sampler {
         Sampler {
+            state: 0,
+            inc: 0,
+            pending: Some([seed, index, sample]),
             lds: Some(stream),
-            ..Sampler::new(seed, index, sample)
+        }
+    }
+
+    /// Derives the PCG32 state if it is still pending (`low_discrepancy`).
+    #[inline]
+    fn seed_pcg(&mut self) {
+        if let Some([seed, index, sample]) = self.pending.take() {
+            let s = Sampler::new(seed, index, sample);
+            (self.state, self.inc) = (s.state, s.inc);
         }
     }
 
@@ -58,8 +76,10 @@ impl Sampler {
         }
     }
 
+    /// PCG32's next output; private, as a pending state (`low_discrepancy`) must be derived
+    /// first (`seed_pcg`).
     #[inline]
-    pub fn next_u32(&mut self) -> u32 {
+    fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(PCG_MULT).wrapping_add(self.inc);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
@@ -72,7 +92,7 @@ impl Sampler {
     pub fn get_1d(&mut self) -> f32 {
         match &mut self.lds {
             Some(q) => unit(q.next_1d()),
-            None => self.get_1d_free(),
+            None => unit(self.next_u32()),
         }
     }
 
@@ -81,7 +101,7 @@ impl Sampler {
     pub fn get_2d(&mut self) -> [f32; 2] {
         match &mut self.lds {
             Some(q) => q.next_2d().map(unit),
-            None => [self.get_1d_free(), self.get_1d_free()],
+            None => [unit(self.next_u32()), unit(self.next_u32())],
         }
     }
 
@@ -90,6 +110,7 @@ impl Sampler {
     /// dimension layout. For the independent sampler it is [`get_1d`](Self::get_1d).
     #[inline]
     pub fn get_1d_free(&mut self) -> f32 {
+        self.seed_pcg();
         unit(self.next_u32())
     }
 
@@ -100,6 +121,7 @@ impl Sampler {
     /// independent sampler it is `f(self)`: the same numbers in the same order.
     #[inline]
     pub fn detached<R>(&mut self, f: impl FnOnce(&mut Sampler) -> R) -> R {
+        self.seed_pcg();
         let lds = self.lds.take();
         let r = f(self);
         self.lds = lds;
@@ -109,11 +131,17 @@ impl Sampler {
     /// A stream of its own, derived from this one's current state and `stream` without
     /// advancing this one: what this sampler draws next does not change.
     pub fn fork(&self, stream: u64) -> Sampler {
+        if self.pending.is_some() {
+            let mut seeded = self.clone();
+            seeded.seed_pcg();
+            return seeded.fork(stream);
+        }
         let key = mix64(self.state ^ mix64(stream ^ self.inc));
         let inc = (mix64(key ^ stream) << 1) | 1;
         let mut s = Sampler {
             state: key,
             inc,
+            pending: None,
             lds: None,
         };
         s.next_u32();
@@ -191,6 +219,19 @@ mod tests {
         let x: Vec<f32> = (0..4).map(|_| c.detached(|s| s.get_1d())).collect();
         let y: Vec<f32> = (0..4).map(|_| d.get_1d()).collect();
         assert_eq!(x, y);
+    }
+
+    #[test]
+    fn a_low_discrepancy_samplers_pcg_is_the_independent_ones() {
+        let z = super::super::zsobol::ZSobol::new(3, Some(16));
+        let lds = || Sampler::low_discrepancy(3, 9, 5, z.stream(9, 0, 5));
+        // A fork before any free draw, and after one, are those of Sampler::new's stream.
+        let (a, mut b, mut free) = (lds(), lds(), Sampler::new(3, 9, 5));
+        assert_eq!(a.fork(7).get_1d(), free.fork(7).get_1d());
+        b.get_2d();
+        assert_eq!(b.get_1d_free(), free.get_1d_free());
+        assert_eq!(b.fork(11).get_1d(), free.fork(11).get_1d());
+        assert_eq!(b.get_1d_free(), free.get_1d_free());
     }
 
     #[test]

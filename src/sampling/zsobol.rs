@@ -37,6 +37,10 @@ pub const UNKNOWN_SPP_LOG2: u32 = 16;
 pub struct ZSobol {
     seed: u64,
     log2: u32,
+    /// The stream keys of replicates 0 and 1 in epoch 0 with no index bits above 32 (`key`):
+    /// every sample's of a run of at most 2^L samples per replicate on an image whose Morton
+    /// codes fit in 32 − L bits, found once per run instead of per sample.
+    first_keys: [u64; 2],
 }
 
 impl ZSobol {
@@ -46,7 +50,12 @@ impl ZSobol {
             Some(n) => (n.div_ceil(2).max(1).next_power_of_two().trailing_zeros()).min(MAX_LOG2),
             None => UNKNOWN_SPP_LOG2,
         };
-        ZSobol { seed, log2 }
+        let first_keys = [0, 1].map(|r| key(seed, r, 0, 0));
+        ZSobol {
+            seed,
+            log2,
+            first_keys,
+        }
     }
 
     /// The stream of sample `s` of pixel (x, y).
@@ -58,13 +67,23 @@ impl ZSobol {
         // The index bits above 32 select a scramble of their own, like an epoch.
         let high = m >> (32 - l);
         let low = ((m << l) | (j & ((1 << l) - 1))) as u32;
-        let key = mix64(self.seed ^ mix64(r ^ mix64(epoch ^ mix64(high))));
+        let key = if epoch | high == 0 {
+            self.first_keys[r as usize]
+        } else {
+            key(self.seed, r, epoch, high)
+        };
         Stream {
             key,
             index_reversed: low.reverse_bits(),
             dim: 0,
         }
     }
+}
+
+/// The seed of the scrambles of replicate `r` of the run seeded `seed`, in epoch `epoch`, for
+/// the index bits `high` above 32.
+fn key(seed: u64, r: u64, epoch: u64, high: u64) -> u64 {
+    mix64(seed ^ mix64(r ^ mix64(epoch ^ mix64(high))))
 }
 
 /// One sample's draws from the sequence: dimension `dim` next. The index is kept with its
@@ -172,6 +191,27 @@ mod tests {
                 assert_eq!(q.next_1d(), want[0], "pixel ({x}, {y}) sample {s} dim {d}");
             }
         }
+    }
+
+    #[test]
+    fn the_first_keys_are_the_definitions() {
+        let z = ZSobol::new(7, Some(64));
+        for (x, y, s) in [
+            (0, 0, 0),
+            (3, 5, 17),
+            (63, 1, 63),
+            (1000, 77, 5),
+            (2, 9, 64),
+        ] {
+            let (r, j) = (s & 1, s >> 1);
+            let m = morton(x, y);
+            let want = key(7, r, j >> z.log2, m >> (32 - z.log2));
+            assert_eq!(z.stream(x, y, s).key, want, "pixel ({x}, {y}) sample {s}");
+        }
+        // Index bits above 32: a key of its own.
+        let big = z.stream(1 << 14, 1 << 14, 3);
+        assert_eq!(big.key, key(7, 1, 0, morton(1 << 14, 1 << 14) >> 27));
+        assert_ne!(big.key, z.first_keys[1]);
     }
 
     #[test]

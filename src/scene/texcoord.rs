@@ -12,13 +12,22 @@ impl Scene {
     /// (PBR 4ed §10.1.1). The derivatives depend on the point only, not on the ray that found
     /// it, so the filtered BSDF is the same for every path through the point (camera and light
     /// subpaths, all BDPT techniques).
-    #[inline]
+    #[inline(always)]
     pub fn tex_coord(&self, si: &SurfaceHit, filter: TextureFilter) -> TexCoord {
-        let TextureFilter::Camera { spp_scale } = filter else {
-            return TexCoord::point(si.uv);
-        };
-        // A scene without textured materials (found once at build) skips the per-hit test.
-        if !self.any_textured || !self.materials[si.material as usize].is_textured() {
+        // A scene without textured materials (found once at build) skips the per-hit test;
+        // the test and the footprint are a call of their own, this check is the caller's.
+        match filter {
+            TextureFilter::Camera { spp_scale } if self.any_textured => {
+                self.filtered_tex_coord(si, spp_scale)
+            }
+            _ => TexCoord::point(si.uv),
+        }
+    }
+
+    /// [`Self::tex_coord`] with the camera's filter in a scene with textured materials.
+    #[inline(never)]
+    fn filtered_tex_coord(&self, si: &SurfaceHit, spp_scale: f32) -> TexCoord {
+        if !self.materials[si.material as usize].is_textured() {
             return TexCoord::point(si.uv);
         }
         let dpdxy = self.camera.approximate_dp_dxy(si.p, si.ng, spp_scale);
