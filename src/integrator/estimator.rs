@@ -66,6 +66,13 @@ pub trait Estimator: Sync + Send {
         false
     }
 
+    /// False when [`Estimator::image_sample`] never reads its `u_lens` (a pinhole camera's
+    /// path tracer): the driver then need not compute the lens sample
+    /// (`Sampler::get_2d_if`).
+    fn reads_lens(&self) -> bool {
+        true
+    }
+
     /// One sample of the pixel at raster position `film`, through lens sample `u_lens`:
     /// contributions into `ws.record`, which the caller has cleared. `lambda` may have its
     /// secondary wavelengths terminated on return.

@@ -713,6 +713,11 @@ impl<'a> PathEstimator<'a> {
 }
 
 impl Estimator for PathEstimator<'_> {
+    /// `Camera::generate_ray` reads the lens sample only for a thin lens.
+    fn reads_lens(&self) -> bool {
+        self.scene.camera.lens_radius > 0.0
+    }
+
     fn image_sample(
         &self,
         film: [f32; 2],

@@ -105,6 +105,22 @@ impl Sampler {
         }
     }
 
+    /// [`get_2d`](Self::get_2d) for a caller that reads the point only when `read` (the lens
+    /// sample of a pinhole camera). Unread, a low-discrepancy stream steps past the two
+    /// dimensions without computing them (its dimensions are addressed, so every later number
+    /// is the same) and the point is the square's centre; the independent sampler draws them
+    /// either way, as its later numbers follow in order.
+    #[inline(always)]
+    pub fn get_2d_if(&mut self, read: bool) -> [f32; 2] {
+        match &mut self.lds {
+            Some(q) if !read => {
+                q.skip(2);
+                [0.5, 0.5]
+            }
+            _ => self.get_2d(),
+        }
+    }
+
     /// A uniform number in [0, 1) from PCG32 whatever the sampler, for decisions a path
     /// takes a variable number of times (stochastic opacity), which have no place in the
     /// dimension layout. For the independent sampler it is [`get_1d`](Self::get_1d).
@@ -232,6 +248,29 @@ mod tests {
         assert_eq!(b.get_1d_free(), free.get_1d_free());
         assert_eq!(b.fork(11).get_1d(), free.fork(11).get_1d());
         assert_eq!(b.get_1d_free(), free.get_1d_free());
+    }
+
+    /// An unread 2D draw leaves every later number as a read one would: the low-discrepancy
+    /// sampler's next dimensions and PCG32, the independent sampler's stream.
+    #[test]
+    fn an_unread_2d_draw_leaves_the_later_numbers_alone() {
+        let z = super::super::zsobol::ZSobol::new(3, Some(16));
+        let independent = || Sampler::new(3, 9, 5);
+        let lds = || Sampler::low_discrepancy(3, 9, 5, z.stream(9, 0, 5));
+        for make in [&independent as &dyn Fn() -> Sampler, &lds] {
+            let (mut read, mut unread) = (make(), make());
+            read.get_1d();
+            unread.get_1d();
+            let point = read.get_2d();
+            assert_eq!(unread.get_2d_if(true), point);
+            let (mut read, mut unread) = (make(), make());
+            read.get_2d();
+            unread.get_2d_if(false);
+            let later = |s: &mut Sampler| (s.get_1d(), s.get_2d(), s.get_1d_free());
+            assert_eq!(later(&mut read), later(&mut unread));
+        }
+        // The independent sampler draws the point either way.
+        assert_eq!(independent().get_2d_if(false), independent().get_2d());
     }
 
     #[test]

@@ -138,6 +138,12 @@ impl Stream {
     pub fn set_dimension(&mut self, d: u32) {
         self.dim = d;
     }
+
+    /// Steps past the next `n` dimensions without drawing them.
+    #[inline]
+    pub fn skip(&mut self, n: u32) {
+        self.dim += n;
+    }
 }
 
 /// The Morton (Z-order) code of (x, y): their bits interleaved, x in the even bits.

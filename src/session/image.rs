@@ -720,6 +720,9 @@ fn render_tile<const HERO_ONLY: bool>(
     let mut k = 0;
     // What an estimator that brings its own wavelengths is handed (it replaces them first).
     let unset = SampledWavelengths::sample_visible(0.5);
+    // A pinhole's path tracer does not read the lens sample (`Estimator::reads_lens`); the
+    // layers' first hit (`add_first_hit`) goes through the same camera.
+    let lens_read = estimator.reads_lens();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             for s in task.first..task.first + task.count {
@@ -738,7 +741,7 @@ fn render_tile<const HERO_ONLY: bool>(
                 sampler.set_dimension(dimensions::FILM);
                 let [jx, jy] = sampler.get_2d();
                 sampler.set_dimension(dimensions::LENS);
-                let u_lens = sampler.get_2d();
+                let u_lens = sampler.get_2d_if(lens_read);
                 let film = [x as f32 + jx, y as f32 + jy];
                 ws.record.clear();
                 estimator.image_sample(film, u_lens, &mut lambda, &mut sampler, ws);
