@@ -295,16 +295,21 @@ impl PathIntegrator {
         g: &mut Gathered,
     ) -> Option<SurfaceHit> {
         loop {
-            let Some(hit) = scene.intersect(&st.ray, st.t_max) else {
-                self.add_escaped(scene, st, lambda, g);
-                return None;
-            };
-            let si = match hit {
-                Hit::Light { light, hit } => {
+            let si = match scene.intersect(&st.ray, st.t_max) {
+                // The common answer, a non-emitting surface of an all-opaque scene, goes back
+                // as it came rather than taken apart and rebuilt (a copy fewer).
+                Some(Hit::Surface(si)) if scene.all_opaque && si.light.is_none() => {
+                    return Some(si)
+                }
+                Some(Hit::Surface(si)) => si,
+                Some(Hit::Light { light, hit }) => {
                     self.add_emitted(scene, light, &hit, st, lambda, g);
                     return None;
                 }
-                Hit::Surface(si) => si,
+                None => {
+                    self.add_escaped(scene, st, lambda, g);
+                    return None;
+                }
             };
             // An all-opaque scene has every surface present (no draw either way).
             let material = || &scene.materials[si.material as usize];
