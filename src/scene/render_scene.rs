@@ -88,6 +88,9 @@ pub struct Scene {
     pub source: PathBuf,
     pub meshes: Vec<Mesh>,
     pub tri_refs: Vec<TriRef>,
+    /// Each BVH primitive's three vertices (`Bvh::build`'s input, in `tri_refs`' order): the
+    /// hit's point, normal and error bound read them with one bounds check.
+    pub tri_vertices: Vec<[Vec3; 3]>,
     pub bvh: Bvh,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
@@ -214,12 +217,7 @@ impl Scene {
     fn surface_hit(&self, prim: u32, hit: &crate::geometry::triangle::TriangleHit) -> SurfaceHit {
         let r = self.tri_refs[prim as usize];
         let mesh = &self.meshes[r.mesh as usize];
-        let [i0, i1, i2] = mesh.indices[r.tri as usize];
-        let (p0, p1, p2) = (
-            mesh.positions[i0 as usize],
-            mesh.positions[i1 as usize],
-            mesh.positions[i2 as usize],
-        );
+        let [p0, p1, p2] = self.tri_vertices[prim as usize];
         let p = hit.b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
         let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
         let uv = mesh.uvs.as_ref().map_or(Vec2::new(hit.b1, hit.b2), |uv| {
