@@ -152,6 +152,12 @@ impl EmissionFilms {
 impl EmissionTile {
     /// Adds sample `s` of tile pixel `k` (its wavelengths final): each layer's XYZ rounded
     /// to the grid as the image's own value is (`session::image`), a non-finite one dropped.
+    /// True when the run has emission-weighted layers to sum.
+    #[inline]
+    pub fn is_on(&self) -> bool {
+        self.grid.is_some()
+    }
+
     #[inline]
     pub fn add(&mut self, k: usize, rec: &SampleRecord, lambda: &SampledWavelengths, s: u64) {
         let Some(grid) = self.grid else {

@@ -115,17 +115,29 @@ impl LayerTile {
     /// albedo with the sample's final wavelengths `lambda` (pbrt-v4's GBufferFilm conventions:
     /// the surface the camera ray meets first, camera space; an escaped ray adds nothing, an
     /// albedo of 0).
-    #[inline]
+    /// The test at the caller, the tracing out of line: most renders trace no first hits.
+    #[inline(always)]
     pub fn add_first_hit(
         &mut self,
         k: usize,
         scene: &Scene,
+        camera_sample: ([f32; 2], [f32; 2]),
+        lambda: &SampledWavelengths,
+    ) {
+        if let Some(setup) = self.first_hit_setup {
+            self.trace_first_hit(k, scene, setup, camera_sample, lambda);
+        }
+    }
+
+    #[inline(never)]
+    fn trace_first_hit(
+        &mut self,
+        k: usize,
+        scene: &Scene,
+        setup: FirstHitSetup,
         (film, u_lens): ([f32; 2], [f32; 2]),
         lambda: &SampledWavelengths,
     ) {
-        let Some(setup) = self.first_hit_setup else {
-            return;
-        };
         self.first_hit[k].samples += 1;
         let (ray, t_max) = scene.camera.generate_ray(film, u_lens);
         let (p, n) = match scene.intersect(&ray, t_max) {
@@ -168,8 +180,22 @@ impl LayerTile {
     /// Adds the finished sample `s` of tile pixel `k` (its wavelengths final); `dropped`: the
     /// sample was non-finite and dropped from the image, so from the spectral layer too (an
     /// emission layer drops its own non-finite samples, as its own render would).
-    #[inline]
+    /// The test at the caller, the sums out of line: most renders have no layers.
+    #[inline(always)]
     pub fn add(
+        &mut self,
+        k: usize,
+        rec: &SampleRecord,
+        lambda: &SampledWavelengths,
+        sample: (u64, bool),
+    ) {
+        if self.binner.is_some() || self.emission.is_on() {
+            self.add_sums(k, rec, lambda, sample);
+        }
+    }
+
+    #[inline(never)]
+    fn add_sums(
         &mut self,
         k: usize,
         rec: &SampleRecord,
