@@ -68,10 +68,12 @@ use crate::geometry::triangle::{
     ROW_PADDING,
 };
 
-/// A hit found by the BVH: `prim` indexes the slice given to [`Bvh::build`].
+/// A hit found by the BVH: `prim` indexes the slice given to [`Bvh::build`]; `slot` is the
+/// triangle's place in the BVH's own store, where [`Bvh::vertices`] reads its vertices.
 #[derive(Clone, Copy, Debug)]
 pub struct BvhHit {
     pub prim: u32,
+    pub slot: u32,
     pub hit: TriangleHit,
 }
 
@@ -250,9 +252,14 @@ impl Bvh {
             return None;
         }
         let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
-        let (prim, hit) =
-            self.closest(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max, &())?;
-        Some(BvhHit { prim, hit })
+        self.closest(&mut Stack::<Entry, STACK_PLACES>::new(), query, t_max, &())
+    }
+
+    /// The vertices of the triangle `hit` met, as given to [`Bvh::build`] (bit for bit), read
+    /// from the BVH's triangle store: a hit's point and normal need no other copy of them.
+    #[inline]
+    pub fn vertices(&self, hit: &BvhHit) -> [Vec3; 3] {
+        PackedTriangle::load(&self.rows, hit.slot as usize).vertices()
     }
 
     /// [`Bvh::intersect`], adding the nodes and triangles it tests to `count` (for benchmarks;
@@ -260,13 +267,12 @@ impl Bvh {
     pub fn count_closest(&self, ray: &Ray, t_max: f32, count: &TraversalCount) -> Option<BvhHit> {
         self.may_hit(t_max).then_some(())?;
         let query = (&WatertightRay::new(ray)?, &RayBoxes::new(ray));
-        let (prim, hit) = self.closest(
+        self.closest(
             &mut Stack::<Entry, STACK_PLACES>::new(),
             query,
             t_max,
             count,
-        )?;
-        Some(BvhHit { prim, hit })
+        )
     }
 
     /// [`Bvh::occluded`], adding the nodes and triangles it tests to `count`.
@@ -360,14 +366,14 @@ impl Bvh {
         Some((WatertightRay::new(ray)?, RayBoxes::new(ray)))
     }
 
-    /// Closest-hit traversal: the input index and the hit.
+    /// Closest-hit traversal: the hit, with its input index and its slot.
     fn closest<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
         (triangle, boxes): (&WatertightRay, &RayBoxes),
         mut t_max: f32,
         tally: &impl Tally,
-    ) -> Option<(u32, TriangleHit)> {
+    ) -> Option<BvhHit> {
         let mut best: Option<(usize, TriangleHit)> = None;
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             tally.triangles(count);
@@ -381,7 +387,11 @@ impl Bvh {
             false
         });
         let (i, hit) = best?;
-        Some((*self.input_index.get(i)?, hit))
+        Some(BvhHit {
+            prim: *self.input_index.get(i)?,
+            slot: i as u32,
+            hit,
+        })
     }
 
     /// Any-hit traversal with early exit.
@@ -770,6 +780,7 @@ mod tests {
                 t_max = hit.t;
                 best = Some(BvhHit {
                     prim: i as u32,
+                    slot: u32::MAX,
                     hit,
                 });
             }
@@ -797,6 +808,11 @@ mod tests {
                     assert_eq!(again.t, e.hit.t, "{ray:?}: {e:?} vs {g:?}");
                 }
                 assert!(g.hit.t.is_finite() && g.hit.b0.is_finite());
+                assert_eq!(
+                    bvh.vertices(&g),
+                    tris[g.prim as usize],
+                    "the hit's vertices"
+                );
             }
             (e, g) => panic!("{ray:?} t_max {t_max}: brute force {e:?}, BVH {g:?}"),
         }
@@ -1234,7 +1250,7 @@ mod tests {
                 spills += two.spilled() as usize;
                 let expected = brute_closest(tris, &r, f32::INFINITY).map(|h| h.hit.t);
                 for got in results {
-                    assert_eq!(got.map(|(_, h)| h.t), expected);
+                    assert_eq!(got.map(|h| h.hit.t), expected);
                 }
             }
         }
