@@ -2,7 +2,7 @@
 //! lights with their sampler, the camera; plus closest-hit and shadow queries.
 
 use super::analysis::SceneFeatures;
-use crate::accel::bvh::Bvh;
+use crate::accel::bvh::{Bvh, BvhHit};
 use crate::desc::DataWindowDesc;
 use crate::geometry::triangle::hit_point_error;
 use crate::geometry::Ray;
@@ -88,9 +88,6 @@ pub struct Scene {
     pub source: PathBuf,
     pub meshes: Vec<Mesh>,
     pub tri_refs: Vec<TriRef>,
-    /// Each BVH primitive's three vertices (`Bvh::build`'s input, in `tri_refs`' order): the
-    /// hit's point, normal and error bound read them with one bounds check.
-    pub tri_vertices: Vec<[Vec3; 3]>,
     pub bvh: Bvh,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
@@ -162,7 +159,7 @@ impl Scene {
             }
         }
         // The surface's hit is built only when it is the answer.
-        tri.map(|h| Hit::Surface(self.surface_hit(h.prim, &h.hit)))
+        tri.map(|h| Hit::Surface(self.surface_hit(&h)))
     }
 
     /// The nearest analytic light shape the ray meets before `limit` (the triangles' nearest
@@ -214,10 +211,14 @@ impl Scene {
         Vec3::splat(POINT_ERROR_REL * extent.max(p.abs().max_element()))
     }
 
-    fn surface_hit(&self, prim: u32, hit: &crate::geometry::triangle::TriangleHit) -> SurfaceHit {
-        let r = self.tri_refs[prim as usize];
+    /// The surface's hit: its vertices are read from the BVH's triangle store, where the
+    /// query just found them (`Bvh::vertices`, bit for bit the mesh's), with no hops through
+    /// the mesh's indices and positions.
+    fn surface_hit(&self, found: &BvhHit) -> SurfaceHit {
+        let hit = &found.hit;
+        let r = self.tri_refs[found.prim as usize];
         let mesh = &self.meshes[r.mesh as usize];
-        let [p0, p1, p2] = self.tri_vertices[prim as usize];
+        let [p0, p1, p2] = self.bvh.vertices(found);
         let p = hit.b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
         let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
         let uv = mesh.uvs.as_ref().map_or(Vec2::new(hit.b1, hit.b2), |uv| {
