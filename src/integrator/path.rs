@@ -427,13 +427,7 @@ impl PathIntegrator {
         g: &mut Gathered,
     ) {
         let (d, prev) = (st.ray.d, st.prev);
-        // `escaped`'s sum over no infinite lights, without setting up its loop.
-        let le = if scene.infinite_lights.is_empty() {
-            SampledSpectrum::ZERO
-        } else {
-            self.escaped(scene, &scene.lights, |_| true, d, prev, lambda)
-        };
-        g.l += st.beta * le;
+        g.l += st.beta * self.escaped(scene, &scene.lights, |_| true, d, prev, lambda);
         for (layer, sum) in g.layers.iter().zip(g.sums.iter_mut()) {
             let le = match &layer.source {
                 LayerSource::Group(mask) => {
@@ -485,6 +479,10 @@ impl PathIntegrator {
         prev: Option<Previous>,
         lambda: &SampledWavelengths,
     ) -> SampledSpectrum {
+        // No infinite light: the sum below is zero; answered before its loop is set up.
+        if scene.infinite_lights.is_empty() {
+            return SampledSpectrum::ZERO;
+        }
         let far = LightHit {
             p: Vec3::ZERO,
             n: Vec3::ZERO,
