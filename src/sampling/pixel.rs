@@ -32,7 +32,7 @@ impl SamplerKind {
 
 /// The samplers of one image run: the seed, the image width (pixel indices) and the
 /// sequence, if any.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct PixelSamplers {
     seed: u64,
     width: u64,
@@ -51,7 +51,7 @@ impl PixelSamplers {
 
     /// The sampler of sample `s` of pixel (x, y): keyed by (seed, pixel, sample) only.
     #[inline]
-    pub fn sampler(&self, x: u32, y: u32, s: u64) -> Sampler {
+    pub fn sampler(&self, x: u32, y: u32, s: u64) -> Sampler<'_> {
         let pixel = u64::from(y) * self.width + u64::from(x);
         match &self.zsobol {
             Some(z) => Sampler::low_discrepancy(self.seed, pixel, s, z.stream(x, y, s)),

@@ -529,7 +529,7 @@ impl<'a> ImageSession<'a> {
         let task = Segment {
             first,
             count,
-            samplers: self.samplers,
+            samplers: &self.samplers,
             strategy_count: self.strategy_count,
             hero_only: self.opts.wavelengths == 1,
             own_wavelengths: self.estimator.own_image_wavelengths(),
@@ -687,10 +687,10 @@ pub fn xyz_to_rgb(p: [f32; 3]) -> [f32; 3] {
 
 /// Samples [first, first + count) of every pixel of a tile.
 #[derive(Clone, Copy)]
-struct Segment {
+struct Segment<'a> {
     first: u64,
     count: u64,
-    samplers: PixelSamplers,
+    samplers: &'a PixelSamplers,
     strategy_count: usize,
     /// Terminate the secondary wavelengths (`RenderOptions::wavelengths` = 1).
     hero_only: bool,
