@@ -272,11 +272,16 @@ impl PathIntegrator {
         spectra: &mut SpectraCache,
     ) -> Option<SurfaceHit> {
         loop {
-            let si = self.next_vertex(scene, st, lambda, sampler, g)?;
+            // The hit is read in place: `?` on the Option copied its 80 bytes out at every
+            // vertex (design.md §8, "The per-sample cost, seventh pass").
+            let hit = self.next_vertex(scene, st, lambda, sampler, g);
+            let Some(si) = &hit else {
+                return None;
+            };
             if st.depth == limit {
-                return Some(si);
+                return hit;
             }
-            if !self.scatter::<DISPERSION>(scene, &si, st, lambda, sampler, g, spectra) {
+            if !self.scatter::<DISPERSION>(scene, si, st, lambda, sampler, g, spectra) {
                 return None;
             }
         }
