@@ -76,12 +76,18 @@ impl ZSobol {
         }
     }
 
-    /// The stream of sample `s` of pixel (x, y).
-    #[inline]
+    /// The stream of sample `s` of pixel (x, y) (the tests' form of `stream_at`).
+    #[cfg(test)]
     pub fn stream(&self, x: u32, y: u32, s: u64) -> Stream<'_> {
+        self.stream_at(morton(x, y), s)
+    }
+
+    /// The stream of sample `s` of the pixel whose Morton code is `m` ([`morton`]), for a
+    /// caller that draws several samples of one pixel.
+    #[inline]
+    pub fn stream_at(&self, m: u64, s: u64) -> Stream<'_> {
         let (r, j) = (s & 1, s >> 1);
         let l = self.log2;
-        let m = morton(x, y);
         let epoch = j >> l;
         // The index bits above 32 select a scramble of their own, like an epoch.
         let high = m >> (32 - l);

@@ -725,8 +725,9 @@ fn render_tile<const HERO_ONLY: bool>(
     let lens_read = estimator.reads_lens();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
+            let pixel = task.samplers.pixel(x as u32, y as u32);
             for s in task.first..task.first + task.count {
-                let mut sampler = task.samplers.sampler(x as u32, y as u32, s);
+                let mut sampler = pixel.sampler(s);
                 sampler.set_dimension(dimensions::WAVELENGTH);
                 // Drawn either way: the independent sampler's later numbers follow it.
                 let u = sampler.get_1d();
