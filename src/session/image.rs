@@ -754,10 +754,15 @@ fn render_tile<const HERO_ONLY: bool>(
                 acc.add(k, &ws.record, &lambda, s);
                 layers.add(k, &ws.record, &lambda, (s, acc.dropped != dropped));
                 layers.add_first_hit(k, scene, (film, u_lens), &lambda);
-                // The sample's own value (0 when it was dropped), rounded to the grid.
+                // The sample's own value (0 when it was dropped), rounded to the grid; zero
+                // (a black sample, about one in six on the peers' box) rounds to 0 unclamped
+                // and adds nothing, so it is skipped (design.md §8, "The per-sample cost,
+                // seventh pass").
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
-                let (t, c) = task.grid.triple(own);
-                clamped += c + u64::from(Grid::add3(&mut fixed[k], &t));
+                if own != [0.0; 3] {
+                    let (t, c) = task.grid.triple(own);
+                    clamped += c + u64::from(Grid::add3(&mut fixed[k], &t));
+                }
             }
             k += 1;
         }
