@@ -15,7 +15,7 @@ use spectral_render::sampling::warp::uniform_sphere;
 use spectral_render::sampling::Sampler;
 
 /// Benchmark inputs from the renderer's own generator.
-struct Rng(Sampler);
+struct Rng(Sampler<'static>);
 
 impl Rng {
     fn vec3(&mut self) -> Vec3 {

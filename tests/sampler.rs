@@ -75,7 +75,7 @@ fn each_replicate_of_a_pixel_is_a_0_k_2_net_in_every_projection() {
         for (x, y) in [(0u32, 0u32), (3, 1), (width as u32 - 1, 17)] {
             for r in 0..2u64 {
                 let all: Vec<_> = (0..1u64 << kmax)
-                    .map(|j| draws(&mut samplers.sampler(x, y, 2 * j + r)))
+                    .map(|j| draws(&mut samplers.pixel(x, y).sampler(2 * j + r)))
                     .collect();
                 for k in 0..=kmax {
                     let n = 1 << k;
@@ -105,7 +105,7 @@ fn the_independent_sampler_is_not_a_net() {
     // probability (16!/16^16)^5-ish, far below 1e-6.
     let samplers = PixelSamplers::new(SamplerKind::Independent, 0, 64, Some(1024));
     let p: Vec<[f32; 2]> = (0..16u64)
-        .map(|j| draws(&mut samplers.sampler(1, 2, 2 * j)).1[0])
+        .map(|j| draws(&mut samplers.pixel(1, 2).sampler(2 * j)).1[0])
         .collect();
     assert!(!is_net_2d(&p, 4));
 }
@@ -116,23 +116,23 @@ fn a_samples_numbers_depend_on_seed_pixel_and_sample_only() {
     let b = PixelSamplers::new(SamplerKind::ZSobol, 5, 64, Some(256));
     for (x, y, s) in [(0, 0, 0), (9, 4, 17), (63, 63, 255)] {
         assert_eq!(
-            draws(&mut a.sampler(x, y, s)),
-            draws(&mut b.sampler(x, y, s))
+            draws(&mut a.pixel(x, y).sampler(s)),
+            draws(&mut b.pixel(x, y).sampler(s))
         );
     }
     // Other seeds, pixels, samples and replicates give other numbers.
-    let base = draws(&mut a.sampler(9, 4, 16));
+    let base = draws(&mut a.pixel(9, 4).sampler(16));
     let c = PixelSamplers::new(SamplerKind::ZSobol, 6, 64, Some(256));
     for other in [
-        draws(&mut c.sampler(9, 4, 16)),
-        draws(&mut a.sampler(10, 4, 16)),
-        draws(&mut a.sampler(9, 4, 18)),
-        draws(&mut a.sampler(9, 4, 17)),
+        draws(&mut c.pixel(9, 4).sampler(16)),
+        draws(&mut a.pixel(10, 4).sampler(16)),
+        draws(&mut a.pixel(9, 4).sampler(18)),
+        draws(&mut a.pixel(9, 4).sampler(17)),
     ] {
         assert_ne!(base, other);
     }
     // Out-of-order draws: a dimension's value does not depend on what was drawn before.
-    let mut s = a.sampler(9, 4, 16);
+    let mut s = a.pixel(9, 4).sampler(16);
     s.set_dimension(dimensions::bounce(40, BSDF) + 1);
     let late = s.get_2d();
     assert_eq!(late, base.1[7]);
@@ -156,7 +156,7 @@ fn error_image(kind: SamplerKind, seed: u64) -> Vec<f64> {
         .map(|i| {
             let (x, y) = (i % n, i / n);
             (0..4)
-                .map(|s| f(&mut samplers.sampler(x, y, s)))
+                .map(|s| f(&mut samplers.pixel(x, y).sampler(s)))
                 .sum::<f64>()
                 / 4.0
                 - exact

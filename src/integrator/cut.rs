@@ -51,7 +51,7 @@ pub fn continuation_limit(cap: u32) -> u32 {
 /// The sampler of a continuation past the cap, with probability [`Q`]: a stream derived from
 /// the path's current state, which is left as it is.
 #[inline]
-pub fn continuation(sampler: &Sampler) -> Option<Sampler> {
+pub fn continuation<'a>(sampler: &Sampler<'a>) -> Option<Sampler<'a>> {
     let mut s = sampler.fork(STREAM);
     (s.get_1d() < Q).then_some(s)
 }

@@ -272,19 +272,25 @@ impl PathIntegrator {
         spectra: &mut SpectraCache,
     ) -> Option<SurfaceHit> {
         loop {
-            let si = self.next_vertex(scene, st, lambda, sampler, g)?;
+            // The hit is read in place: `?` on the Option copied its 80 bytes out at every
+            // vertex (design.md §8, "The per-sample cost, seventh pass").
+            let hit = self.next_vertex(scene, st, lambda, sampler, g);
+            let Some(Hit::Surface(si)) = &hit else {
+                return None;
+            };
             if st.depth == limit {
-                return Some(si);
+                return Some(*si);
             }
-            if !self.scatter::<DISPERSION>(scene, &si, st, lambda, sampler, g, spectra) {
+            if !self.scatter::<DISPERSION>(scene, si, st, lambda, sampler, g, spectra) {
                 return None;
             }
         }
     }
 
     /// Follows `st.ray` to the next surface the path scatters at (passing through surfaces
-    /// that are absent for this path), adding the emission it finds to `l`; None when the
-    /// path ends (escaped, an analytic light, too many pass-throughs).
+    /// that are absent for this path), adding the emission it finds to `l`: always a
+    /// `Hit::Surface`, or None when the path ends (escaped, an analytic light, too many
+    /// pass-throughs).
     #[inline]
     fn next_vertex(
         &self,
@@ -293,14 +299,18 @@ impl PathIntegrator {
         lambda: &SampledWavelengths,
         sampler: &mut Sampler,
         g: &mut Gathered,
-    ) -> Option<SurfaceHit> {
+    ) -> Option<Hit> {
         loop {
-            let si = match scene.intersect(&st.ray, st.t_max) {
-                // The common answer, a non-emitting surface of an all-opaque scene, goes back
-                // as it came rather than taken apart and rebuilt (a copy fewer).
-                Some(Hit::Surface(si)) if scene.all_opaque && si.light.is_none() => {
-                    return Some(si)
+            let hit = scene.intersect(&st.ray, st.t_max);
+            // The common answer, a non-emitting surface of an all-opaque scene, goes back as
+            // it came, `Scene::intersect`'s answer itself, rather than taken apart and
+            // rebuilt (two copies fewer).
+            if let Some(Hit::Surface(si)) = &hit {
+                if scene.all_opaque && si.light.is_none() {
+                    return hit;
                 }
+            }
+            let si = match hit {
                 Some(Hit::Surface(si)) => si,
                 Some(Hit::Light { light, hit }) => {
                     self.add_emitted(scene, light, &hit, st, lambda, g);
@@ -330,7 +340,7 @@ impl PathIntegrator {
                 };
                 self.add_emitted(scene, light, &lh, st, lambda, g);
             }
-            return Some(si);
+            return Some(Hit::Surface(si));
         }
     }
 

@@ -28,8 +28,10 @@ impl RadianceMemo {
 
     /// `lights[light].uniform_radiance(lambda)`, evaluated when the entry holds another class
     /// (`classes[light]`, `light::radiance_class::radiance_classes` of `lights`) or other
-    /// wavelengths.
-    #[inline]
+    /// wavelengths. The test is inlined at the caller and the evaluation is not (`fill`): left
+    /// to LLVM, the whole was a call at every light sample in some builds (design.md §8,
+    /// "The per-sample cost, seventh pass").
+    #[inline(always)]
     pub fn get(
         &mut self,
         (lights, classes): (&[Light], &[u32]),
@@ -39,13 +41,19 @@ impl RadianceMemo {
         let bits = lambda.lambda.map(f32::to_bits);
         let class = classes[light];
         if self.class != class || self.lambda != bits {
-            *self = RadianceMemo {
-                class,
-                lambda: bits,
-                le: lights[light].uniform_radiance(lambda),
-            };
+            self.fill(&lights[light], class, lambda);
         }
         self.le
+    }
+
+    /// Evaluates `light` (of radiance class `class`) at `lambda` into the entry.
+    #[inline]
+    fn fill(&mut self, light: &Light, class: u32, lambda: &SampledWavelengths) {
+        *self = RadianceMemo {
+            class,
+            lambda: lambda.lambda.map(f32::to_bits),
+            le: light.uniform_radiance(lambda),
+        };
     }
 }
 

@@ -53,7 +53,7 @@ pub fn survives(
 mod tests {
     use super::*;
 
-    fn sampler() -> Sampler {
+    fn sampler() -> Sampler<'static> {
         Sampler::new(7, 0, 0)
     }
 

@@ -1,7 +1,7 @@
 //! The run's choice of sampler (`--sampler`) and the sampler of each (pixel, sample).
 
 use super::rng::Sampler;
-use super::zsobol::ZSobol;
+use super::zsobol::{morton, ZSobol};
 
 /// Which numbers the samples of an image draw.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -32,7 +32,7 @@ impl SamplerKind {
 
 /// The samplers of one image run: the seed, the image width (pixel indices) and the
 /// sequence, if any.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct PixelSamplers {
     seed: u64,
     width: u64,
@@ -49,13 +49,40 @@ impl PixelSamplers {
         }
     }
 
-    /// The sampler of sample `s` of pixel (x, y): keyed by (seed, pixel, sample) only.
+    /// The samplers of pixel (x, y), whose pixel index and Morton code are found once for
+    /// all its samples (design.md §8, "The per-sample cost, seventh pass").
     #[inline]
-    pub fn sampler(&self, x: u32, y: u32, s: u64) -> Sampler {
-        let pixel = u64::from(y) * self.width + u64::from(x);
-        match &self.zsobol {
-            Some(z) => Sampler::low_discrepancy(self.seed, pixel, s, z.stream(x, y, s)),
-            None => Sampler::new(self.seed, pixel, s),
+    pub fn pixel(&self, x: u32, y: u32) -> PixelSampler<'_> {
+        PixelSampler {
+            samplers: self,
+            pixel: u64::from(y) * self.width + u64::from(x),
+            morton: if self.zsobol.is_some() {
+                morton(x, y)
+            } else {
+                0
+            },
+        }
+    }
+}
+
+/// The samplers of one pixel ([`PixelSamplers::pixel`]).
+#[derive(Clone, Copy, Debug)]
+pub struct PixelSampler<'a> {
+    samplers: &'a PixelSamplers,
+    /// The pixel's index in the image (y · width + x).
+    pixel: u64,
+    /// The pixel's Morton code (zsobol only).
+    morton: u64,
+}
+
+impl<'a> PixelSampler<'a> {
+    /// The sampler of sample `s` of this pixel: keyed by (seed, pixel, sample) only.
+    #[inline]
+    pub fn sampler(&self, s: u64) -> Sampler<'a> {
+        let p = self.samplers;
+        match &p.zsobol {
+            Some(z) => Sampler::low_discrepancy(p.seed, self.pixel, s, z.stream_at(self.morton, s)),
+            None => Sampler::new(p.seed, self.pixel, s),
         }
     }
 }

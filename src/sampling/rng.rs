@@ -12,9 +12,10 @@
 
 use super::zsobol::Stream;
 
-/// A per-sample random number stream.
+/// A per-sample random number stream; `'a` is the run's sequence (`ZSobol`), whose table of
+/// seed hashes a low-discrepancy stream reads.
 #[derive(Clone, Debug)]
-pub struct Sampler {
+pub struct Sampler<'a> {
     state: u64,
     inc: u64,
     /// The (seed, index, sample) of a PCG32 state not derived yet: a low-discrepancy sampler
@@ -23,14 +24,14 @@ pub struct Sampler {
     /// for the independent sampler.
     pending: Option<[u64; 3]>,
     /// The low-discrepancy stream, if this sample draws from one.
-    lds: Option<Stream>,
+    lds: Option<Stream<'a>>,
 }
 
 const PCG_MULT: u64 = 6_364_136_223_846_793_005;
 
-impl Sampler {
+impl<'a> Sampler<'a> {
     /// The stream for one (seed, index, sample) triple; `index` is typically the pixel index.
-    pub fn new(seed: u64, index: u64, sample: u64) -> Sampler {
+    pub fn new(seed: u64, index: u64, sample: u64) -> Sampler<'a> {
         let key = mix64(seed ^ mix64(index.wrapping_add(mix64(sample))));
         let inc = (mix64(key ^ 0x9e37_79b9_7f4a_7c15) << 1) | 1;
         let mut s = Sampler {
@@ -49,7 +50,7 @@ impl Sampler {
     /// `stream`; its forks and [`get_1d_free`](Self::get_1d_free) are those of
     /// `Sampler::new(seed, index, sample)`, whose state it derives at the first of them.
     #[inline]
-    pub fn low_discrepancy(seed: u64, index: u64, sample: u64, stream: Stream) -> Sampler {
+    pub fn low_discrepancy(seed: u64, index: u64, sample: u64, stream: Stream<'a>) -> Sampler<'a> {
         Sampler {
             state: 0,
             inc: 0,
@@ -136,7 +137,7 @@ impl Sampler {
     /// dimension layout (a bidirectional sample's light subpath and its splats). For the
     /// independent sampler it is `f(self)`: the same numbers in the same order.
     #[inline]
-    pub fn detached<R>(&mut self, f: impl FnOnce(&mut Sampler) -> R) -> R {
+    pub fn detached<R>(&mut self, f: impl FnOnce(&mut Sampler<'a>) -> R) -> R {
         self.seed_pcg();
         let lds = self.lds.take();
         let r = f(self);
@@ -146,7 +147,7 @@ impl Sampler {
 
     /// A stream of its own, derived from this one's current state and `stream` without
     /// advancing this one: what this sampler draws next does not change.
-    pub fn fork(&self, stream: u64) -> Sampler {
+    pub fn fork(&self, stream: u64) -> Sampler<'a> {
         if self.pending.is_some() {
             let mut seeded = self.clone();
             seeded.seed_pcg();
@@ -254,10 +255,7 @@ mod tests {
     /// sampler's next dimensions and PCG32, the independent sampler's stream.
     #[test]
     fn an_unread_2d_draw_leaves_the_later_numbers_alone() {
-        let z = super::super::zsobol::ZSobol::new(3, Some(16));
-        let independent = || Sampler::new(3, 9, 5);
-        let lds = || Sampler::low_discrepancy(3, 9, 5, z.stream(9, 0, 5));
-        for make in [&independent as &dyn Fn() -> Sampler, &lds] {
+        fn check<'a>(make: impl Fn() -> Sampler<'a>) {
             let (mut read, mut unread) = (make(), make());
             read.get_1d();
             unread.get_1d();
@@ -269,6 +267,10 @@ mod tests {
             let later = |s: &mut Sampler| (s.get_1d(), s.get_2d(), s.get_1d_free());
             assert_eq!(later(&mut read), later(&mut unread));
         }
+        let z = super::super::zsobol::ZSobol::new(3, Some(16));
+        let independent = || Sampler::new(3, 9, 5);
+        check(independent);
+        check(|| Sampler::low_discrepancy(3, 9, 5, z.stream(9, 0, 5)));
         // The independent sampler draws the point either way.
         assert_eq!(independent().get_2d_if(false), independent().get_2d());
     }

@@ -32,8 +32,12 @@ pub const MAX_LOG2: u32 = 20;
 /// log2 of the block of a run whose sample count is unknown (a time budget).
 pub const UNKNOWN_SPP_LOG2: u32 = 16;
 
+/// The dimensions whose seed hashes a run keeps for each of its first keys (`ZSobol::seeds`):
+/// the camera's five and 17 bounces of the path tracer's layout (`dimensions.rs`).
+pub const TABLED_DIMENSIONS: usize = 128;
+
 /// A run's parameters of the sequence: its seed and the block size.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ZSobol {
     seed: u64,
     log2: u32,
@@ -41,6 +45,11 @@ pub struct ZSobol {
     /// every sample's of a run of at most 2^L samples per replicate on an image whose Morton
     /// codes fit in 32 − L bits, found once per run instead of per sample.
     first_keys: [u64; 2],
+    /// For each first key, the seed hash of each of the first [`TABLED_DIMENSIONS`]
+    /// dimensions and that hash hashed again (the second dimension's scramble of a 2D draw):
+    /// the same numbers as `seed_hash`, found once per run rather than at every draw
+    /// (design.md §8, "The per-sample cost, seventh pass").
+    seeds: [Box<[[u64; 2]]>; 2],
 }
 
 impl ZSobol {
@@ -51,29 +60,46 @@ impl ZSobol {
             None => UNKNOWN_SPP_LOG2,
         };
         let first_keys = [0, 1].map(|r| key(seed, r, 0, 0));
+        let seeds = first_keys.map(|k| {
+            (0..TABLED_DIMENSIONS as u32)
+                .map(|d| {
+                    let h = seed_hash(k, d);
+                    [h, mix64(h)]
+                })
+                .collect()
+        });
         ZSobol {
             seed,
             log2,
             first_keys,
+            seeds,
         }
     }
 
-    /// The stream of sample `s` of pixel (x, y).
-    pub fn stream(&self, x: u32, y: u32, s: u64) -> Stream {
+    /// The stream of sample `s` of pixel (x, y) (the tests' form of `stream_at`).
+    #[cfg(test)]
+    pub fn stream(&self, x: u32, y: u32, s: u64) -> Stream<'_> {
+        self.stream_at(morton(x, y), s)
+    }
+
+    /// The stream of sample `s` of the pixel whose Morton code is `m` ([`morton`]), for a
+    /// caller that draws several samples of one pixel.
+    #[inline]
+    pub fn stream_at(&self, m: u64, s: u64) -> Stream<'_> {
         let (r, j) = (s & 1, s >> 1);
         let l = self.log2;
-        let m = morton(x, y);
         let epoch = j >> l;
         // The index bits above 32 select a scramble of their own, like an epoch.
         let high = m >> (32 - l);
         let low = ((m << l) | (j & ((1 << l) - 1))) as u32;
-        let key = if epoch | high == 0 {
-            self.first_keys[r as usize]
+        let (key, seeds) = if epoch | high == 0 {
+            (self.first_keys[r as usize], &self.seeds[r as usize][..])
         } else {
-            key(self.seed, r, epoch, high)
+            (key(self.seed, r, epoch, high), &[][..])
         };
         Stream {
             key,
+            seeds,
             index_reversed: low.reverse_bits(),
             dim: 0,
         }
@@ -86,22 +112,48 @@ fn key(seed: u64, r: u64, epoch: u64, high: u64) -> u64 {
     mix64(seed ^ mix64(r ^ mix64(epoch ^ mix64(high))))
 }
 
+/// The seed hash of dimension `d` of the stream keyed `key`: its shuffle's seed in the low 32
+/// bits, its first scramble's in the high 32.
+#[inline]
+fn seed_hash(key: u64, d: u32) -> u64 {
+    mix64(key ^ u64::from(d).wrapping_mul(0x9e37_79b9_7f4a_7c15))
+}
+
 /// One sample's draws from the sequence: dimension `dim` next. The index is kept with its
 /// bits reversed, as the shuffle takes it (`owen::scramble_reversed`), so each draw costs a
 /// seed hash, the shuffle and one scramble per dimension, with three bit reversals for a 2D
 /// draw — the same bits as `scramble(dim0(shuffle(index)))` and `scramble(dim1(..))`, by
-/// dim0(i) = reverse(i) and dim1(i) = reverse(dim1_reversed(i)) (tested).
+/// dim0(i) = reverse(i) and dim1(i) = reverse(dim1_reversed(i)) (tested). The seed hashes of
+/// the first dimensions come from the run's table when the key is a first key.
 #[derive(Clone, Copy, Debug)]
-pub struct Stream {
+pub struct Stream<'a> {
     key: u64,
+    /// [`ZSobol::seeds`] of this key (empty for any other key).
+    seeds: &'a [[u64; 2]],
     index_reversed: u32,
     dim: u32,
 }
 
-impl Stream {
+impl Stream<'_> {
+    /// The seed hash of dimension `d` (`seed_hash`).
     #[inline]
     fn seeds(&self, d: u32) -> u64 {
-        mix64(self.key ^ u64::from(d).wrapping_mul(0x9e37_79b9_7f4a_7c15))
+        match self.seeds.get(d as usize) {
+            Some(s) => s[0],
+            None => seed_hash(self.key, d),
+        }
+    }
+
+    /// The seed hash of dimension `d` and its hash, the seeds of a 2D draw.
+    #[inline]
+    fn seed_pair(&self, d: u32) -> [u64; 2] {
+        match self.seeds.get(d as usize) {
+            Some(&s) => s,
+            None => {
+                let h = seed_hash(self.key, d);
+                [h, mix64(h)]
+            }
+        }
     }
 
     /// The index shuffled with the seed hash `h` (Burley 2020 §4): `owen::shuffle`.
@@ -112,7 +164,7 @@ impl Stream {
 
     /// The next dimension as a 32-bit fraction: Sobol' dimension 0 at the shuffled index,
     /// scrambled (dim0(i) reversed is i).
-    #[inline]
+    #[inline(always)]
     pub fn next_1d(&mut self) -> u32 {
         let h = self.seeds(self.dim);
         self.dim += 1;
@@ -121,12 +173,11 @@ impl Stream {
     }
 
     /// The next two dimensions, a point of one (0, 2)-sequence, as 32-bit fractions.
-    #[inline]
+    #[inline(always)]
     pub fn next_2d(&mut self) -> [u32; 2] {
-        let h = self.seeds(self.dim);
+        let [h, h2] = self.seed_pair(self.dim);
         self.dim += 2;
         let i = self.shuffled(h);
-        let h2 = mix64(h);
         [
             owen::scramble_reversed(i, (h >> 32) as u32),
             owen::scramble_reversed(sobol::dim1_reversed(i), h2 as u32),
@@ -174,9 +225,10 @@ mod tests {
         assert_eq!(morton(u32::MAX, 0), 0x5555_5555_5555_5555);
     }
 
-    /// The draws as the definition writes them: shuffle, Sobol' point, scramble.
+    /// The draws as the definition writes them: shuffle, Sobol' point, scramble, with the
+    /// seed hashed here (not read from the run's table).
     fn reference_2d(q: &Stream, d: u32) -> [u32; 2] {
-        let h = q.seeds(d);
+        let h = seed_hash(q.key, d);
         let i = owen::shuffle(q.index_reversed.reverse_bits(), h as u32);
         [
             owen::scramble(sobol::dim0(i), (h >> 32) as u32),
@@ -187,9 +239,19 @@ mod tests {
     #[test]
     fn draws_are_the_definitions_bits() {
         let z = ZSobol::new(7, Some(64));
-        for (x, y, s) in [(0, 0, 0), (3, 5, 17), (63, 1, 63), (1000, 77, 5)] {
+        // First keys (tabled seeds), an epoch 1 sample and index bits above 32 (hashed), and
+        // dimensions on both sides of the table's end.
+        let t = TABLED_DIMENSIONS as u32;
+        for (x, y, s) in [
+            (0, 0, 0),
+            (3, 5, 17),
+            (63, 1, 63),
+            (1000, 77, 5),
+            (2, 9, 64),
+            (1 << 14, 1 << 14, 3),
+        ] {
             let mut q = z.stream(x, y, s);
-            for d in [0u32, 1, 5, 12, 40] {
+            for d in [0u32, 1, 5, 12, 40, t - 2, t - 1, t, t + 7] {
                 q.set_dimension(d);
                 let want = reference_2d(&q, d);
                 assert_eq!(q.next_2d(), want, "pixel ({x}, {y}) sample {s} dim {d}");

@@ -529,7 +529,7 @@ impl<'a> ImageSession<'a> {
         let task = Segment {
             first,
             count,
-            samplers: self.samplers,
+            samplers: &self.samplers,
             strategy_count: self.strategy_count,
             hero_only: self.opts.wavelengths == 1,
             own_wavelengths: self.estimator.own_image_wavelengths(),
@@ -687,10 +687,10 @@ pub fn xyz_to_rgb(p: [f32; 3]) -> [f32; 3] {
 
 /// Samples [first, first + count) of every pixel of a tile.
 #[derive(Clone, Copy)]
-struct Segment {
+struct Segment<'a> {
     first: u64,
     count: u64,
-    samplers: PixelSamplers,
+    samplers: &'a PixelSamplers,
     strategy_count: usize,
     /// Terminate the secondary wavelengths (`RenderOptions::wavelengths` = 1).
     hero_only: bool,
@@ -725,8 +725,9 @@ fn render_tile<const HERO_ONLY: bool>(
     let lens_read = estimator.reads_lens();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
+            let pixel = task.samplers.pixel(x as u32, y as u32);
             for s in task.first..task.first + task.count {
-                let mut sampler = task.samplers.sampler(x as u32, y as u32, s);
+                let mut sampler = pixel.sampler(s);
                 sampler.set_dimension(dimensions::WAVELENGTH);
                 // Drawn either way: the independent sampler's later numbers follow it.
                 let u = sampler.get_1d();
@@ -753,10 +754,15 @@ fn render_tile<const HERO_ONLY: bool>(
                 acc.add(k, &ws.record, &lambda, s);
                 layers.add(k, &ws.record, &lambda, (s, acc.dropped != dropped));
                 layers.add_first_hit(k, scene, (film, u_lens), &lambda);
-                // The sample's own value (0 when it was dropped), rounded to the grid.
+                // The sample's own value (0 when it was dropped), rounded to the grid; zero
+                // (a black sample, about one in six on the peers' box) rounds to 0 unclamped
+                // and adds nothing, so it is skipped (design.md §8, "The per-sample cost,
+                // seventh pass").
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
-                let (t, c) = task.grid.triple(own);
-                clamped += c + u64::from(Grid::add3(&mut fixed[k], &t));
+                if own != [0.0; 3] {
+                    let (t, c) = task.grid.triple(own);
+                    clamped += c + u64::from(Grid::add3(&mut fixed[k], &t));
+                }
             }
             k += 1;
         }

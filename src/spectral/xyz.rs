@@ -7,8 +7,13 @@ use std::sync::OnceLock;
 
 /// Monte Carlo estimate of K_m ∫ L(λ) {x̄,ȳ,z̄}(λ) dλ from one set of hero wavelengths:
 /// the mean over lanes of L(λᵢ) x̄(λᵢ) / p(λᵢ) (lanes with pdf 0 contribute nothing).
+/// A black `l` (every lane skipped below) is zero without the tables' lookups: about one
+/// image sample in six on the peers' box (design.md §8, "The per-sample cost, seventh pass").
 #[inline]
 pub fn sampled_to_xyz(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
+    if l.is_black() {
+        return [0.0; 3];
+    }
     let [xb, yb, zb] = data::cie_xyz().each_ref().map(|c| c.eval_lanes(w.lambda));
     let mut xyz = [0.0f32; 3];
     for i in 0..N_LAMBDA {
