@@ -1168,8 +1168,14 @@ mod tests {
         let (lo, hi) = heap.bounds();
         let (center, extent) = (0.5 * (lo + hi), (hi - lo).max_element());
         let mut hits = 0;
-        for _ in 0..6000 {
-            let r = random_ray(&mut rng, center, extent);
+        for k in 0..6000 {
+            let r = if k % 2 == 0 {
+                let t = tris[rng.below(tris.len())];
+                let o = center + rng.vec3(-1.5, 1.5) * extent;
+                Ray::new(o, t[0].lerp(t[1], rng.f32()).lerp(t[2], rng.f32()) - o)
+            } else {
+                random_ray(&mut rng, center, extent)
+            };
             let t_max = random_t_max(&mut rng, extent);
             let [a, b] = [&heap, &mapped].map(|bvh| bvh.intersect(&r, t_max));
             match (a, b) {
@@ -1183,7 +1189,7 @@ mod tests {
             }
             assert_eq!(heap.occluded(&r, t_max), mapped.occluded(&r, t_max));
         }
-        assert!(hits > 1000, "{hits}");
+        assert!(hits > 2000, "{hits}");
     }
 
     /// obvhs's own node test ignores boxes left before t = 1e-4; ours must not.
