@@ -47,7 +47,11 @@ pub(crate) struct Pages<T> {
 enum Store<T> {
     Heap(Vec<T>),
     /// The data's `len` elements start at byte `start` of `map`, on a 2 MiB boundary.
-    Mapped { map: Mmap, start: usize, len: u32 },
+    Mapped {
+        map: Mmap,
+        start: usize,
+        len: u32,
+    },
 }
 
 impl<T: Pod> Pages<T> {
@@ -66,7 +70,10 @@ impl<T: Pod> Pages<T> {
         };
         let len = data.len();
         let short = u32::try_from(len).ok();
-        let store = match short.filter(|_| mapped).map(|short| (short, map_huge(bytes))) {
+        let store = match short
+            .filter(|_| mapped)
+            .map(|short| (short, map_huge(bytes)))
+        {
             Some((len, Ok((map, start)))) => Store::Mapped { map, start, len },
             _ => Store::Heap(data),
         };
@@ -145,7 +152,9 @@ mod tests {
     use super::*;
 
     fn words(n: usize) -> Vec<u32> {
-        (0..n as u32).map(|k| k.wrapping_mul(2_654_435_761)).collect()
+        (0..n as u32)
+            .map(|k| k.wrapping_mul(2_654_435_761))
+            .collect()
     }
 
     /// Every placement gives back the data; mapped stores start on a 2 MiB boundary; `Auto`
@@ -162,7 +171,12 @@ mod tests {
             (&large, Placement::Heap, false),
         ] {
             let pages = Pages::placed(data.clone(), placement);
-            assert_eq!(pages.is_mapped(), mapped, "{placement:?}, {} words", data.len());
+            assert_eq!(
+                pages.is_mapped(),
+                mapped,
+                "{placement:?}, {} words",
+                data.len()
+            );
             assert_eq!(&pages[..], &data[..]);
             if mapped {
                 assert_eq!(pages.as_ptr() as usize % HUGE_PAGE, 0);
