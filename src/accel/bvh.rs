@@ -59,7 +59,6 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::triangle::Triangle;
 
-use super::pages::{Pages, Placement};
 use super::sah;
 use super::stack::Stack;
 use crate::geometry::offset::gamma;
@@ -78,23 +77,20 @@ pub struct BvhHit {
     pub hit: TriangleHit,
 }
 
-/// An 8-wide BVH over triangles, with the triangles stored in BVH primitive order. The stores
-/// a query reads sit on huge pages when large (`accel/pages.rs`).
+/// An 8-wide BVH over triangles, with the triangles stored in BVH primitive order.
 pub struct Bvh {
     /// Node 0 is the root; empty for a BVH without hittable triangles.
-    nodes: Pages<WideNode>,
+    nodes: Vec<WideNode>,
     /// Triangles in BVH primitive order, as a row store for [`PackedTriangle::load`].
-    rows: Pages<f32>,
+    rows: Vec<f32>,
     /// BVH primitive order → index into the slice given to `build`.
-    input_index: Pages<u32>,
+    input_index: Vec<u32>,
     input_count: usize,
     bounds: (Vec3, Vec3),
 }
 
-/// A node with up to eight children. Slot `s` is lane `s % 4` of half `s / 4`. Plain data
-/// (240 bytes, no implicit padding), so that [`Pages`] can hold it.
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
+/// A node with up to eight children. Slot `s` is lane `s % 4` of half `s / 4`.
+#[derive(Clone, Copy, Debug)]
 struct WideNode {
     /// `planes[h][2k]` / `planes[h][2k + 1]`: min / max along axis k of the children of half h.
     planes: [[Vec4; 6]; 2],
@@ -106,8 +102,6 @@ struct WideNode {
     present: u8,
     /// Bit `s`: slot s holds a leaf.
     leaves: u8,
-    /// Up to the 16-byte alignment of `planes`.
-    padding: [u8; 6],
 }
 
 /// A subtree waiting on the traversal stack: the bits of the (widened) distance where the ray
@@ -209,11 +203,6 @@ impl Bvh {
 
     /// [`Bvh::build`] with the given builder of the binary BVH.
     pub fn build_with(triangles: &[[Vec3; 3]], builder: Builder) -> Bvh {
-        Bvh::build_placed(triangles, builder, Placement::Auto)
-    }
-
-    /// [`Bvh::build_with`], its stores placed as asked.
-    fn build_placed(triangles: &[[Vec3; 3]], builder: Builder, placement: Placement) -> Bvh {
         let kept: Vec<u32> = (0..triangles.len() as u32)
             .filter(|&i| {
                 let [p0, p1, p2] = triangles[i as usize];
@@ -239,19 +228,19 @@ impl Bvh {
         let ordered: Vec<[Vec3; 3]> = input_index.iter().map(|&i| triangles[i as usize]).collect();
         let nodes = wide_nodes(&cwbvh.nodes, &ordered);
         Bvh {
-            rows: Pages::placed(row_store(&ordered), placement),
-            nodes: Pages::placed(nodes, placement),
+            rows: row_store(&ordered),
+            nodes,
             bounds: bounds_of(&ordered),
-            input_index: Pages::placed(input_index, placement),
+            input_index,
             input_count: triangles.len(),
         }
     }
 
     fn empty(input_count: usize) -> Bvh {
         Bvh {
-            nodes: Pages::new(Vec::new()),
-            rows: Pages::new(Vec::new()),
-            input_index: Pages::new(Vec::new()),
+            nodes: Vec::new(),
+            rows: Vec::new(),
+            input_index: Vec::new(),
             input_count,
             bounds: (Vec3::ZERO, Vec3::ZERO),
         }
@@ -337,7 +326,7 @@ impl Bvh {
             nodes: 0.0,
             triangles: 0.0,
         };
-        for node in self.nodes.iter() {
+        for node in &self.nodes {
             let boxes = (0..8).filter(|&s| node.present & (1 << s) != 0);
             let node_box = boxes.clone().map(|s| node.child_box(s));
             let node_box = node_box.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |b, c| {
@@ -386,11 +375,10 @@ impl Bvh {
         tally: &impl Tally,
     ) -> Option<BvhHit> {
         let mut best: Option<(usize, TriangleHit)> = None;
-        let rows = self.rows.as_slice();
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             tally.triangles(count);
             for i in first..first + count {
-                let tri = PackedTriangle::load(rows, i);
+                let tri = PackedTriangle::load(&self.rows, i);
                 if let Some(hit) = intersect_packed(triangle, tri, *t_max) {
                     *t_max = hit.t;
                     best = Some((i, hit));
@@ -415,11 +403,10 @@ impl Bvh {
         tally: &impl Tally,
     ) -> bool {
         let mut hit = false;
-        let rows = self.rows.as_slice();
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             hit = (first..first + count).any(|i| {
                 tally.triangles(1);
-                let tri = PackedTriangle::load(rows, i);
+                let tri = PackedTriangle::load(&self.rows, i);
                 intersect_packed(triangle, tri, *t_max).is_some()
             });
             hit
@@ -441,12 +428,11 @@ impl Bvh {
         // The root, then the nearest inner child met by each node, is visited without a push
         // and a pop; the other inner children wait on the stack. The visiting order is the
         // stack's: nearest first, then the rest near to far.
-        let nodes = self.nodes.as_slice();
         let mut entry = Entry::default();
         let mut limit = key_limit(*t_max);
         loop {
             if entry.0 <= limit {
-                let node = &nodes[entry.node()];
+                let node = &self.nodes[entry.node()];
                 tally.node();
                 let (hits, t_enter) = node.intersect(ray, *t_max);
                 let leaves = hits & node.leaves as u32;
@@ -658,7 +644,6 @@ impl WideNode {
         count: [0; 8],
         present: 0,
         leaves: 0,
-        padding: [0; 6],
     };
 
     /// Mask of the children (bit = slot) whose boxes the ray meets within [0, t_max], and the
@@ -1150,46 +1135,6 @@ mod tests {
             hits += bvh.intersect(&r, t_max).is_some() as usize;
         }
         assert!(hits > 1000, "{hits}");
-    }
-
-    /// Stores mapped on huge pages and their `Vec` fallback (what a failed mapping leaves)
-    /// answer every query alike: the same hits, slots and vertices, and the same any-hit answers.
-    #[test]
-    fn mapped_and_heap_stores_agree() {
-        let mut rng = Rng::new(10);
-        let tris = random_soup(&mut rng, 3000, 1.0);
-        let [heap, mapped] = [Placement::Heap, Placement::Mapped]
-            .map(|placement| Bvh::build_placed(&tris, Builder::DEFAULT, placement));
-        assert!(!heap.nodes.is_mapped() && !heap.rows.is_mapped());
-        if cfg!(target_os = "linux") {
-            assert!(mapped.nodes.is_mapped() && mapped.rows.is_mapped());
-            assert!(mapped.input_index.is_mapped());
-        }
-        let (lo, hi) = heap.bounds();
-        let (center, extent) = (0.5 * (lo + hi), (hi - lo).max_element());
-        let mut hits = 0;
-        for k in 0..6000 {
-            let r = if k % 2 == 0 {
-                let t = tris[rng.below(tris.len())];
-                let o = center + rng.vec3(-1.5, 1.5) * extent;
-                Ray::new(o, t[0].lerp(t[1], rng.f32()).lerp(t[2], rng.f32()) - o)
-            } else {
-                random_ray(&mut rng, center, extent)
-            };
-            let t_max = random_t_max(&mut rng, extent);
-            let [a, b] = [&heap, &mapped].map(|bvh| bvh.intersect(&r, t_max));
-            match (a, b) {
-                (None, None) => {}
-                (Some(a), Some(b)) => {
-                    assert_eq!((a.prim, a.slot, a.hit.t), (b.prim, b.slot, b.hit.t));
-                    assert_eq!(heap.vertices(&a), mapped.vertices(&b));
-                    hits += 1;
-                }
-                (a, b) => panic!("{r:?}: heap {a:?}, mapped {b:?}"),
-            }
-            assert_eq!(heap.occluded(&r, t_max), mapped.occluded(&r, t_max));
-        }
-        assert!(hits > 2000, "{hits}");
     }
 
     /// obvhs's own node test ignores boxes left before t = 1e-4; ours must not.

@@ -1,7 +1,5 @@
-//! Ray acceleration structures. Only `bvh.rs` and `sah.rs` name obvhs; only `pages.rs` names
-//! memmap2.
+//! Ray acceleration structures. Only `bvh.rs` and `sah.rs` name obvhs.
 
 pub mod bvh;
-mod pages;
 mod sah;
 mod stack;
