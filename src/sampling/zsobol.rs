@@ -236,20 +236,22 @@ mod tests {
         ]
     }
 
+    /// (x, y, sample) of first keys (epoch 0) and of an epoch-1 sample (`s` = 64 at 64 spp).
+    const PIXEL_SAMPLES: [(u32, u32, u64); 5] = [
+        (0, 0, 0),
+        (3, 5, 17),
+        (63, 1, 63),
+        (1000, 77, 5),
+        (2, 9, 64),
+    ];
+
     #[test]
     fn draws_are_the_definitions_bits() {
         let z = ZSobol::new(7, Some(64));
         // First keys (tabled seeds), an epoch 1 sample and index bits above 32 (hashed), and
         // dimensions on both sides of the table's end.
         let t = TABLED_DIMENSIONS as u32;
-        for (x, y, s) in [
-            (0, 0, 0),
-            (3, 5, 17),
-            (63, 1, 63),
-            (1000, 77, 5),
-            (2, 9, 64),
-            (1 << 14, 1 << 14, 3),
-        ] {
+        for (x, y, s) in PIXEL_SAMPLES.into_iter().chain([(1 << 14, 1 << 14, 3)]) {
             let mut q = z.stream(x, y, s);
             for d in [0u32, 1, 5, 12, 40, t - 2, t - 1, t, t + 7] {
                 q.set_dimension(d);
@@ -264,13 +266,7 @@ mod tests {
     #[test]
     fn the_first_keys_are_the_definitions() {
         let z = ZSobol::new(7, Some(64));
-        for (x, y, s) in [
-            (0, 0, 0),
-            (3, 5, 17),
-            (63, 1, 63),
-            (1000, 77, 5),
-            (2, 9, 64),
-        ] {
+        for (x, y, s) in PIXEL_SAMPLES {
             let (r, j) = (s & 1, s >> 1);
             let m = morton(x, y);
             let want = key(7, r, j >> z.log2, m >> (32 - z.log2));
