@@ -291,7 +291,9 @@ impl PathIntegrator {
     /// that are absent for this path), adding the emission it finds to `l`: always a
     /// `Hit::Surface`, or None when the path ends (escaped, an analytic light, too many
     /// pass-throughs).
-    #[inline]
+    /// Inlined into the walk, its only caller: LLVM left it a call of its own, whose frame and
+    /// `Option<Hit>` return cost about 100 instructions a sample (design.md §8, eighth pass).
+    #[inline(always)]
     fn next_vertex(
         &self,
         scene: &Scene,
@@ -654,6 +656,9 @@ fn shadow_ray(from: &SpawnPoint, ls: &LightLiSample) -> (Ray, f32) {
 /// The fraction of the light sample's radiance that reaches the surface point `from`: 0
 /// behind an opaque surface, the product of (1 − opacity) over the translucent surfaces in
 /// between, else 1.
+/// Inlined into next event estimation (`Nee::shared`, the meters): a call of its own cost a
+/// frame per shadow ray (design.md §8, eighth pass).
+#[inline(always)]
 pub(crate) fn transmittance(
     scene: &Scene,
     from: &SpawnPoint,
