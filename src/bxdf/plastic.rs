@@ -251,8 +251,10 @@ impl PlasticBxdf {
         self.sample_f_at(&self.at(wo), uc, u)
     }
 
-    /// [`Self::sample_f`] from ωo given its terms `at = self.at(wo)`.
-    #[inline]
+    /// [`Self::sample_f`] from ωo given its terms `at = self.at(wo)`. Inlined (into the path
+    /// tracer's `scatter` through `BsdfAt::sample_f`): as a call it cost about 38 instructions
+    /// a vertex in frame and copies (design.md §8, eighth pass).
+    #[inline(always)]
     pub fn sample_f_at(&self, at: &PlasticAt, uc: f32, u: [f32; 2]) -> Option<BsdfSample> {
         let (wo, flip, pc) = (at.wo, at.flip, at.pc);
         if wo.z == 0.0 {
