@@ -347,8 +347,10 @@ impl PathIntegrator {
     }
 
     /// One scattering event at `si`: next-event estimation into `l`, a BSDF-sampled
-    /// direction and Russian roulette; false when the path ends.
-    #[inline]
+    /// direction and Russian roulette; false when the path ends. Inlined into the walk (and
+    /// the cut's continuation): as a call it cost about 19 instructions a vertex in frame and
+    /// arguments (design.md §8, eighth pass).
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn scatter<const DISPERSION: bool>(
         &self,
