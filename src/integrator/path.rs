@@ -364,7 +364,7 @@ impl PathIntegrator {
         spectra: &mut SpectraCache,
     ) -> bool {
         // Each decision draws from its own dimensions of this bounce (`dimensions.rs`).
-        let bounce = st.depth;
+        let block = dimensions::bounce(st.depth, 0);
         st.depth += 1;
         let wo = -st.ray.d;
         let index = si.material as usize;
@@ -379,12 +379,12 @@ impl PathIntegrator {
         // The BSDF's terms of ωo, shared by next event estimation and the BSDF sample.
         let at = bsdf.at(wo);
         if !bsdf.is_specular() {
-            sampler.set_dimension(dimensions::bounce(bounce, LIGHT));
+            sampler.set_dimension(dimensions::in_block(block, LIGHT));
             let v = (si, &from);
             let l = (st.beta, &mut st.le);
             self.sample_ld(scene, v, &at, lambda, sampler, l, g);
         }
-        sampler.set_dimension(dimensions::bounce(bounce, BSDF));
+        sampler.set_dimension(dimensions::in_block(block, BSDF));
         let (uc, u) = (sampler.get_1d(), sampler.get_2d());
         let Some(bs) = at.sample_f(uc, u, TransportMode::Radiance) else {
             return false;
@@ -400,7 +400,7 @@ impl PathIntegrator {
         });
         st.ray = from.ray(bs.wi);
         st.t_max = f32::INFINITY;
-        sampler.set_dimension(dimensions::bounce(bounce, ROULETTE));
+        sampler.set_dimension(dimensions::in_block(block, ROULETTE));
         roulette::survives(&mut st.beta, st.eta_scale, st.depth, self.rr_depth, sampler)
     }
 

@@ -33,3 +33,27 @@ pub fn bounce(b: u32, offset: u32) -> u32 {
         .saturating_add(b.saturating_mul(PER_BOUNCE))
         .saturating_add(offset)
 }
+
+/// Dimension `offset` of the block that starts at `block` (`bounce(b, 0)`): `bounce(b,
+/// offset)`, for a caller that draws several decisions of one bounce and computes the block's
+/// start once.
+#[inline]
+pub fn in_block(block: u32, offset: u32) -> u32 {
+    block.saturating_add(offset)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A block's start plus an offset is the bounce's dimension, up to and past saturation.
+    #[test]
+    fn in_block_is_bounce() {
+        let bounces = [0, 1, 2, 6, 7, 1000, u32::MAX / 7, u32::MAX / 7 + 1, u32::MAX];
+        for b in bounces {
+            for offset in [LIGHT, BSDF, ROULETTE, PER_BOUNCE - 1] {
+                assert_eq!(in_block(bounce(b, 0), offset), bounce(b, offset), "{b} {offset}");
+            }
+        }
+    }
+}
