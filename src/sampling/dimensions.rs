@@ -49,10 +49,24 @@ mod tests {
     /// A block's start plus an offset is the bounce's dimension, up to and past saturation.
     #[test]
     fn in_block_is_bounce() {
-        let bounces = [0, 1, 2, 6, 7, 1000, u32::MAX / 7, u32::MAX / 7 + 1, u32::MAX];
+        let bounces = [
+            0,
+            1,
+            2,
+            6,
+            7,
+            1000,
+            u32::MAX / 7,
+            u32::MAX / 7 + 1,
+            u32::MAX,
+        ];
         for b in bounces {
             for offset in [LIGHT, BSDF, ROULETTE, PER_BOUNCE - 1] {
-                assert_eq!(in_block(bounce(b, 0), offset), bounce(b, offset), "{b} {offset}");
+                assert_eq!(
+                    in_block(bounce(b, 0), offset),
+                    bounce(b, offset),
+                    "{b} {offset}"
+                );
             }
         }
     }
