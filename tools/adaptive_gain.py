@@ -26,9 +26,15 @@ n₁ samples; the gain is evaluated with v_i from the K − 2n₁ samples in nei
 the pilot's samples for both the allocation and its evaluation would flatter the scheme).
 The cost of a sample is taken as equal in every pixel (not measured here).
 
+The renderer's `--adaptive` allocates over every pixel, the light's included; `--rules` compares
+allocation rules on that footing (`pilot_scale`; `masked` is the rule over the masked pixels
+alone, which a renderer cannot know).
+
 Run with the project's venv (tools/venv.sh), from the repository root, after `cargo build
 --release`:
     .venv/bin/python tools/adaptive_gain.py ../shared/peers/cbox.usda --samples 160 --zsobol-spp 64
+    .venv/bin/python tools/adaptive_gain.py --pilots 0.125 --radii 2 --rules masked,all,floor,clip \
+        --clips 4,8,16,32 --trials 3
 """
 
 import argparse
@@ -137,6 +143,14 @@ def realised_gain(x, mask, n_total, n1, r, rng, rule="masked", clip=8.0, cap=16.
     return (v / n_total).sum() / ((v / n_a + v / n_b) / 4).sum()
 
 
+def rules(a):
+    """(rule, clip) pairs of --rules and --clips."""
+    for rule in a.rules.split(","):
+        clips = [float(c) for c in a.clips.split(",")] if rule == "clip" else [0.0]
+        for clip in clips:
+            yield rule, clip
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("stage", nargs="?", default=os.path.join(ROOT, "..", "shared", "peers",
@@ -153,7 +167,7 @@ def main():
     ap.add_argument("--zsobol-seeds", type=int, default=12)
     ap.add_argument("--rules", default="masked",
                     help="allocation rules (pilot_scale): masked, all, floor, clip")
-    ap.add_argument("--clip", type=float, default=8.0, help="rule clip's multiple of the mean")
+    ap.add_argument("--clips", default="8", help="rule clip's multiples of the mean")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         x = np.stack([render(a, tmp, s) for s in range(1, a.samples + 1)])
@@ -174,10 +188,11 @@ def main():
             if 2 * n1 > a.samples - 2:
                 continue
             for r in (int(q) for q in a.radii.split(",")):
-                for rule in a.rules.split(","):
-                    g = [realised_gain(x, mask, n_total, n1, r, rng, rule, a.clip)
+                for rule, clip in rules(a):
+                    g = [realised_gain(x, mask, n_total, n1, r, rng, rule, clip)
                          for _ in range(a.trials)]
-                    print(f"| {rule} | {n_total} | {2 * n1} | {2 * r + 1}² | {np.mean(g):.3f} | "
+                    name = f"{rule} {clip:g}" if rule == "clip" else rule
+                    print(f"| {name} | {n_total} | {2 * n1} | {2 * r + 1}² | {np.mean(g):.3f} | "
                           f"{min(g):.3f}..{max(g):.3f} |", flush=True)
 
 
