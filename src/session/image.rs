@@ -445,6 +445,9 @@ impl<'a> ImageSession<'a> {
     /// Continues from `c`, a checkpoint of the same run (identity checked), before any pass.
     pub fn resume(&mut self, c: Checkpoint) -> Reason<()> {
         c.check_identity(&checkpoint::identity(self.scene, &self.opts))?;
+        if self.adaptive.is_some() {
+            return Err("an adaptive render does not continue a checkpoint".into());
+        }
         if self.done > 0 {
             return Err("a session resumes only before its first pass".into());
         }
