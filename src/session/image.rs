@@ -523,9 +523,12 @@ impl<'a> ImageSession<'a> {
     }
 
     fn finished(&self) -> bool {
+        self.done >= self.target || self.out_of_time()
+    }
+
+    fn out_of_time(&self) -> bool {
         let elapsed = self.elapsed();
-        self.done >= self.target
-            || (self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t))
+        self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t)
     }
 
     /// Samples per pixel of the next pass (see the module docs).
@@ -594,13 +597,13 @@ impl<'a> ImageSession<'a> {
     /// Sets an adaptive render's clip once the pilot's first samples are in
     /// (`session::adaptive`).
     fn set_clip(&mut self) {
-        let mask = adaptive::rendered(&self.tiles, self.film.width, self.film.height);
         let Some(run) = &mut self.adaptive else {
             return;
         };
         if run.clip.is_some() || self.done < AdaptiveRun::FIRST {
             return;
         }
+        let mask = adaptive::rendered(&self.tiles, self.film.width, self.film.height);
         let xyz = self.film.xyz(1.0);
         let inside = xyz.iter().zip(&mask).filter(|(_, &m)| m);
         let sum: f64 = inside
@@ -609,18 +612,16 @@ impl<'a> ImageSession<'a> {
         run.set_clip(sum / (3 * run.pixels.max(1)) as f64);
     }
 
-    /// Ends an adaptive render's pilot, once done, by allocating its samples; whether there
-    /// are samples left to render.
-    fn allocate(&mut self) -> bool {
-        let mask = adaptive::rendered(&self.tiles, self.film.width, self.film.height);
+    /// Ends an adaptive render's pilot, once done, by allocating its samples.
+    fn allocate(&mut self) {
         let Some(run) = &mut self.adaptive else {
-            return false;
+            return;
         };
-        if !run.in_pilot() || self.done < self.target {
-            return false;
+        if run.in_pilot() && self.done >= self.target {
+            let (w, h) = (self.film.width, self.film.height);
+            let mask = adaptive::rendered(&self.tiles, w, h);
+            self.target = run.allocate(&mask, w).max(self.done);
         }
-        self.target = run.allocate(&mask, self.film.width).max(self.done);
-        self.done < self.target
     }
 
     /// Samples [first, first + count) of every pixel, all within one chunk.
@@ -751,7 +752,10 @@ impl ImageSession<'_> {
 
 impl Progressive for ImageSession<'_> {
     fn step(&mut self) -> Option<PassStats> {
-        if self.finished() && !self.allocate() {
+        if !self.out_of_time() {
+            self.allocate();
+        }
+        if self.finished() {
             return None;
         }
         self.set_clip();
