@@ -26,9 +26,15 @@ n₁ samples; the gain is evaluated with v_i from the K − 2n₁ samples in nei
 the pilot's samples for both the allocation and its evaluation would flatter the scheme).
 The cost of a sample is taken as equal in every pixel (not measured here).
 
+The renderer's `--adaptive` allocates over every pixel, the light's included; `--rules` compares
+allocation rules on that footing (`pilot_scale`; `masked` is the rule over the masked pixels
+alone, which a renderer cannot know).
+
 Run with the project's venv (tools/venv.sh), from the repository root, after `cargo build
 --release`:
     .venv/bin/python tools/adaptive_gain.py ../shared/peers/cbox.usda --samples 160 --zsobol-spp 64
+    .venv/bin/python tools/adaptive_gain.py --pilots 0.125 --radii 2 --rules masked,all,floor,clip \
+        --clips 4,8,16,32 --trials 3
 """
 
 import argparse
@@ -89,17 +95,60 @@ def water_fill(sd, n1, mean_count):
     return np.maximum(n1, lo * sd)
 
 
-def realised_gain(x, mask, n_total, n1, r, rng):
-    """One trial of the cross-replicate scheme: MSE of uniform sampling over the scheme's."""
+def water_fill_capped(sd, n1, mean_count, cap):
+    """Counts clip(c·sd, n1, cap) whose mean is `mean_count` (bisection on c)."""
+    budget = mean_count * sd.size
+    lo, hi = 0.0, budget / max(float(sd.sum()), 1e-300) * 1e6
+    for _ in range(200):
+        c = 0.5 * (lo + hi)
+        if np.clip(c * sd, n1, cap).sum() > budget:
+            hi = c
+        else:
+            lo = c
+    return np.clip(lo * sd, n1, cap)
+
+
+def pilot_scale(p, rule, r, clip):
+    """The allocation's per-pixel scale from one pilot p (samples × pixels × RGB) under `rule`:
+    `masked`/`all`: the box-averaged standard deviation; `floor`: that over the box-averaged
+    mean plus the image's mean (channels summed); `clip`: the standard deviation of the
+    samples clipped per channel at `clip` × the pilot image's mean."""
+    if rule == "clip":
+        p = np.minimum(p, clip * p.mean())
+    sd = np.sqrt(box_mean(p.var(0, ddof=1).sum(-1), r))
+    if rule == "floor":
+        mu = box_mean(p.mean(0).sum(-1), r)
+        sd = sd / (mu + mu.mean())
+    return sd
+
+
+def realised_gain(x, mask, n_total, n1, r, rng, rule="masked", clip=8.0, cap=16.0):
+    """One trial of the cross-replicate scheme: MSE of uniform sampling over the scheme's
+    (over the pixels in `mask`). Rule `masked` allocates over the pixels in `mask` only (what a
+    renderer cannot know); the others over every pixel, each replicate's count at most `cap` ×
+    its mean, as the renderer's `--adaptive` does (`session/adaptive.rs`)."""
     k = x.shape[0]
     perm = rng.permutation(k)
     pilot_a, pilot_b, rest = perm[:n1], perm[n1:2 * n1], perm[2 * n1:]
-    sd_a = np.sqrt(box_mean(x[pilot_a].var(0, ddof=1).sum(-1), r))[mask]
-    sd_b = np.sqrt(box_mean(x[pilot_b].var(0, ddof=1).sum(-1), r))[mask]
-    v = x[rest].var(0, ddof=1).sum(-1)[mask]
-    n_a = water_fill(sd_b, n1, n_total / 2)
-    n_b = water_fill(sd_a, n1, n_total / 2)
+    v = x[rest].var(0, ddof=1).sum(-1)
+    sd_a, sd_b = (pilot_scale(x[p], rule, r, clip) for p in (pilot_a, pilot_b))
+    if rule == "masked":
+        n_a = water_fill(sd_b[mask], n1, n_total / 2)
+        n_b = water_fill(sd_a[mask], n1, n_total / 2)
+    else:
+        top = cap * n_total / 2
+        n_a = water_fill_capped(sd_b.ravel(), n1, n_total / 2, top).reshape(sd_b.shape)[mask]
+        n_b = water_fill_capped(sd_a.ravel(), n1, n_total / 2, top).reshape(sd_a.shape)[mask]
+    v = v[mask]
     return (v / n_total).sum() / ((v / n_a + v / n_b) / 4).sum()
+
+
+def rules(a):
+    """(rule, clip) pairs of --rules and --clips."""
+    for rule in a.rules.split(","):
+        clips = [float(c) for c in a.clips.split(",")] if rule == "clip" else [0.0]
+        for clip in clips:
+            yield rule, clip
 
 
 def main():
@@ -116,6 +165,9 @@ def main():
     ap.add_argument("--zsobol-spp", type=int, default=0,
                     help="also the ideal gain of M-spp images with the zsobol sampler")
     ap.add_argument("--zsobol-seeds", type=int, default=12)
+    ap.add_argument("--rules", default="masked",
+                    help="allocation rules (pilot_scale): masked, all, floor, clip")
+    ap.add_argument("--clips", default="8", help="rule clip's multiples of the mean")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         x = np.stack([render(a, tmp, s) for s in range(1, a.samples + 1)])
@@ -127,8 +179,8 @@ def main():
     print(f"ideal gain (true variances): {v.mean() / np.sqrt(v).mean() ** 2:.3f}")
     if z is not None:
         print(f"ideal gain of {a.zsobol_spp}-spp zsobol images ({a.zsobol_seeds} seeds): {z:.3f}")
-    print("| budget N | pilot 2·n1 | box | realised gain (mean of trials) | min..max |")
-    print("|---|---|---|---|---|")
+    print("| rule | budget N | pilot 2·n1 | box | realised gain (mean of trials) | min..max |")
+    print("|---|---|---|---|---|---|")
     rng = np.random.default_rng(1)
     for n_total in (int(b) for b in a.budgets.split(",")):
         for f in (float(p) for p in a.pilots.split(",")):
@@ -136,9 +188,12 @@ def main():
             if 2 * n1 > a.samples - 2:
                 continue
             for r in (int(q) for q in a.radii.split(",")):
-                g = [realised_gain(x, mask, n_total, n1, r, rng) for _ in range(a.trials)]
-                print(f"| {n_total} | {2 * n1} | {2 * r + 1}² | {np.mean(g):.3f} | "
-                      f"{min(g):.3f}..{max(g):.3f} |")
+                for rule, clip in rules(a):
+                    g = [realised_gain(x, mask, n_total, n1, r, rng, rule, clip)
+                         for _ in range(a.trials)]
+                    name = f"{rule} {clip:g}" if rule == "clip" else rule
+                    print(f"| {name} | {n_total} | {2 * n1} | {2 * r + 1}² | {np.mean(g):.3f} | "
+                          f"{min(g):.3f}..{max(g):.3f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Time to equal error on the Cornell box (issue 18): ours (path with --sampler zsobol and
-# independent) against Mitsuba 3 llvm_ad_spectral and scalar_spectral, interleaved in one
-# run: samples/s, relRMSE at 64, 256 and 1024 spp, time to relRMSE 5 % with the visible light
-# masked, and the ratios (tools/equal_error.py says how each is measured).
+# independent, and zsobol with --adaptive) against Mitsuba 3 llvm_ad_spectral and
+# scalar_spectral, interleaved in one run: samples/s, relRMSE at 64, 256 and 1024 spp, time to
+# relRMSE 5 % with the visible light masked, and the ratios (tools/equal_error.py says how each
+# is measured).
 #
-#   tools/bench_equal_error.sh [--rounds N] [--spp 64 256 1024] [--rr-depth N…]   (equal_error.py)
+#   tools/bench_equal_error.sh [--rounds N] [--spp 64 256 1024] [--rr-depth N…] [--no-adaptive]
+#   (equal_error.py)
 #
 # Needs the peers' venv (../shared/peers/README.md; PEERS_VENV, default ~/peers/venv) and
 # DRJIT_LIBLLVM_PATH for the llvm variant. The reference is Mitsuba llvm_ad_spectral at

@@ -5,7 +5,8 @@ tools/bench_equal_error.sh, which names the reference; see that script for the o
 
 For each configuration and sample count (64, 256 by default) and each of --rounds rounds
 (configurations interleaved within a round, seeds 1, 2, ...):
-- ours: the release binary on ../shared/peers/cbox.usda, --max-depth 7, timed by the render
+- ours: the release binary on ../shared/peers/cbox.usda, --max-depth 7 (path with each sampler,
+  and zsobol with --adaptive: the spp is then the mean of the pixels' counts), timed by the render
   loop's own wall time (the EXR header's `spectralRender:wallTime`: scene load and EXR write
   not counted, as Mitsuba's scene load is not), with the whole process's wall time in a
   column of its own (sessions before 31 timed the whole process);
@@ -46,9 +47,10 @@ from compare_mitsuba import emitter_mask  # noqa: E402
 EXE = os.path.join(ROOT, "target", "release", "spectral-render")
 
 
-def ours(sampler, spp, res, seed, tmp, rr_depth=None):
-    out = os.path.join(tmp, f"ours_{sampler}_{rr_depth}_{spp}_{seed}.exr")
+def ours(sampler, spp, res, seed, tmp, rr_depth=None, adaptive=False):
+    out = os.path.join(tmp, f"ours_{sampler}_{rr_depth}_{adaptive}_{spp}_{seed}.exr")
     rr = ["--rr-depth", str(rr_depth)] if rr_depth else []
+    rr += ["--adaptive"] if adaptive else []
     t0 = time.perf_counter()
     subprocess.run([EXE, os.path.join(PEERS, "cbox.usda"), "-o", out, "--spp", str(spp),
                     "--resolution", f"{res}x{res}", "--max-depth", "7", "--seed", str(seed),
@@ -120,6 +122,8 @@ def main():
     ap.add_argument("--variants", nargs="+", default=["llvm_ad_spectral", "scalar_spectral"])
     ap.add_argument("--rr-depth", type=int, nargs="*", default=[],
                     help="extra rows: ours (zsobol) with --rr-depth N")
+    ap.add_argument("--no-adaptive", action="store_true",
+                    help="leave out the row of ours with --adaptive")
     a = ap.parse_args()
     ref = common.read_exr(a.reference)[..., :3].astype(np.float64)
     mask = emitter_mask(ref)
@@ -128,6 +132,9 @@ def main():
     configs = [("ours path zsobol", lambda spp, s, tmp: ours("zsobol", spp, a.res, s, tmp)),
                ("ours path independent",
                 lambda spp, s, tmp: ours("independent", spp, a.res, s, tmp))]
+    if not a.no_adaptive:
+        configs.append(("ours path zsobol --adaptive",
+                        lambda spp, s, tmp: ours("zsobol", spp, a.res, s, tmp, adaptive=True)))
     for d in a.rr_depth:
         configs.append((f"ours path zsobol rr-depth {d}",
                         lambda spp, s, tmp, d=d: ours("zsobol", spp, a.res, s, tmp, d)))

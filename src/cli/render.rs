@@ -59,6 +59,12 @@ struct RenderArgs {
     /// independent ones whatever this says.
     #[arg(long, default_value = "zsobol", value_parser = named::<SamplerKind>("sampler"))]
     sampler: SamplerKind,
+    /// Give noisier pixels more samples, --spp being their mean: a pilot of an eighth of
+    /// them, then each pixel's samples in proportion to the noise around it (unbiased; the
+    /// path tracer only, which `auto` then means; the EXR's `samples` channel holds the
+    /// counts).
+    #[arg(long)]
+    adaptive: bool,
     #[command(flatten)]
     machinery: MachineryArgs,
     #[command(flatten)]
@@ -299,6 +305,9 @@ fn render_frame(
     warn_clamped(out.clamped);
     warn_depth_cut(out.depth_cut.as_ref(), "the image's mean luminance");
     print_report(&out.report);
+    if let Some(a) = &out.layers.adaptive {
+        eprintln!("adaptive sampling: {}", a.summary);
+    }
     if let Some(signal) = interrupted {
         if let Some(file) = saves.write(&session)? {
             eprintln!("wrote checkpoint {} at {} spp", file.display(), out.spp);
@@ -519,9 +528,30 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
     if args.threads == Some(0) {
         return Err(Error::option("--threads must be at least 1"));
     }
+    if args.adaptive {
+        let whole = [
+            (args.part.is_part(), "--part and --crop"),
+            (
+                args.checkpoint.is_some() || args.resume.is_some(),
+                "--checkpoint and --resume",
+            ),
+        ];
+        if let Some((_, flags)) = whole.iter().find(|(on, _)| *on) {
+            return Err(Error::option(format!(
+                "--adaptive allocates each pixel's samples from a pilot of the whole render \
+                 in one run: it does not go with {flags}"
+            )));
+        }
+    }
     let integrator = args.layers.integrator(integrator);
+    // The path tracer is the one integrator whose samples are allocated per pixel: auto (the
+    // default) means it under --adaptive.
+    let integrator = match integrator {
+        Integrator::Auto { .. } if args.adaptive => Integrator::Path,
+        other => other,
+    };
     let layers = args.layers.options(&integrator)?;
-    Ok(RenderOptions {
+    let opts = RenderOptions {
         layers,
         spp: args.spp,
         time_budget: args.time,
@@ -534,8 +564,11 @@ fn options(args: &RenderArgs) -> Result<RenderOptions> {
         filter_textures: !args.no_texture_filtering,
         max_memory: args.max_memory,
         sampler: args.sampler,
+        adaptive: args.adaptive,
         ..RenderOptions::default()
-    })
+    };
+    session::image::check_adaptive(&opts, args.layers.emission_layers())?;
+    Ok(opts)
 }
 
 /// `stage.usda` → `./stage.exr`.

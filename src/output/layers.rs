@@ -23,6 +23,10 @@
 //! reflectance under the working space's white at Y = 1 (a white Lambertian is (1, 1, 1); not
 //! scaled by the exposure).
 //!
+//! **Samples per pixel** (an adaptive render, `--adaptive`): the channel `samples` holds each
+//! pixel's sample count, and the string attribute `spectralRender:adaptive` the allocation's
+//! settings and the counts' range (`session::adaptive`).
+//!
 //! **Emission layers** (`--illuminants`, `--light-groups`): per layer `<name>.R/G/B` in the
 //! EXR's working space (as `R`, `G`, `B`) and `<name>.XYZ.X/Y/Z`, absolute, × 2^exposure like
 //! the image's; with `--spectral`, its spectral radiance `<name>.S0.<λ>nm` in the bins of the
@@ -41,6 +45,10 @@ pub const EMISSIVE_UNITS: &str = "W.m^-2.sr^-1";
 /// The variance of the pixel's mean luminance (`--aov variance`).
 pub const VARIANCE_CHANNEL: &str = "variance.Y";
 pub const SPECTRAL_BINS_ATTRIBUTE: &str = "spectralRender:spectralBins";
+/// An adaptive render's samples per pixel.
+pub const SAMPLES_CHANNEL: &str = "samples";
+/// An adaptive render's settings and counts.
+pub const ADAPTIVE_ATTRIBUTE: &str = "spectralRender:adaptive";
 /// The first hit's albedo (`--aov albedo`), RGB in the EXR's working space.
 pub const ALBEDO_CHANNELS: [&str; 3] = ["albedo.R", "albedo.G", "albedo.B"];
 
@@ -55,6 +63,12 @@ pub fn exr_layers(layers: &LayerImages, space: WorkingSpace) -> ExrLayers {
     }
     if let Some(v) = &layers.variance {
         out.channels.push((VARIANCE_CHANNEL.to_string(), v.clone()));
+    }
+    if let Some(a) = &layers.adaptive {
+        out.channels
+            .push((SAMPLES_CHANNEL.to_string(), a.samples.clone()));
+        out.strings
+            .push((ADAPTIVE_ATTRIBUTE.to_string(), a.summary.clone()));
     }
     if let Some(f) = &layers.first_hit {
         for (c, axis) in ["X", "Y", "Z"].iter().enumerate() {

@@ -14,9 +14,14 @@
 //! and odd halves are two independent estimates a, b of the pixel, so
 //! (a − b)² n_even n_odd / n² is an unbiased estimate of the variance of the pixel's mean over
 //! all n samples, whatever the integrator ([`Film::variance_y`]).
+//!
+//! **Replicates.** An adaptive render's pixels take different numbers of even and odd
+//! samples; its film keeps the odd samples' XYZ sums and counts apart too
+//! (`sensor::replicates`), and such a pixel is the average of its two replicates' means.
 
 use super::film_state::FilmState;
 use super::grid_sum::{Fixed3, Grid};
+use super::replicates::Replicates;
 use crate::error::Reason;
 
 /// Accumulated XYZ per pixel (Y in cd/m²), row-major, top row first.
@@ -37,6 +42,8 @@ pub struct Film {
     odd_splat_y: Vec<f64>,
     /// Terms clamped and sums saturated (`grid_sum`).
     clamped: u64,
+    /// The odd samples' sums and counts, for pixels whose replicates' counts differ.
+    replicates: Option<Replicates>,
 }
 
 /// One light-path contribution to a pixel (XYZ, before the 1/light-paths-per-pixel scale).
@@ -80,7 +87,19 @@ impl Film {
             odd_y: vec![0.0; n],
             odd_splat_y: Vec::new(),
             clamped: 0,
+            replicates: None,
         }
+    }
+
+    /// Keeps the odd samples' sums and counts apart from now on ([`Film::store_tile_counted`]),
+    /// for pixels whose replicates take different sample counts; before any sample.
+    pub fn keep_replicates(&mut self) {
+        self.replicates = Some(Replicates::new(self.width * self.height));
+    }
+
+    /// Samples per pixel so far, row-major.
+    pub fn sample_counts(&self) -> &[u64] {
+        &self.samples
     }
 
     /// The grid the sums are held on.
@@ -123,6 +142,30 @@ impl Film {
             self.clamped += u64::from(Grid::add3(&mut self.sums[i], &sums[k]));
             self.odd_y[i] += odd_y[k];
             self.samples[i] += samples;
+        }
+        self.clamped += clamped;
+    }
+
+    /// Adds a tile's grid sums as [`Film::store_tile`] does, each pixel with its own counts
+    /// of even and odd samples (`counts[k]`) and the odd samples' grid sums `odd` apart (a film
+    /// that keeps its replicates: [`Film::keep_replicates`]).
+    pub fn store_tile_counted(
+        &mut self,
+        tile: &Tile,
+        (sums, odd): (&[Fixed3], &[Fixed3]),
+        odd_y: &[f64],
+        counts: &[[u32; 2]],
+        clamped: u64,
+    ) {
+        let reps = self
+            .replicates
+            .get_or_insert_with(|| Replicates::new(self.width * self.height));
+        for (k, i) in tile.pixels(self.width).enumerate() {
+            let [even, odd_n] = counts[k].map(u64::from);
+            self.clamped += u64::from(Grid::add3(&mut self.sums[i], &sums[k]));
+            self.clamped += u64::from(reps.add(i, &odd[k], odd_n));
+            self.odd_y[i] += odd_y[k];
+            self.samples[i] += even + odd_n;
         }
         self.clamped += clamped;
     }
@@ -203,8 +246,13 @@ impl Film {
         let g = self.grid;
         (0..self.sums.len())
             .map(|i| {
-                let s = self.sums[i].map(|c| g.value(c));
                 let n = self.samples[i];
+                let replicated = self.replicates.as_ref();
+                if let Some(m) = replicated.and_then(|r| r.mean(i, &self.sums[i], n, g)) {
+                    // An adaptive render does not splat (`session::adaptive`).
+                    return m.map(|c| (c * scale) as f32);
+                }
+                let s = self.sums[i].map(|c| g.value(c));
                 let k = if n > 0 { scale / n as f64 } else { 0.0 };
                 match self.splat.get(i) {
                     Some(sp) if splat_k > 0.0 => {
@@ -224,10 +272,14 @@ impl Film {
         (0..self.sums.len())
             .map(|i| {
                 let n = self.samples[i];
-                let (n_odd, n_even) = ((n / 2) as f64, (n - n / 2) as f64);
-                if n < 2 {
+                let n_odd = match &self.replicates {
+                    Some(r) => r.odd_samples(i),
+                    None => n / 2,
+                };
+                if n_odd == 0 || n_odd == n {
                     return f64::INFINITY;
                 }
+                let (n_odd, n_even) = (n_odd as f64, (n - n_odd) as f64);
                 let own = g.value(self.sums[i][1]);
                 let (mut odd, mut even) = (self.odd_y[i], own - self.odd_y[i]);
                 if let Some(sp) = self.splat.get(i) {
@@ -238,6 +290,10 @@ impl Film {
                     even += (g.value(sp[1]) - self.odd_splat_y[i]) * k;
                 }
                 let d = even / n_even - odd / n_odd;
+                if n_even != n_odd && self.replicates.is_some() {
+                    // The pixel is (a + b)/2 (`sensor::replicates`).
+                    return scale * scale * d * d / 4.0;
+                }
                 scale * scale * d * d * n_even * n_odd / (n as f64 * n as f64)
             })
             .collect()
@@ -275,6 +331,7 @@ impl Film {
             odd_y: state.odd_y,
             odd_splat_y: state.odd_splat_y,
             clamped: state.clamped,
+            replicates: None,
         })
     }
 

@@ -9,6 +9,7 @@ pub mod film_state;
 pub mod grid_sum;
 pub mod meter;
 pub mod raw_bytes;
+pub mod replicates;
 pub mod spectral_film;
 
 pub use camera::Camera;

@@ -23,11 +23,17 @@
 //! The path tracer has one chunk for the whole render. Per-thread buffers (`Workspace`) live
 //! as long as a rayon job and are reused by every sample of it.
 //!
+//! **Adaptive sampling** (`RenderOptions::adaptive`, `session::adaptive`): a pilot of a few
+//! samples per pixel in both replicates, then each pixel's replicates take the counts the
+//! allocation gives them, in passes over windows of sample indices as above (a pixel skips
+//! the indices beyond its counts); the film keeps the replicates apart (`sensor::replicates`).
+//!
 //! **Iterations.** An estimator whose samples share per-iteration work (VCM: the light
 //! vertices of the iteration and their hash grid) names its iteration size; segments then
 //! also end at iteration boundaries, and each iteration is prepared (`begin_iteration`) on
 //! the session's threads before its first sample.
 
+use super::adaptive::{self, AdaptiveImage, AdaptiveRun, Plan, ReplicateTile};
 use super::auto::AutoReport;
 use super::checkpoint::{self, Checkpoint};
 use super::crop::Crop;
@@ -39,7 +45,7 @@ use crate::integrator::bidir::TileAccumulator;
 use crate::integrator::cut::{depth_cap, BatchedRatio};
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::{dimensions, PixelSamplers, SamplerKind};
-use crate::scene::Scene;
+use crate::scene::{ray_count, Scene};
 use crate::sensor::film::{Film, Tile};
 use crate::sensor::grid_sum::{Fixed3, Grid};
 use crate::spectral::{color, SampledWavelengths};
@@ -106,6 +112,9 @@ pub struct RenderOptions {
     /// Render only this window's pixels (`--crop`, or the stage's `dataWindowNDC`:
     /// `session::crop`); None: the whole image. Auto's pilot renders the same window.
     pub crop: Option<Crop>,
+    /// Allocate the samples per pixel by a pilot's noise (`--adaptive`, `session::adaptive`):
+    /// `spp` is then their mean. The path tracer only, under a sample count.
+    pub adaptive: bool,
 }
 
 /// The wavelength counts [`RenderOptions::wavelengths`] may take.
@@ -128,6 +137,7 @@ impl Default for RenderOptions {
             sampler: SamplerKind::ZSobol,
             layers: LayerOptions::default(),
             crop: None,
+            adaptive: false,
         }
     }
 }
@@ -203,12 +213,15 @@ pub struct ImageSession<'a> {
     auto: Option<AutoReport>,
     /// The samplers of every (pixel, sample).
     samplers: PixelSamplers,
+    /// An adaptive render's state (`RenderOptions::adaptive`).
+    adaptive: Option<AdaptiveRun>,
 }
 
 impl<'a> ImageSession<'a> {
     /// A session of `opts.integrator`; `Integrator::Auto` is resolved first by its pilot
     /// (`session::auto`), whose winning session this then is.
     pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<ImageSession<'a>> {
+        let plan = check_adaptive(opts, !scene.emission_layers.is_empty())?;
         if let Integrator::Auto { .. } = opts.integrator {
             return super::auto::image(scene, opts);
         }
@@ -284,7 +297,12 @@ impl<'a> ImageSession<'a> {
             auto: None,
             samplers: pixel_samplers(opts, w as u64),
             opts: opts.clone(),
+            adaptive: plan.map(|p| AdaptiveRun::new(p, w * h, (w * h) as u64)),
         };
+        if let Some(run) = &session.adaptive {
+            session.film.keep_replicates();
+            session.target = run.plan.pilot_spp();
+        }
         if let Some(c) = opts.crop {
             session.start_crop(c).map_err(crate::error::Error::option)?;
         }
@@ -339,6 +357,9 @@ impl<'a> ImageSession<'a> {
         if self.done > 0 || self.first > 0 {
             return Err("a session starts a part only before its first pass".into());
         }
+        if self.adaptive.is_some() {
+            return Err(ADAPTIVE_WHOLE.into());
+        }
         if !self.layers.emission.films.is_empty() {
             return Err(EMISSION_LAYERS_WHOLE.into());
         }
@@ -372,6 +393,9 @@ impl<'a> ImageSession<'a> {
         }
         self.tiles = crop.clip(&self.tiles);
         self.crop = Some(crop);
+        if let Some(run) = &mut self.adaptive {
+            run.pixels = crop.pixel_count() as u64;
+        }
         Ok(())
     }
 
@@ -421,6 +445,9 @@ impl<'a> ImageSession<'a> {
     /// Continues from `c`, a checkpoint of the same run (identity checked), before any pass.
     pub fn resume(&mut self, c: Checkpoint) -> Reason<()> {
         c.check_identity(&checkpoint::identity(self.scene, &self.opts))?;
+        if self.adaptive.is_some() {
+            return Err("an adaptive render does not continue a checkpoint".into());
+        }
         if self.done > 0 {
             return Err("a session resumes only before its first pass".into());
         }
@@ -456,7 +483,10 @@ impl<'a> ImageSession<'a> {
             height: self.film.height,
             xyz,
             rgb,
-            spp: self.done - self.first,
+            spp: match &self.adaptive {
+                Some(run) => run.mean_spp().round() as u64,
+                None => self.done - self.first,
+            },
             wall_time_s: self.elapsed(),
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
@@ -478,6 +508,11 @@ impl<'a> ImageSession<'a> {
                         .map(|&v| if v.is_finite() { v as f32 } else { -1.0 })
                         .collect()
                 }),
+                adaptive: self.adaptive.as_ref().map(|run| {
+                    let (w, h) = (self.film.width, self.film.height);
+                    let mask = adaptive::rendered(&self.tiles, w, h);
+                    AdaptiveImage::new(run.plan, self.film.sample_counts(), &mask)
+                }),
                 ..self.layers.images(exposure)
             },
         }
@@ -488,9 +523,12 @@ impl<'a> ImageSession<'a> {
     }
 
     fn finished(&self) -> bool {
+        self.done >= self.target || self.out_of_time()
+    }
+
+    fn out_of_time(&self) -> bool {
         let elapsed = self.elapsed();
-        self.done >= self.target
-            || (self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t))
+        self.done > 0 && self.opts.time_budget.is_some_and(|t| elapsed >= t)
     }
 
     /// Samples per pixel of the next pass (see the module docs).
@@ -521,7 +559,69 @@ impl<'a> ImageSession<'a> {
                 wanted.max(1).div_ceil(quantum).saturating_mul(quantum)
             }
         };
-        n.min(remaining)
+        match &self.adaptive {
+            // After the pilot: about a pass's worth of samples at the rate so far.
+            Some(run) if !run.in_pilot() && elapsed > 0.0 => {
+                let rate = run.samples as f64 / elapsed;
+                run.indices_for(self.done, rate * PASS_SECONDS)
+                    .min(remaining)
+            }
+            // The pilot's first pass sets the clip (`session::adaptive`).
+            Some(run) if run.clip.is_none() => n
+                .min(remaining)
+                .min(AdaptiveRun::FIRST.saturating_sub(self.done).max(1)),
+            _ => n.min(remaining),
+        }
+    }
+
+    /// The tiles of the segment [first, first + count): the session's, or after an adaptive
+    /// render's pilot, the rows of those with a pixel whose samples reach into the segment
+    /// (the last samples go to a few pixels: rows keep both threads busy on them).
+    fn segment_tiles(&self, first: u64, count: u64) -> Vec<Tile> {
+        let Some(alloc) = self.adaptive.as_ref().and_then(|r| r.allocation.as_deref()) else {
+            return self.tiles.clone();
+        };
+        let w = self.film.width;
+        let rows = self.tiles.iter().flat_map(|t| {
+            (t.y0..t.y1).map(|y| Tile {
+                y0: y,
+                y1: y + 1,
+                ..*t
+            })
+        });
+        let reaches =
+            |t: &Tile| count > 0 && t.pixels(w).any(|i| adaptive::end_of(alloc[i]) > first);
+        rows.filter(reaches).collect()
+    }
+
+    /// Sets an adaptive render's clip once the pilot's first samples are in
+    /// (`session::adaptive`).
+    fn set_clip(&mut self) {
+        let Some(run) = &mut self.adaptive else {
+            return;
+        };
+        if run.clip.is_some() || self.done < AdaptiveRun::FIRST {
+            return;
+        }
+        let mask = adaptive::rendered(&self.tiles, self.film.width, self.film.height);
+        let xyz = self.film.xyz(1.0);
+        let inside = xyz.iter().zip(&mask).filter(|(_, &m)| m);
+        let sum: f64 = inside
+            .map(|(p, _)| xyz_to_rgb(*p).iter().map(|&c| f64::from(c)).sum::<f64>())
+            .sum();
+        run.set_clip(sum / (3 * run.pixels.max(1)) as f64);
+    }
+
+    /// Ends an adaptive render's pilot, once done, by allocating its samples.
+    fn allocate(&mut self) {
+        let Some(run) = &mut self.adaptive else {
+            return;
+        };
+        if run.in_pilot() && self.done >= self.target {
+            let (w, h) = (self.film.width, self.film.height);
+            let mask = adaptive::rendered(&self.tiles, w, h);
+            self.target = run.allocate(&mask, w).max(self.done);
+        }
     }
 
     /// Samples [first, first + count) of every pixel, all within one chunk.
@@ -534,13 +634,19 @@ impl<'a> ImageSession<'a> {
             hero_only: self.opts.wavelengths == 1,
             own_wavelengths: self.estimator.own_image_wavelengths(),
             grid: self.film.grid(),
+            width: self.film.width,
+            adaptive: self.adaptive.as_ref().map(|run| Adaptive {
+                clip: run.moments_clip(),
+                counts: run.allocation.as_deref(),
+            }),
         };
         let estimator = &*self.estimator;
         let max_depth = self.cap;
         let layers = &self.layers;
         let scene = self.scene;
+        let tiles = self.segment_tiles(first, count);
         let results: Vec<TileSums> = self.pool.install(|| {
-            self.tiles
+            tiles
                 .par_iter()
                 .map_init(
                     || Workspace::new(max_depth, task.strategy_count),
@@ -550,20 +656,36 @@ impl<'a> ImageSession<'a> {
                             task.strategy_count,
                         );
                         let lt = LayerTile::new(layers, tile);
+                        let reps = task
+                            .adaptive
+                            .map(|a| ReplicateTile::new(tile.pixel_count(), a.clip));
+                        let sums = (acc, lt, reps);
                         if task.hero_only {
-                            render_tile::<true>(estimator, scene, tile, &task, (acc, lt), ws)
+                            render_tile::<true>(estimator, scene, tile, &task, sums, ws)
                         } else {
-                            render_tile::<false>(estimator, scene, tile, &task, (acc, lt), ws)
+                            render_tile::<false>(estimator, scene, tile, &task, sums, ws)
                         }
                     },
                 )
                 .collect()
         });
-        for (tile, (r, fixed, clamped, lt)) in self.tiles.iter().zip(results) {
-            self.film.store_tile(tile, &fixed, &r.odd_y, count, clamped);
+        for (tile, (r, fixed, clamped, lt, reps)) in tiles.iter().zip(results) {
+            match (reps, &mut self.adaptive) {
+                (Some(t), Some(run)) => {
+                    let sums = (&fixed[..], &t.odd[..]);
+                    self.film
+                        .store_tile_counted(tile, sums, &r.odd_y, &t.counts, clamped);
+                    run.add_tile(tile, self.film.width, &t);
+                }
+                _ => self.film.store_tile(tile, &fixed, &r.odd_y, count, clamped),
+            }
             self.layers.store_tile(tile, &lt, count);
             self.film.add_splats(&r.splats, &r.odd_splats);
-            self.cut.merge(&r.cut);
+            if self.adaptive.as_ref().is_none_or(AdaptiveRun::in_pilot) {
+                // An adaptive render's cut is its pilot's: its samples are alike in every
+                // pixel, the later ones are not (design.md §9, "Adaptive sampling").
+                self.cut.merge(&r.cut);
+            }
             if let (Some(sf), Some(st)) = (&mut self.strategy_films, &r.strategies) {
                 sf.merge_tile(tile, st);
             }
@@ -615,7 +737,10 @@ impl ImageSession<'_> {
         self.passes += 1;
         PassStats {
             pass: self.passes,
-            samples: self.done,
+            samples: match &self.adaptive {
+                Some(run) => run.mean_spp() as u64,
+                None => self.done,
+            },
             target: (self.opts.time_budget.is_none() || self.opts.spp.is_some())
                 .then_some(self.target),
             wall_time_s: self.elapsed(),
@@ -627,9 +752,13 @@ impl ImageSession<'_> {
 
 impl Progressive for ImageSession<'_> {
     fn step(&mut self) -> Option<PassStats> {
+        if !self.out_of_time() {
+            self.allocate();
+        }
         if self.finished() {
             return None;
         }
+        self.set_clip();
         let end = self.done + self.pass_size();
         Some(self.advance(end))
     }
@@ -675,6 +804,40 @@ pub(crate) fn sampler_kind(opts: &RenderOptions) -> SamplerKind {
     }
 }
 
+/// Why parts refuse adaptive sampling.
+const ADAPTIVE_WHOLE: &str = "--adaptive allocates each pixel's samples from a pilot of the whole \
+    render: it does not split into parts";
+
+/// What adaptive sampling does not go with.
+const ADAPTIVE_LAYERS: &str = "--spectral, --aov position/normal/depth/albedo, --illuminants \
+    and --light-groups average each pixel's samples alike (--aov variance is supported)";
+
+/// The plan of `opts`' adaptive render (None when not asked for), or why it cannot be;
+/// `emission_layers`: the scene has emission layers (`--illuminants`, `--light-groups`).
+pub fn check_adaptive(opts: &RenderOptions, emission_layers: bool) -> Result<Option<Plan>> {
+    if !opts.adaptive {
+        return Ok(None);
+    }
+    let refuse = |why: &str| Err(crate::error::Error::option(format!("--adaptive: {why}")));
+    if opts.integrator != Integrator::Path {
+        return refuse(&format!(
+            "the samples are allocated per pixel, and integrator {} splats or chooses \
+             (use --integrator path)",
+            opts.integrator.name()
+        ));
+    }
+    if opts.time_budget.is_some() && opts.spp.is_none() {
+        return refuse("the allocation needs a sample count (--spp), not a time budget");
+    }
+    if opts.layers.any() || emission_layers {
+        return refuse(ADAPTIVE_LAYERS);
+    }
+    let spp = opts.spp.unwrap_or(DEFAULT_SPP);
+    Plan::new(spp)
+        .map(Some)
+        .map_err(crate::error::Error::option)
+}
+
 /// Why parts refuse emission layers (a window without a part, a stage's `dataWindowNDC`,
 /// keeps them: they are cut to it like the image).
 const EMISSION_LAYERS_WHOLE: &str = "--illuminants and --light-groups render all the samples in \
@@ -698,11 +861,29 @@ struct Segment<'a> {
     own_wavelengths: bool,
     /// The film's grid (`sensor::grid_sum`).
     grid: Grid,
+    /// The film's width (a pixel's index in `adaptive`'s counts).
+    width: usize,
+    /// An adaptive render's segment.
+    adaptive: Option<Adaptive<'a>>,
+}
+
+/// A segment of an adaptive render: the pilot's, or each pixel's counts per replicate.
+#[derive(Clone, Copy)]
+struct Adaptive<'a> {
+    /// Collect the pilot's moments, clipped here.
+    clip: Option<f64>,
+    counts: Option<&'a [[u32; 2]]>,
 }
 
 /// A tile's accumulator (its own-pixel sums emptied), its own-pixel sums on the grid, the
-/// terms it clamped and its layers' sums.
-type TileSums = (TileAccumulator, Vec<Fixed3>, u64, LayerTile);
+/// terms it clamped, its layers' sums and an adaptive render's replicates.
+type TileSums = (
+    TileAccumulator,
+    Vec<Fixed3>,
+    u64,
+    LayerTile,
+    Option<ReplicateTile>,
+);
 
 /// Renders a tile's samples into `acc`: per-pixel XYZ sums, splats and the number of
 /// non-finite samples dropped. `HERO_ONLY`: every sample carries its hero wavelength alone
@@ -712,7 +893,7 @@ fn render_tile<const HERO_ONLY: bool>(
     scene: &Scene,
     tile: &Tile,
     task: &Segment,
-    (mut acc, mut layers): (TileAccumulator, LayerTile),
+    (mut acc, mut layers, mut reps): (TileAccumulator, LayerTile, Option<ReplicateTile>),
     ws: &mut Workspace,
 ) -> TileSums {
     let mut fixed = vec![[0; 3]; tile.pixel_count()];
@@ -726,7 +907,22 @@ fn render_tile<const HERO_ONLY: bool>(
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             let pixel = task.samplers.pixel(x as u32, y as u32);
-            for s in task.first..task.first + task.count {
+            let counts = task
+                .adaptive
+                .and_then(|a| a.counts)
+                .map(|c| c[y * task.width + x]);
+            let end = match counts {
+                Some(c) => (task.first + task.count).min(adaptive::end_of(c)),
+                None => task.first + task.count,
+            };
+            for s in task.first..end {
+                if counts.is_some_and(|c| !adaptive::takes(c, s)) {
+                    continue;
+                }
+                let rays = match &reps {
+                    Some(r) if r.collects() => ray_count::on_this_thread(),
+                    _ => 0,
+                };
                 let mut sampler = pixel.sampler(s);
                 sampler.set_dimension(dimensions::WAVELENGTH);
                 // Drawn either way: the independent sampler's later numbers follow it.
@@ -759,13 +955,19 @@ fn render_tile<const HERO_ONLY: bool>(
                 // and adds nothing, so it is skipped (design.md §8, "The per-sample cost,
                 // seventh pass").
                 let own = std::mem::replace(&mut acc.sums[k], [0.0; 3]);
+                let mut on_grid = None;
                 if own != [0.0; 3] {
                     let (t, c) = task.grid.triple(own);
                     clamped += c + u64::from(Grid::add3(&mut fixed[k], &t));
+                    on_grid = Some(t);
+                }
+                if let Some(r) = &mut reps {
+                    let rays = ray_count::on_this_thread().wrapping_sub(rays);
+                    clamped += u64::from(r.add(k, s, own, on_grid.as_ref(), rays));
                 }
             }
             k += 1;
         }
     }
-    (acc, fixed, clamped, layers)
+    (acc, fixed, clamped, layers, reps)
 }

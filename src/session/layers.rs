@@ -270,6 +270,8 @@ pub struct LayerImages {
     pub albedo: Option<Vec<[f32; 3]>>,
     /// The emission-weighted layers (`--illuminants`, `--light-groups`), in order.
     pub emission: Vec<EmissionImage>,
+    /// An adaptive render's samples per pixel and its settings (`session::adaptive`).
+    pub adaptive: Option<super::adaptive::AdaptiveImage>,
 }
 
 impl LayerFilms {
@@ -338,6 +340,7 @@ impl LayerFilms {
                 images: f.images(scale),
             }),
             variance: None,
+            adaptive: None,
             first_hit: self.first_hit.as_ref().filter(|f| f.geometry).map(|f| {
                 let mean = |p: &FirstHitSums, c0: usize| -> [f32; 3] {
                     std::array::from_fn(|c| mean_of(p.sums[c0 + c], p.hits))

@@ -53,6 +53,10 @@ const FILM_SPLATS: u64 = 56;
 const PASS: u64 = 88;
 const OUTPUT: u64 = 72;
 const STRATEGY: u64 = 96;
+/// Per pixel of an adaptive render (`session::adaptive`): the pilot's moments of both
+/// replicates (2 × 48 B), the allocation (8 B), the odd samples' sums and counts (56 B), the
+/// sample counts' image (4 B).
+const ADAPTIVE: u64 = 164;
 /// Bytes of one splat and its odd-sample copy.
 const SPLAT: u64 = 24;
 /// Bytes per meter.
@@ -128,6 +132,9 @@ pub fn image(scene: &Scene, opts: &RenderOptions) -> MemoryEstimate {
     if opts.strategies {
         let n = strategies::count(cap.min(strategies::MAX_DEPTH)) as u64;
         e.add("strategy images", pixels.saturating_mul(n * STRATEGY));
+    }
+    if opts.adaptive {
+        e.add("adaptive sampling", pixels.saturating_mul(ADAPTIVE));
     }
     e.add(
         "light vertices",

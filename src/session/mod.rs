@@ -10,6 +10,7 @@
 //! seed and each reading's sample count (blocks of fixed boundaries), whatever the pass sizes
 //! and the number of threads.
 
+pub mod adaptive;
 pub mod auto;
 pub mod checkpoint;
 pub mod crop;
