@@ -21,8 +21,9 @@
 //!
 //! **Robustness.**
 //! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored in
-//!   BVH primitive order, 36 bytes each (no index indirection per test; a leaf of three
-//!   triangles is 108 contiguous bytes).
+//!   BVH primitive order, 40 bytes each: 36 of coordinates and the triangle's input index,
+//!   which a hit reads from the line it was tested in (no index indirection per test; a leaf
+//!   of three triangles is 120 contiguous bytes).
 //! - Child boxes are the exact bounds of their triangles (the CWBVH's 8-bit quantised boxes are
 //!   not used), and the box test is conservative in the spirit of PBR 4ed §6.8.2
 //!   ("Conservative Ray–Bounds Intersections"; see `RayBoxes` in the source). A box the exact
@@ -81,10 +82,10 @@ pub struct BvhHit {
 pub struct Bvh {
     /// Node 0 is the root; empty for a BVH without hittable triangles.
     nodes: Vec<WideNode>,
-    /// Triangles in BVH primitive order, as a row store for [`PackedTriangle::load`].
+    /// Triangles in BVH primitive order, [`TRI_FLOATS`] each: the rows of
+    /// [`PackedTriangle::push_rows`], then the bits of the triangle's index into the slice given
+    /// to `build` (the last row's fourth lane, which the leaf test loads and ignores).
     rows: Vec<f32>,
-    /// BVH primitive order → index into the slice given to `build`.
-    input_index: Vec<u32>,
     input_count: usize,
     bounds: (Vec3, Vec3),
 }
@@ -129,6 +130,10 @@ impl Entry {
 /// meet: none of the primary, diffuse and shadow rays of `../shared/limit`'s box and 100k- and
 /// 1M-triangle spheres needed more than 16 (docs/design.md §8).
 const STACK_PLACES: usize = 16;
+
+/// Floats per triangle in [`Bvh::rows`]: its rows and its input index, which is also the
+/// [`ROW_PADDING`] float its last row's four-lane load reads.
+const TRI_FLOATS: usize = ROW_FLOATS + ROW_PADDING;
 
 /// Triangles per leaf (the CWBVH maximum).
 const LEAF_SIZE: u32 = 3;
@@ -228,10 +233,9 @@ impl Bvh {
         let ordered: Vec<[Vec3; 3]> = input_index.iter().map(|&i| triangles[i as usize]).collect();
         let nodes = wide_nodes(&cwbvh.nodes, &ordered);
         Bvh {
-            rows: row_store(&ordered),
+            rows: row_store(&ordered, &input_index),
             nodes,
             bounds: bounds_of(&ordered),
-            input_index,
             input_count: triangles.len(),
         }
     }
@@ -240,7 +244,6 @@ impl Bvh {
         Bvh {
             nodes: Vec::new(),
             rows: Vec::new(),
-            input_index: Vec::new(),
             input_count,
             bounds: (Vec3::ZERO, Vec3::ZERO),
         }
@@ -259,7 +262,7 @@ impl Bvh {
     /// from the BVH's triangle store: a hit's point and normal need no other copy of them.
     #[inline]
     pub fn vertices(&self, hit: &BvhHit) -> [Vec3; 3] {
-        PackedTriangle::load(&self.rows, hit.slot as usize).vertices()
+        PackedTriangle::at(&self.rows, TRI_FLOATS * hit.slot as usize).vertices()
     }
 
     /// [`Bvh::intersect`], adding the nodes and triangles it tests to `count` (for benchmarks;
@@ -310,8 +313,7 @@ impl Bvh {
     pub fn memory_bytes(&self) -> (usize, usize) {
         (
             self.nodes.len() * std::mem::size_of::<WideNode>(),
-            self.rows.len() * std::mem::size_of::<f32>()
-                + self.input_index.len() * std::mem::size_of::<u32>(),
+            self.rows.len() * std::mem::size_of::<f32>(),
         )
     }
 
@@ -343,7 +345,7 @@ impl Bvh {
             cost.triangles /= root;
         } else {
             cost.nodes = self.nodes.len() as f64;
-            cost.triangles = self.input_index.len() as f64;
+            cost.triangles = (self.rows.len() / TRI_FLOATS) as f64;
         }
         cost
     }
@@ -378,7 +380,7 @@ impl Bvh {
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             tally.triangles(count);
             for i in first..first + count {
-                let tri = PackedTriangle::load(&self.rows, i);
+                let tri = PackedTriangle::at(&self.rows, TRI_FLOATS * i);
                 if let Some(hit) = intersect_packed(triangle, tri, *t_max) {
                     *t_max = hit.t;
                     best = Some((i, hit));
@@ -388,7 +390,7 @@ impl Bvh {
         });
         let (i, hit) = best?;
         Some(BvhHit {
-            prim: *self.input_index.get(i)?,
+            prim: self.rows.get(TRI_FLOATS * i + ROW_FLOATS)?.to_bits(),
             slot: i as u32,
             hit,
         })
@@ -406,7 +408,7 @@ impl Bvh {
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             hit = (first..first + count).any(|i| {
                 tally.triangles(1);
-                let tri = PackedTriangle::load(&self.rows, i);
+                let tri = PackedTriangle::at(&self.rows, TRI_FLOATS * i);
                 intersect_packed(triangle, tri, *t_max).is_some()
             });
             hit
@@ -725,13 +727,13 @@ fn wide_nodes(cw: &[CwBvhNode], triangles: &[[Vec3; 3]]) -> Vec<WideNode> {
     nodes
 }
 
-/// The triangles' row store for [`PackedTriangle::load`], in BVH primitive order.
-fn row_store(ordered: &[[Vec3; 3]]) -> Vec<f32> {
-    let mut rows = Vec::with_capacity(ROW_FLOATS * ordered.len() + ROW_PADDING);
-    for &tri in ordered {
+/// The triangles' store ([`Bvh::rows`]) in BVH primitive order, each with its input index.
+fn row_store(ordered: &[[Vec3; 3]], input_index: &[u32]) -> Vec<f32> {
+    let mut rows = Vec::with_capacity(TRI_FLOATS * ordered.len());
+    for (&tri, &index) in ordered.iter().zip(input_index) {
         PackedTriangle::push_rows(&mut rows, tri);
+        rows.push(f32::from_bits(index));
     }
-    rows.extend([0.0; ROW_PADDING]);
     rows
 }
 
