@@ -378,7 +378,7 @@ impl Bvh {
         let mut best: Option<(usize, TriangleHit)> = None;
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             tally.triangles(count);
-            for at in (first..first + TRI_FLOATS * count).step_by(TRI_FLOATS) {
+            for at in (0..count).map(|k| first + TRI_FLOATS * k) {
                 let tri = PackedTriangle::at(&self.store, at);
                 if let Some(hit) = intersect_packed(triangle, tri, *t_max) {
                     *t_max = hit.t;
@@ -405,13 +405,11 @@ impl Bvh {
     ) -> bool {
         let mut hit = false;
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
-            hit = (first..first + TRI_FLOATS * count)
-                .step_by(TRI_FLOATS)
-                .any(|at| {
-                    tally.triangles(1);
-                    let tri = PackedTriangle::at(&self.store, at);
-                    intersect_packed(triangle, tri, *t_max).is_some()
-                });
+            hit = (0..count).map(|k| first + TRI_FLOATS * k).any(|at| {
+                tally.triangles(1);
+                let tri = PackedTriangle::at(&self.store, at);
+                intersect_packed(triangle, tri, *t_max).is_some()
+            });
             hit
         });
         hit

@@ -2,23 +2,23 @@
 //! triangles of its leaf children, so a ray that tests a node's leaves reads their rows from the
 //! lines and the 4 KiB page right after the node's own (Embree keeps a node's Triangle4 blocks
 //! beside it in the same way). Records are laid out in the collapse's node order (obvhs's
-//! depth-first `bvh2_to_cwbvh`: a node's children one after the other, the first child's
-//! subtree after them), each at a multiple of [`NODE_ALIGN`] floats.
+//! depth-first `bvh2_to_cwbvh`: a node's children one after the other, each followed by its
+//! triangles here, then the first child's subtree), each at a multiple of [`NODE_ALIGN`] words.
 //!
-//! A record is [`NODE_FLOATS`] words: the child boxes' 48 planes (half h's row r in floats
+//! A record is [`NODE_FLOATS`] words: the child boxes' 48 planes (half h's row r in words
 //! 24h + 4r … 24h + 4r + 3, as [`WideNode::planes`]), then eight child words (the bits of a u32:
 //! an inner child's record offset, a leaf's first triangle's offset), two words of leaf counts
-//! (a byte per slot) and one of masks (present in bits 0–7, leaves in bits 8–15). A triangle is
-//! [`TRI_FLOATS`] words: its rows ([`PackedTriangle::push_rows`]) and the bits of its index
-//! into the slice given to `Bvh::build`, which is the fourth lane its last row's load reads and
-//! ignores.
+//! (a byte per slot), and the masks of the slots that hold a child and of those that hold a
+//! leaf (a word each). A triangle is [`TRI_FLOATS`] words: its rows
+//! ([`PackedTriangle::push_rows`]) and the bits of its index into the slice given to
+//! `Bvh::build`, which is the fourth lane its last row's load reads and ignores.
 
 use glam::{Vec3, Vec4};
 
 use super::bvh::WideNode;
 use crate::geometry::triangle::{PackedTriangle, ROW_FLOATS, ROW_PADDING};
 
-/// Words of a node's record (240 bytes; one unused).
+/// Words of a node's record (240 bytes).
 pub(super) const NODE_FLOATS: usize = 60;
 /// Words of a triangle: rows, then its input index.
 pub(super) const TRI_FLOATS: usize = ROW_FLOATS + ROW_PADDING;
@@ -28,7 +28,8 @@ const NODE_ALIGN: usize = 4;
 
 const CHILD: usize = 48;
 const COUNT: usize = 56;
-const MASKS: usize = 58;
+const PRESENT: usize = 58;
+const LEAVES: usize = 59;
 
 /// A node's record in the store.
 #[derive(Clone, Copy, Debug)]
@@ -70,13 +71,13 @@ impl<'a> Record<'a> {
     /// Bit `s`: slot s holds a child.
     #[inline(always)]
     pub fn present(&self) -> u32 {
-        self.0[MASKS].to_bits() & 0xff
+        self.0[PRESENT].to_bits()
     }
 
     /// Bit `s`: slot s holds a leaf.
     #[inline(always)]
     pub fn leaves(&self) -> u32 {
-        self.0[MASKS].to_bits() >> 8 & 0xff
+        self.0[LEAVES].to_bits()
     }
 
     /// Slot `slot`'s box `(min, max)`.
@@ -127,7 +128,8 @@ pub(super) fn build(nodes: &[WideNode], ordered: &[[Vec3; 3]], input_index: &[u3
             words[CHILD + slot] = f32::from_bits(u32::try_from(word).expect("a 32-bit offset"));
         }
         words[COUNT..COUNT + 2].copy_from_slice(&counts.map(f32::from_bits));
-        words[MASKS] = f32::from_bits(node.present as u32 | (node.leaves as u32) << 8);
+        words[PRESENT] = f32::from_bits(node.present as u32);
+        words[LEAVES] = f32::from_bits(node.leaves as u32);
         store.extend(words);
         for slot in (0..8).filter(|&s| node.leaves & (1 << s) != 0) {
             let first = node.child[slot] as usize;
