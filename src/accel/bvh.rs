@@ -306,7 +306,8 @@ impl Bvh {
         self.input_count
     }
 
-    /// Bytes held: `(nodes, triangles)`, the triangles with their index into the input.
+    /// Bytes held: `(nodes, triangles)`, the nodes with the store's alignment padding, the
+    /// triangles with their index into the input.
     pub fn memory_bytes(&self) -> (usize, usize) {
         (
             (self.store.len() - TRI_FLOATS * self.hittable) * std::mem::size_of::<f32>(),
