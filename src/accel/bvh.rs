@@ -417,8 +417,8 @@ impl Bvh {
     }
 
     /// Calls `leaf(first, count, t_max)` (`first` the store offset of the leaf's first
-    /// triangle) for the leaves whose boxes the ray meets before
-    /// `t_max`, near to far within each node; `leaf` may lower `t_max` and returns true to stop.
+    /// triangle) for the leaves whose boxes the ray meets before `t_max`, near to far within
+    /// each node; `leaf` may lower `t_max` and returns true to stop.
     #[inline(always)]
     fn traverse<const N: usize>(
         &self,
@@ -604,8 +604,8 @@ impl Tally for TraversalCount {
 /// [`max_or_acc`] and [`min_or_acc`] skip. No other distance is NaN: p − o is finite or ±∞ and
 /// 1/d finite and non-zero elsewhere (a non-finite d never reaches the BVH).
 struct RayBoxes {
-    /// Per axis: the plane row (see [`WideNode::planes`], the store's layout) of the near slab; the far one is
-    /// `near ^ 1`.
+    /// Per axis: the plane row (see [`WideNode::planes`], the store's layout) of the near
+    /// slab; the far one is `near ^ 1`.
     near: [usize; 3],
     /// Per axis, splatted: a plane's distance is (plane − o)·inv.
     o: [Vec4; 3],
