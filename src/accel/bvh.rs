@@ -20,9 +20,11 @@
 //! nothing else.
 //!
 //! **Robustness.**
-//! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored in
-//!   BVH primitive order, 36 bytes each (no index indirection per test; a leaf of three
-//!   triangles is 108 contiguous bytes).
+//! - Triangles: the watertight test of [`crate::geometry::triangle`], on triangles stored
+//!   right after the record of the node whose leaves hold them (`accel/store.rs`), 40 bytes
+//!   each: 36 of coordinates and the triangle's input index, which a hit reads from the line
+//!   it was tested in (no index indirection per test; a leaf of three triangles is 120
+//!   contiguous bytes).
 //! - Child boxes are the exact bounds of their triangles (the CWBVH's 8-bit quantised boxes are
 //!   not used), and the box test is conservative in the spirit of PBR 4ed §6.8.2
 //!   ("Conservative Ray–Bounds Intersections"; see `RayBoxes` in the source). A box the exact
@@ -61,11 +63,11 @@ use obvhs::triangle::Triangle;
 
 use super::sah;
 use super::stack::Stack;
+use super::store::{self, Record, TRI_FLOATS};
 use crate::geometry::offset::gamma;
 use crate::geometry::ray::Ray;
 use crate::geometry::triangle::{
     intersect_packed, is_degenerate, PackedTriangle, TriangleHit, WatertightRay, ROW_FLOATS,
-    ROW_PADDING,
 };
 
 /// A hit found by the BVH: `prim` indexes the slice given to [`Bvh::build`]; `slot` is the
@@ -79,41 +81,41 @@ pub struct BvhHit {
 
 /// An 8-wide BVH over triangles, with the triangles stored in BVH primitive order.
 pub struct Bvh {
-    /// Node 0 is the root; empty for a BVH without hittable triangles.
-    nodes: Vec<WideNode>,
-    /// Triangles in BVH primitive order, as a row store for [`PackedTriangle::load`].
-    rows: Vec<f32>,
-    /// BVH primitive order → index into the slice given to `build`.
-    input_index: Vec<u32>,
+    /// The nodes' records, each followed by its leaves' triangles (`accel/store.rs`); the
+    /// root's at word 0; empty for a BVH without hittable triangles.
+    store: Vec<f32>,
+    /// Hittable triangles (those in the store).
+    hittable: usize,
     input_count: usize,
     bounds: (Vec3, Vec3),
 }
 
-/// A node with up to eight children. Slot `s` is lane `s % 4` of half `s / 4`.
+/// A node with up to eight children as built, before `accel/store.rs` lays it out. Slot `s` is
+/// lane `s % 4` of half `s / 4`.
 #[derive(Clone, Copy, Debug)]
-struct WideNode {
+pub(super) struct WideNode {
     /// `planes[h][2k]` / `planes[h][2k + 1]`: min / max along axis k of the children of half h.
-    planes: [[Vec4; 6]; 2],
+    pub planes: [[Vec4; 6]; 2],
     /// Inner child: its node index; leaf child: its first triangle (BVH order).
-    child: [u32; 8],
+    pub child: [u32; 8],
     /// Triangles of each leaf child (0 for inner children and empty slots).
-    count: [u8; 8],
+    pub count: [u8; 8],
     /// Bit `s`: slot s holds a child.
-    present: u8,
+    pub present: u8,
     /// Bit `s`: slot s holds a leaf.
-    leaves: u8,
+    pub leaves: u8,
 }
 
 /// A subtree waiting on the traversal stack: the bits of the (widened) distance where the ray
-/// enters it above its node index, one 8-byte word to push and pop.
+/// enters it above its record's offset in the store, one 8-byte word to push and pop.
 #[derive(Clone, Copy, Debug, Default)]
 struct Entry(u64);
 
 impl Entry {
     /// The child of `node` in the slot of `key` (see [`order_key`]), entered at the key's distance.
     #[inline(always)]
-    fn child(node: &WideNode, key: u64) -> Entry {
-        Entry(key & !0xffff_ffff | node.child[key as usize & 7] as u64)
+    fn child(node: &Record, key: u64) -> Entry {
+        Entry(key & !0xffff_ffff | node.child(key as usize) as u64)
     }
 
     #[inline(always)]
@@ -228,19 +230,17 @@ impl Bvh {
         let ordered: Vec<[Vec3; 3]> = input_index.iter().map(|&i| triangles[i as usize]).collect();
         let nodes = wide_nodes(&cwbvh.nodes, &ordered);
         Bvh {
-            rows: row_store(&ordered),
-            nodes,
+            store: store::build(&nodes, &ordered, &input_index),
+            hittable: ordered.len(),
             bounds: bounds_of(&ordered),
-            input_index,
             input_count: triangles.len(),
         }
     }
 
     fn empty(input_count: usize) -> Bvh {
         Bvh {
-            nodes: Vec::new(),
-            rows: Vec::new(),
-            input_index: Vec::new(),
+            store: Vec::new(),
+            hittable: 0,
             input_count,
             bounds: (Vec3::ZERO, Vec3::ZERO),
         }
@@ -259,7 +259,7 @@ impl Bvh {
     /// from the BVH's triangle store: a hit's point and normal need no other copy of them.
     #[inline]
     pub fn vertices(&self, hit: &BvhHit) -> [Vec3; 3] {
-        PackedTriangle::load(&self.rows, hit.slot as usize).vertices()
+        PackedTriangle::at(&self.store, hit.slot as usize).vertices()
     }
 
     /// [`Bvh::intersect`], adding the nodes and triangles it tests to `count` (for benchmarks;
@@ -306,12 +306,12 @@ impl Bvh {
         self.input_count
     }
 
-    /// Bytes held: `(nodes, triangles)`, the triangles with their index into the input.
+    /// Bytes held: `(nodes, triangles)`, the nodes with the store's alignment padding, the
+    /// triangles with their index into the input.
     pub fn memory_bytes(&self) -> (usize, usize) {
         (
-            self.nodes.len() * std::mem::size_of::<WideNode>(),
-            self.rows.len() * std::mem::size_of::<f32>()
-                + self.input_index.len() * std::mem::size_of::<u32>(),
+            (self.store.len() - TRI_FLOATS * self.hittable) * std::mem::size_of::<f32>(),
+            TRI_FLOATS * self.hittable * std::mem::size_of::<f32>(),
         )
     }
 
@@ -326,15 +326,16 @@ impl Bvh {
             nodes: 0.0,
             triangles: 0.0,
         };
-        for node in &self.nodes {
-            let boxes = (0..8).filter(|&s| node.present & (1 << s) != 0);
+        let records = store::records(&self.store);
+        for (_, node) in &records {
+            let boxes = (0..8).filter(|&s| node.present() & (1 << s) != 0);
             let node_box = boxes.clone().map(|s| node.child_box(s));
             let node_box = node_box.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |b, c| {
                 (b.0.min(c.0), b.1.max(c.1))
             });
             cost.nodes += area(node_box);
-            for s in boxes.filter(|&s| node.leaves & (1 << s) != 0) {
-                cost.triangles += area(node.child_box(s)) * node.count[s] as f64;
+            for s in boxes.filter(|&s| node.leaves() & (1 << s) != 0) {
+                cost.triangles += area(node.child_box(s)) * node.count(s) as f64;
             }
         }
         let root = area(self.bounds);
@@ -342,8 +343,8 @@ impl Bvh {
             cost.nodes /= root;
             cost.triangles /= root;
         } else {
-            cost.nodes = self.nodes.len() as f64;
-            cost.triangles = self.input_index.len() as f64;
+            cost.nodes = records.len() as f64;
+            cost.triangles = self.hittable as f64;
         }
         cost
     }
@@ -356,7 +357,7 @@ impl Bvh {
     /// False when nothing can be hit (no triangles, or an empty interval (0, t_max)).
     #[inline(always)]
     fn may_hit(&self, t_max: f32) -> bool {
-        !self.nodes.is_empty() && t_max > 0.0
+        !self.store.is_empty() && t_max > 0.0
     }
 
     /// Per-ray setup, or None when nothing can be hit.
@@ -366,7 +367,8 @@ impl Bvh {
         Some((WatertightRay::new(ray)?, RayBoxes::new(ray)))
     }
 
-    /// Closest-hit traversal: the hit, with its input index and its slot.
+    /// Closest-hit traversal: the hit, with its input index and its slot (the triangle's offset
+    /// in the store).
     fn closest<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
@@ -377,19 +379,19 @@ impl Bvh {
         let mut best: Option<(usize, TriangleHit)> = None;
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
             tally.triangles(count);
-            for i in first..first + count {
-                let tri = PackedTriangle::load(&self.rows, i);
+            for at in (0..count).map(|k| first + TRI_FLOATS * k) {
+                let tri = PackedTriangle::at(&self.store, at);
                 if let Some(hit) = intersect_packed(triangle, tri, *t_max) {
                     *t_max = hit.t;
-                    best = Some((i, hit));
+                    best = Some((at, hit));
                 }
             }
             false
         });
-        let (i, hit) = best?;
+        let (at, hit) = best?;
         Some(BvhHit {
-            prim: *self.input_index.get(i)?,
-            slot: i as u32,
+            prim: self.store.get(at + ROW_FLOATS)?.to_bits(),
+            slot: at as u32,
             hit,
         })
     }
@@ -404,9 +406,9 @@ impl Bvh {
     ) -> bool {
         let mut hit = false;
         self.traverse(stack, boxes, &mut t_max, tally, |first, count, t_max| {
-            hit = (first..first + count).any(|i| {
+            hit = (0..count).map(|k| first + TRI_FLOATS * k).any(|at| {
                 tally.triangles(1);
-                let tri = PackedTriangle::load(&self.rows, i);
+                let tri = PackedTriangle::at(&self.store, at);
                 intersect_packed(triangle, tri, *t_max).is_some()
             });
             hit
@@ -414,8 +416,9 @@ impl Bvh {
         hit
     }
 
-    /// Calls `leaf(first, count, t_max)` for the leaves whose boxes the ray meets before
-    /// `t_max`, near to far within each node; `leaf` may lower `t_max` and returns true to stop.
+    /// Calls `leaf(first, count, t_max)` (`first` the store offset of the leaf's first
+    /// triangle) for the leaves whose boxes the ray meets before `t_max`, near to far within
+    /// each node; `leaf` may lower `t_max` and returns true to stop.
     #[inline(always)]
     fn traverse<const N: usize>(
         &self,
@@ -432,16 +435,18 @@ impl Bvh {
         let mut limit = key_limit(*t_max);
         loop {
             if entry.0 <= limit {
-                let node = &self.nodes[entry.node()];
+                let Some(node) = Record::at(&self.store, entry.node()) else {
+                    return;
+                };
                 tally.node();
                 let (hits, t_enter) = node.intersect(ray, *t_max);
-                let leaves = hits & node.leaves as u32;
+                let leaves = hits & node.leaves();
                 if leaves != 0
                     && node.leaves_near_to_far(leaves, &t_enter, (t_max, &mut limit), &mut leaf)
                 {
                     return;
                 }
-                if let Some(next) = node.push_inner(hits & !node.leaves as u32, &t_enter, stack) {
+                if let Some(next) = node.push_inner(hits & !node.leaves(), &t_enter, stack) {
                     entry = next;
                     continue;
                 }
@@ -488,7 +493,7 @@ fn pick_key(mut mask: u32, t_enter: &[f32; 8], pick: impl Fn(u64, u64) -> u64) -
     best
 }
 
-impl WideNode {
+impl Record<'_> {
     /// Calls `leaf` on the leaf children in `leaves` (not empty), near to far, skipping those
     /// that start beyond `t_max` (keys above `limit`, [`key_limit`]) as `leaf` lowers it; true
     /// when `leaf` asks to stop.
@@ -504,7 +509,7 @@ impl WideNode {
             let key = pick_key(leaves, t_enter, u64::min);
             let slot = key as usize & 7;
             leaves &= !(1 << slot);
-            let (first, count) = (self.child[slot] as usize, self.count[slot] as usize);
+            let (first, count) = (self.child(slot) as usize, self.count(slot));
             if key <= *limit {
                 if leaf(first, count, t_max) {
                     return true;
@@ -536,6 +541,20 @@ impl WideNode {
             self,
             order_key(t_enter, inner.trailing_zeros()),
         ))
+    }
+}
+
+impl Record<'_> {
+    /// Mask of the children (bit = slot) whose boxes the ray meets within [0, t_max], and the
+    /// widened entry distance of each slot.
+    #[inline(always)]
+    fn intersect(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
+        let t_max = Vec4::splat(t_max);
+        let (m0, t0) = slab_half(self.half(0), ray, t_max);
+        let (m1, t1) = slab_half(self.half(1), ray, t_max);
+        let (t0, t1) = (t0.to_array(), t1.to_array());
+        let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
+        ((m0 | m1 << 4) & self.present(), t_enter)
     }
 }
 
@@ -585,8 +604,8 @@ impl Tally for TraversalCount {
 /// [`max_or_acc`] and [`min_or_acc`] skip. No other distance is NaN: p − o is finite or ±∞ and
 /// 1/d finite and non-zero elsewhere (a non-finite d never reaches the BVH).
 struct RayBoxes {
-    /// Per axis: the plane row (see [`WideNode::planes`]) of the near slab; the far one is
-    /// `near ^ 1`.
+    /// Per axis: the plane row (see [`WideNode::planes`], the store's layout) of the near
+    /// slab; the far one is `near ^ 1`.
     near: [usize; 3],
     /// Per axis, splatted: a plane's distance is (plane − o)·inv.
     o: [Vec4; 3],
@@ -646,28 +665,6 @@ impl WideNode {
         leaves: 0,
     };
 
-    /// Mask of the children (bit = slot) whose boxes the ray meets within [0, t_max], and the
-    /// widened entry distance of each slot.
-    #[inline(always)]
-    fn intersect(&self, ray: &RayBoxes, t_max: f32) -> (u32, [f32; 8]) {
-        let t_max = Vec4::splat(t_max);
-        let (m0, t0) = slab_half(&self.planes[0], ray, t_max);
-        let (m1, t1) = slab_half(&self.planes[1], ray, t_max);
-        let (t0, t1) = (t0.to_array(), t1.to_array());
-        let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
-        ((m0 | m1 << 4) & self.present as u32, t_enter)
-    }
-
-    /// Slot `slot`'s box `(min, max)`.
-    fn child_box(&self, slot: usize) -> (Vec3, Vec3) {
-        let (half, lane) = (slot / 4, slot % 4);
-        let plane = |row: usize| self.planes[half][row][lane];
-        (
-            Vec3::new(plane(0), plane(2), plane(4)),
-            Vec3::new(plane(1), plane(3), plane(5)),
-        )
-    }
-
     fn set_box(&mut self, slot: usize, (lo, hi): (Vec3, Vec3)) {
         let (half, lane) = (slot / 4, slot % 4);
         for k in 0..3 {
@@ -681,8 +678,8 @@ impl WideNode {
 /// The slab test of four children (PBR 4ed §6.1.2, widened as described at [`RayBoxes`]):
 /// the overlap mask (4 bits) and the entry distances (≥ +0, never NaN).
 #[inline(always)]
-fn slab_half(planes: &[Vec4; 6], ray: &RayBoxes, t_max: Vec4) -> (u32, Vec4) {
-    let distance = |row: usize, k: usize| (planes[row] - ray.o[k]) * ray.inv[k];
+fn slab_half(planes: &[f32; 24], ray: &RayBoxes, t_max: Vec4) -> (u32, Vec4) {
+    let distance = |row: usize, k: usize| (store::plane(planes, row) - ray.o[k]) * ray.inv[k];
     let (mut enter, mut exit) = (Vec4::ZERO, t_max);
     for k in 0..3 {
         enter = max_or_acc(distance(ray.near[k], k), enter);
@@ -725,27 +722,17 @@ fn wide_nodes(cw: &[CwBvhNode], triangles: &[[Vec3; 3]]) -> Vec<WideNode> {
     nodes
 }
 
-/// The triangles' row store for [`PackedTriangle::load`], in BVH primitive order.
-fn row_store(ordered: &[[Vec3; 3]]) -> Vec<f32> {
-    let mut rows = Vec::with_capacity(ROW_FLOATS * ordered.len() + ROW_PADDING);
-    for &tri in ordered {
-        PackedTriangle::push_rows(&mut rows, tri);
-    }
-    rows.extend([0.0; ROW_PADDING]);
-    rows
-}
-
 /// Number of nodes on the longest root-to-leaf path.
 #[cfg(test)]
-fn tree_depth(nodes: &[WideNode]) -> usize {
+fn tree_depth(store: &[f32]) -> usize {
     let mut deepest = 0;
     let mut pending = vec![(0u32, 1usize)];
-    while let Some((index, depth)) = pending.pop() {
+    while let Some((offset, depth)) = pending.pop() {
         deepest = deepest.max(depth);
-        let node = &nodes[index as usize];
+        let node = Record::at(store, offset as usize).expect("a record");
         for slot in 0..8 {
-            if (node.present & !node.leaves) & (1 << slot) != 0 {
-                pending.push((node.child[slot], depth + 1));
+            if (node.present() & !node.leaves()) & (1 << slot) != 0 {
+                pending.push((node.child(slot), depth + 1));
             }
         }
     }
@@ -900,6 +887,38 @@ mod tests {
                 assert!(!bvh.occluded(&r, f32::INFINITY));
             }
         }
+    }
+
+    /// The store holds every hittable triangle once, right after the record of the node whose
+    /// leaf holds it, with its input index and its vertices bit for bit.
+    #[test]
+    fn leaves_follow_their_node_in_the_store() {
+        let mut rng = Rng::new(11);
+        let mut tris = random_soup(&mut rng, 2000, 1.0);
+        tris[7] = [Vec3::ZERO; 3];
+        let bvh = Bvh::build(&tris);
+        let mut seen = vec![0; tris.len()];
+        for (offset, node) in store::records(&bvh.store) {
+            let mut next = offset + store::NODE_FLOATS;
+            for slot in (0..8).filter(|&s| node.leaves() & (1 << s) != 0) {
+                let first = node.child(slot) as usize;
+                assert_eq!(first, next);
+                for k in 0..node.count(slot) {
+                    let at = first + TRI_FLOATS * k;
+                    let prim = bvh.store[at + ROW_FLOATS].to_bits() as usize;
+                    seen[prim] += 1;
+                    let stored = PackedTriangle::at(&bvh.store, at).vertices();
+                    assert_eq!(
+                        stored.map(|p| p.to_array()),
+                        tris[prim].map(|p| p.to_array())
+                    );
+                }
+                next += TRI_FLOATS * node.count(slot);
+            }
+        }
+        let expected: Vec<u32> = (0..tris.len()).map(|i| (i != 7) as u32).collect();
+        assert_eq!(seen, expected);
+        assert_eq!(bvh.memory_bytes().1, 4 * TRI_FLOATS * (tris.len() - 1));
     }
 
     #[test]
@@ -1193,7 +1212,7 @@ mod tests {
                 for t_enter in below {
                     let key = order_key(&[t_enter; 8], slot);
                     assert!(key <= limit, "t_max {t_max}: {t_enter} in slot {slot}");
-                    let entry = Entry::child(&WideNode::EMPTY, key);
+                    let entry = Entry::child(&Record::EMPTY, key);
                     assert!(entry.0 <= limit, "t_max {t_max}: entry at {t_enter}");
                 }
                 if edge < f32::INFINITY {
@@ -1220,7 +1239,7 @@ mod tests {
         let mut spills = 0;
         for (tris, k) in [(&deep, 0), (&soup, 1)] {
             let bvh = Bvh::build(tris);
-            assert!(tree_depth(&bvh.nodes) >= 3);
+            assert!(tree_depth(&bvh.store) >= 3);
             let (lo, hi) = bvh.bounds();
             let (center, extent) = (0.5 * (lo + hi), (hi - lo).max_element());
             for _ in 0..3000 {

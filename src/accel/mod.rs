@@ -3,3 +3,4 @@
 pub mod bvh;
 mod sah;
 mod stack;
+mod store;

@@ -72,7 +72,8 @@ pub(crate) struct PackedTriangle<'a> {
 
 /// Floats per triangle in a row store ([`PackedTriangle::push_rows`]).
 pub(crate) const ROW_FLOATS: usize = 9;
-/// Floats that end a row store, so the last row's four-lane load stays inside it.
+/// Floats read after a triangle's rows (its last row's fourth lane), so the store must hold
+/// them too.
 pub(crate) const ROW_PADDING: usize = 1;
 
 /// A coordinate axis as the first float of its row in a [`PackedTriangle`]. Its values are
@@ -114,13 +115,13 @@ impl<'a> PackedTriangle<'a> {
         }
     }
 
-    /// Triangle `i` of a row store built by [`PackedTriangle::push_rows`] and ended by
-    /// [`ROW_PADDING`] floats (each row is loaded as four lanes). Out of range (not built so):
-    /// the zero triangle, which nothing hits.
+    /// The triangle whose rows ([`PackedTriangle::push_rows`]) start at float `start` of
+    /// `store`, which holds at least [`ROW_PADDING`] floats after them (each row is loaded as
+    /// four lanes; lane 3 is ignored). Out of range (not built so): the zero triangle, which
+    /// nothing hits.
     #[inline(always)]
-    pub fn load(rows: &'a [f32], i: usize) -> PackedTriangle<'a> {
-        let start = ROW_FLOATS * i;
-        let stored = rows.get(start..start + ROW_FLOATS + ROW_PADDING);
+    pub fn at(store: &'a [f32], start: usize) -> PackedTriangle<'a> {
+        let stored = store.get(start..start + ROW_FLOATS + ROW_PADDING);
         let floats = stored.and_then(|r| r.try_into().ok());
         PackedTriangle {
             floats: floats.unwrap_or(&ZERO_TRIANGLE),
