@@ -542,9 +542,7 @@ impl Record<'_> {
             order_key(t_enter, inner.trailing_zeros()),
         ))
     }
-}
 
-impl Record<'_> {
     /// Mask of the children (bit = slot) whose boxes the ray meets within [0, t_max], and the
     /// widened entry distance of each slot.
     #[inline(always)]
