@@ -380,26 +380,15 @@ impl PathIntegrator {
         let from = SpawnPoint::new(si.p, si.p_error, si.ng);
         // The BSDF's terms of ωo, shared by next event estimation and the BSDF sample.
         let at = bsdf.at(wo);
-        // The numbers are drawn in the layout's order (the independent sampler's stream), but
-        // the BSDF sample and the next ray are computed before next event estimation's work,
-        // which does not depend on them: the core runs that independent work while the
-        // next ray's chain of latencies completes (design.md §8, ninth pass).
-        let u_light = if bsdf.is_specular() {
-            None
-        } else {
+        if !bsdf.is_specular() {
             sampler.set_dimension(dimensions::in_block(block, LIGHT));
-            Some((sampler.get_1d(), sampler.get_2d()))
-        };
-        sampler.set_dimension(dimensions::in_block(block, BSDF));
-        let (uc, u) = (sampler.get_1d(), sampler.get_2d());
-        let sampled = at.sample_f(uc, u, TransportMode::Radiance);
-        let next_ray = sampled.as_ref().map(|bs| from.ray(bs.wi));
-        if let Some(u_light) = u_light {
             let v = (si, &from);
             let l = (st.beta, &mut st.le);
-            self.sample_ld(scene, v, &at, lambda, u_light, l, g);
+            self.sample_ld(scene, v, &at, lambda, sampler, l, g);
         }
-        let (Some(bs), Some(next_ray)) = (sampled, next_ray) else {
+        sampler.set_dimension(dimensions::in_block(block, BSDF));
+        let (uc, u) = (sampler.get_1d(), sampler.get_2d());
+        let Some(bs) = at.sample_f(uc, u, TransportMode::Radiance) else {
             return false;
         };
         st.beta *= bs.f * (bs.wi.dot(si.ns).abs() / bs.pdf_w);
@@ -411,7 +400,7 @@ impl PathIntegrator {
             pdf_bsdf_w: bs.pdf_w,
             specular: bs.specular,
         });
-        st.ray = next_ray;
+        st.ray = from.ray(bs.wi);
         st.t_max = f32::INFINITY;
         sampler.set_dimension(dimensions::in_block(block, ROULETTE));
         roulette::survives(&mut st.beta, st.eta_scale, st.depth, self.rr_depth, sampler)
@@ -545,9 +534,7 @@ impl PathIntegrator {
     /// every layer. A replacing layer samples its own light with the same numbers (the same
     /// point: only the spectrum differs) and shares the BSDF value, the shadow ray and the
     /// MIS weight, computed once. `from` is the vertex's [`SpawnPoint`], `bsdf` the BSDF at
-    /// the path's ωo, `(ul, u)` the light choice's and the light point's numbers (drawn by
-    /// the caller at the bounce's `LIGHT` dimensions), `le` the path's memo of the light's
-    /// radiance.
+    /// the path's ωo, `le` the path's memo of the light's radiance.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn sample_ld(
@@ -556,10 +543,11 @@ impl PathIntegrator {
         (si, from): (&SurfaceHit, &SpawnPoint),
         bsdf: &BsdfAt,
         lambda: &SampledWavelengths,
-        (ul, u): (f32, [f32; 2]),
+        sampler: &mut Sampler,
         (beta, le): (SampledSpectrum, &mut RadianceMemo),
         g: &mut Gathered,
     ) {
+        let (ul, u) = (sampler.get_1d(), sampler.get_2d());
         let ctx = LightSampleContext { p: si.p, n: si.ng };
         let Some((light, pmf)) = scene.light_sampler.sample_at(&ctx, ul) else {
             return;
