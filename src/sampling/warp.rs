@@ -11,25 +11,12 @@ pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    // The wedge, |x| > |y| or not, is as random as u: chosen by a mask rather than a branch
-    // (mispredicted on every other sample, design.md §8, ninth pass). Each wedge's values
-    // are the same operations as in the branching form (PBR 4ed §A.5.1), so the same bits
-    // (test `concentric_disk_is_the_branching_form`).
-    // Through `black_box`: LLVM otherwise sees the mask as the comparison and branches on it.
-    let x_wedge = std::hint::black_box(wedge_mask(o));
-    let pick = |a: f32, b: f32| f32::from_bits((a.to_bits() & x_wedge) | (b.to_bits() & !x_wedge));
-    let (r, other) = (pick(o.x, o.y), pick(o.y, o.x));
-    let q = FRAC_PI_4 * (other / r);
-    let theta = pick(q, FRAC_PI_2 - q);
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
+    };
     r * Vec2::new(theta.cos(), theta.sin())
-}
-
-/// All ones when |o.x| > |o.y|, else zero, with no branch or select: for finite floats of one sign the bit patterns order as the values, and
-/// the difference of two patterns below 2³¹ cannot overflow, so its sign bit is the test.
-#[inline(always)]
-fn wedge_mask(o: Vec2) -> u32 {
-    let (ax, ay) = (o.x.abs().to_bits() as i32, o.y.abs().to_bits() as i32);
-    (ay.wrapping_sub(ax) >> 31) as u32
 }
 
 /// Cosine-weighted hemisphere around +Z by Malley's method (PBR 4ed §A.5.3).
@@ -115,49 +102,6 @@ mod tests {
             assert!(uniform_cone(u, 0.9).z >= 0.9 - 1e-6);
             let b = uniform_triangle(u);
             assert!(b.iter().all(|&x| x >= -1e-6) && (b.iter().sum::<f32>() - 1.0).abs() < 1e-6);
-        }
-    }
-
-    /// The map as written with a branch per wedge (PBR 4ed §A.5.1).
-    fn concentric_disk_branching(u: [f32; 2]) -> Vec2 {
-        let o = Vec2::new(2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
-        if o.x == 0.0 && o.y == 0.0 {
-            return Vec2::ZERO;
-        }
-        let (r, theta) = if o.x.abs() > o.y.abs() {
-            (o.x, FRAC_PI_4 * (o.y / o.x))
-        } else {
-            (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-        };
-        r * Vec2::new(theta.cos(), theta.sin())
-    }
-
-    #[test]
-    fn concentric_disk_is_the_branching_form() {
-        let bits = |v: Vec2| [v.x.to_bits(), v.y.to_bits()];
-        let mut s = Sampler::new(11, 0, 0);
-        let mut us: Vec<[f32; 2]> = (0..100_000).map(|_| s.get_2d()).collect();
-        // The wedges' borders (|x| = |y|), the axes, the corners and the centre.
-        let edges = [
-            0.0,
-            0.25,
-            0.5,
-            0.75,
-            1.0 - f32::EPSILON / 2.0,
-            0.5f32.next_up(),
-        ];
-        for a in edges {
-            for b in edges {
-                us.push([a, b]);
-            }
-            us.push([a, 1.0 - a]);
-        }
-        for u in us {
-            assert_eq!(
-                bits(concentric_disk(u)),
-                bits(concentric_disk_branching(u)),
-                "{u:?}"
-            );
         }
     }
 
