@@ -103,8 +103,21 @@ impl Distribution1D {
     fn find_interval(&self, u: f32) -> usize {
         let n = self.func.len();
         let i = self.cdf.partition_point(|&c| c <= u);
-        let mut i = i.saturating_sub(1).min(n - 1);
-        // Skip zero-width cells so a zero-weight entry is never chosen.
+        let i = i.saturating_sub(1).min(n - 1);
+        // Skip zero-width cells so a zero-weight entry is never chosen. The cell's width is
+        // tested alone first (`cdf` has n + 1 entries, so `cdf[i + 1]` exists for i ≤ n − 1):
+        // it is almost never zero, where the loop's `i + 1 < n`, which LLVM tests first, is as
+        // random as the choice itself: a branch mispredicted on every other call of a
+        // two-entry table (design.md §8, ninth pass).
+        if self.cdf[i + 1] == self.cdf[i] {
+            return self.skip_zero_widths(i);
+        }
+        i
+    }
+
+    /// The first cell from `i` on that has a non-zero width, or the last cell.
+    fn skip_zero_widths(&self, mut i: usize) -> usize {
+        let n = self.func.len();
         while i + 1 < n && self.cdf[i + 1] == self.cdf[i] {
             i += 1;
         }
@@ -180,6 +193,57 @@ mod tests {
             let sigma = (p * (1.0 - p) / n as f64).sqrt();
             assert!((counts[i] as f64 / n as f64 - p).abs() <= 5.0 * sigma + 1e-12);
             assert!((d.discrete_pmf(i) as f64 - p).abs() < 1e-6);
+        }
+    }
+
+    /// `find_interval` as it was written before its two tests were swapped.
+    fn interval_reference(d: &Distribution1D, u: f32) -> usize {
+        let n = d.func.len();
+        let mut i = d
+            .cdf
+            .partition_point(|&c| c <= u)
+            .saturating_sub(1)
+            .min(n - 1);
+        while i + 1 < n && d.cdf[i + 1] == d.cdf[i] {
+            i += 1;
+        }
+        i
+    }
+
+    #[test]
+    fn interval_is_the_references_with_zero_widths_anywhere() {
+        let tables: [&[f32]; 7] = [
+            &[1.0, 1.0],
+            &[1.0, 0.0],
+            &[0.0, 1.0],
+            &[0.0, 0.0, 2.0, 0.0, 0.0],
+            &[3.0],
+            &[0.0, 0.0, 0.0],
+            &[1.0, 0.0, 3.0, 4.0, 0.0],
+        ];
+        let mut s = Sampler::new(7, 0, 0);
+        for w in tables {
+            let d = Distribution1D::new(w);
+            let mut us = vec![
+                0.0,
+                1.0,
+                -0.0,
+                -1.0,
+                2.0,
+                f32::NAN,
+                1.0 - f32::EPSILON / 2.0,
+            ];
+            for &c in &d.cdf {
+                us.extend([c, c.next_down(), c.next_up()]);
+            }
+            us.extend((0..1000).map(|_| s.get_1d()));
+            for u in us {
+                assert_eq!(
+                    d.find_interval(u),
+                    interval_reference(&d, u),
+                    "{w:?} at {u}"
+                );
+            }
         }
     }
 
