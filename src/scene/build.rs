@@ -4,7 +4,8 @@
 use super::analysis::{self, SceneFeatures};
 use super::limits;
 use super::machinery::Machinery;
-use super::render_scene::{Mesh, Scene, Summary, TriRef};
+use super::prim::{self, Prim};
+use super::render_scene::{Mesh, Scene, Summary};
 use crate::accel::bvh::Bvh;
 use crate::bxdf::TrowbridgeReitz;
 use crate::desc::*;
@@ -66,7 +67,7 @@ pub fn build_with(
 pub(super) struct Geometry {
     pub materials: Vec<Material>,
     pub meshes: Vec<Mesh>,
-    pub tri_refs: Vec<TriRef>,
+    pub prims: Vec<Prim>,
     pub bvh: Bvh,
     pub center: Vec3,
     pub radius: f32,
@@ -117,13 +118,13 @@ pub(super) fn geometry(desc: &SceneDescription, machinery: Machinery) -> Result<
             .map_err(|r| Error::prim(file, &m.prim_path, r))?,
         );
     }
-    let (tri_refs, triangles) = flatten_triangles(&meshes);
+    let (prims, triangles) = prim::flatten(&meshes);
     let bvh = Bvh::build(&triangles);
     let (center, radius) = bounding_sphere(&bvh);
     Ok(Geometry {
         materials,
         meshes,
-        tri_refs,
+        prims,
         bvh,
         center,
         radius,
@@ -149,14 +150,14 @@ pub(super) fn assemble(
     let Geometry {
         materials,
         meshes,
-        tri_refs,
+        prims,
         bvh,
         center,
         radius,
         mesh_lights: mut lights,
         ..
     } = geometry;
-    let triangles = tri_refs.len();
+    let triangles = prims.len();
     lights.extend(usd_lights);
     attach_portals(desc, &mut lights, &mut warnings)?;
     if lights.is_empty() {
@@ -201,7 +202,7 @@ pub(super) fn assemble(
     let mut scene = Scene {
         source: file.clone(),
         meshes,
-        tri_refs,
+        prims,
         bvh,
         all_opaque,
         any_textured,
@@ -702,21 +703,6 @@ fn mesh_peak_projected_area(m: &MeshDesc) -> f32 {
         })
         .collect();
     report::peak_projected_area(&patches, m.double_sided)
-}
-
-fn flatten_triangles(meshes: &[Mesh]) -> (Vec<TriRef>, Vec<[Vec3; 3]>) {
-    let mut refs = Vec::new();
-    let mut tris = Vec::new();
-    for (mi, m) in meshes.iter().enumerate() {
-        for (ti, t) in m.indices.iter().enumerate() {
-            refs.push(TriRef {
-                mesh: mi as u32,
-                tri: ti as u32,
-            });
-            tris.push(t.map(|i| m.positions[i as usize]));
-        }
-    }
-    (refs, tris)
 }
 
 fn bounding_sphere(bvh: &Bvh) -> (Vec3, f32) {

@@ -1,6 +1,6 @@
 //! Scenes: the USD reader (`usd/`, the only module naming openusd) producing the plain
 //! description (`crate::desc`), the builder (`build.rs`) and the immutable render scene with
-//! its ray queries (`render_scene.rs`, counted per thread by `ray_count.rs`), texture
+//! its ray queries (`render_scene.rs`, over the primitives of `prim.rs`, counted per thread by `ray_count.rs`), texture
 //! footprints at hits (`texcoord.rs`), and what the stage calls for (`analysis/`).
 
 pub mod analysis;
@@ -11,6 +11,7 @@ pub mod build;
 pub(crate) mod build;
 pub mod emission_layers;
 mod limits;
+mod prim;
 pub mod machinery;
 pub mod ray_count;
 mod rebuild;

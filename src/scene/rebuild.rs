@@ -184,7 +184,7 @@ fn take_geometry(scene: Scene, last: &Last) -> (Geometry, Vec<Light>, LightSampl
     let Scene {
         materials,
         meshes,
-        tri_refs,
+        prims,
         bvh,
         center,
         radius,
@@ -196,7 +196,7 @@ fn take_geometry(scene: Scene, last: &Last) -> (Geometry, Vec<Light>, LightSampl
     let geometry = Geometry {
         materials,
         meshes,
-        tri_refs,
+        prims,
         bvh,
         center,
         radius,

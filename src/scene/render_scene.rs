@@ -2,6 +2,7 @@
 //! lights with their sampler, the camera; plus closest-hit and shadow queries.
 
 use super::analysis::SceneFeatures;
+use super::prim::Prim;
 use crate::accel::bvh::{Bvh, BvhHit};
 use crate::desc::DataWindowDesc;
 use crate::geometry::triangle::hit_point_error;
@@ -87,7 +88,8 @@ pub struct Summary {
 pub struct Scene {
     pub source: PathBuf,
     pub meshes: Vec<Mesh>,
-    pub tri_refs: Vec<TriRef>,
+    /// Per BVH primitive (`BvhHit::prim`), its triangle and geometric normal (`scene/prim.rs`).
+    pub prims: Vec<Prim>,
     pub bvh: Bvh,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
@@ -213,14 +215,14 @@ impl Scene {
 
     /// The surface's hit: its vertices are read from the BVH's triangle store, where the
     /// query just found them (`Bvh::vertices`, bit for bit the mesh's), with no hops through
-    /// the mesh's indices and positions.
+    /// the mesh's indices and positions; its geometric normal is the primitive's, found when
+    /// the scene was built (`scene/prim.rs`).
     fn surface_hit(&self, found: &BvhHit) -> SurfaceHit {
         let hit = &found.hit;
-        let r = self.tri_refs[found.prim as usize];
+        let Prim { ng, tri: r } = self.prims[found.prim as usize];
         let mesh = &self.meshes[r.mesh as usize];
         let [p0, p1, p2] = self.bvh.vertices(found);
         let p = hit.b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
-        let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
         let uv = mesh.uvs.as_ref().map_or(Vec2::new(hit.b1, hit.b2), |uv| {
             let [a, b, c] = uv[r.tri as usize];
             hit.b0 * a + hit.b1 * b + hit.b2 * c
