@@ -248,6 +248,7 @@ impl Bvh {
     }
 
     /// Closest hit with t in (0, t_max).
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<BvhHit> {
         if !self.may_hit(t_max) {
             return None;
@@ -291,6 +292,7 @@ impl Bvh {
     }
 
     /// Whether anything is hit with t in (0, t_max) (shadow rays; stops at the first hit).
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         if !self.may_hit(t_max) {
             return false;
