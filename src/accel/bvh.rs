@@ -372,6 +372,7 @@ impl Bvh {
 
     /// Closest-hit traversal: the hit, with its input index and its slot (the triangle's offset
     /// in the store).
+    #[inline(always)]
     fn closest<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
@@ -400,6 +401,7 @@ impl Bvh {
     }
 
     /// Any-hit traversal with early exit.
+    #[inline(always)]
     fn any<const N: usize>(
         &self,
         stack: &mut Stack<Entry, N>,
