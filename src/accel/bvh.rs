@@ -561,7 +561,11 @@ impl Record<'_> {
         let (m1, t1) = slab_half(self.half(1), ray, t_max);
         let (t0, t1) = (t0.to_array(), t1.to_array());
         let t_enter = [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]];
-        ((m0 | m1 << 4) & self.present(), t_enter)
+        // No mask of the slots that hold a child: an empty slot's box is the empty one, whose
+        // entry (+∞ on an axis the ray is not parallel to) never precedes its exit (−∞), and
+        // it counts as a leaf of no triangles, so a ray parallel to all three axes' slabs
+        // (|d| < 2⁻¹²⁷ on each), which meets every box, tests nothing there (`store::build`).
+        ((m0 | m1 << 4), t_enter)
     }
 }
 
@@ -686,9 +690,17 @@ fn min_or_acc(a: Vec4, acc: Vec4) -> Vec4 {
     }
 }
 
+/// The planes of slots without a child: the empty box, min +∞ and max −∞ on every axis.
+const EMPTY_MIN: Vec4 = Vec4::splat(f32::INFINITY);
+const EMPTY_MAX: Vec4 = Vec4::splat(f32::NEG_INFINITY);
+
 impl WideNode {
+    /// No child; each slot's box the empty box (min +∞, max −∞), which no ray meets (see
+    /// `store::build`).
     const EMPTY: WideNode = WideNode {
-        planes: [[Vec4::ZERO; 6]; 2],
+        planes: [[
+            EMPTY_MIN, EMPTY_MAX, EMPTY_MIN, EMPTY_MAX, EMPTY_MIN, EMPTY_MAX,
+        ]; 2],
         child: [0; 8],
         count: [0; 8],
         present: 0,
@@ -1011,6 +1023,23 @@ mod tests {
                 hits += bvh.intersect(&r, t_max).is_some() as usize;
             }
             assert!(hits > 2500, "scale {scale}: only {hits} hits");
+        }
+    }
+
+    /// A direction below 2⁻¹²⁷ on every axis constrains no slab, so the ray meets every box,
+    /// the empty slots' empty boxes too (leaves of no triangles, `store::build`): the queries
+    /// still end and agree with brute force, on trees with partly filled nodes.
+    #[test]
+    fn rays_meeting_every_box_agree() {
+        let mut rng = Rng::new(12);
+        for n in [1, 5, 40, 300] {
+            let tris = random_soup(&mut rng, n, 1.0);
+            let bvh = Bvh::build(&tris);
+            for _ in 0..200 {
+                let o = rng.vec3(-2.0, 2.0);
+                let d = rng.vec3(-1.0, 1.0) * 1e-39;
+                assert_agrees(&bvh, &tris, &Ray::new(o, d), f32::INFINITY);
+            }
         }
     }
 

@@ -9,7 +9,8 @@
 //! 24h + 4r … 24h + 4r + 3, as [`WideNode::planes`]), then eight child words (the bits of a u32:
 //! an inner child's record offset, a leaf's first triangle's offset), two words of leaf counts
 //! (a byte per slot), and the masks of the slots that hold a child and of those that hold a
-//! leaf (a word each). A triangle is [`TRI_FLOATS`] words: its rows
+//! leaf or nothing (a word each; an empty slot is a leaf of no triangles whose box, min +∞ and
+//! max −∞, no ray meets, so the traversal reads the second mask only). A triangle is [`TRI_FLOATS`] words: its rows
 //! ([`PackedTriangle::push_rows`]) and the bits of its index into the slice given to
 //! `Bvh::build`, which is the fourth lane its last row's load reads and ignores.
 
@@ -74,7 +75,7 @@ impl<'a> Record<'a> {
         self.0[PRESENT].to_bits()
     }
 
-    /// Bit `s`: slot s holds a leaf.
+    /// Bit `s`: slot s holds a leaf, or nothing (a leaf of no triangles, its box the empty one).
     #[inline(always)]
     pub fn leaves(&self) -> u32 {
         self.0[LEAVES].to_bits()
@@ -112,24 +113,25 @@ pub(super) fn build(nodes: &[WideNode], ordered: &[[Vec3; 3]], input_index: &[u3
                 words[24 * h + 4 * r..24 * h + 4 * r + 4].copy_from_slice(&row.to_array());
             }
         }
+        // An empty slot is a leaf of no triangles (its box is the empty one, `WideNode::EMPTY`):
+        // the traversal needs no mask of the present slots.
+        let leaves = node.leaves | !node.present;
         let mut counts = [0u32; 2];
         let mut row = offset + NODE_FLOATS;
         for slot in 0..8 {
-            let word = if node.leaves & (1 << slot) != 0 {
+            let word = if leaves & (1 << slot) != 0 {
                 counts[slot / 4] |= (node.count[slot] as u32) << (8 * (slot % 4));
                 let first = row;
                 row += TRI_FLOATS * node.count[slot] as usize;
                 first
-            } else if node.present & (1 << slot) != 0 {
-                offsets[node.child[slot] as usize].0
             } else {
-                0
+                offsets[node.child[slot] as usize].0
             };
             words[CHILD + slot] = f32::from_bits(u32::try_from(word).expect("a 32-bit offset"));
         }
         words[COUNT..COUNT + 2].copy_from_slice(&counts.map(f32::from_bits));
         words[PRESENT] = f32::from_bits(node.present as u32);
-        words[LEAVES] = f32::from_bits(node.leaves as u32);
+        words[LEAVES] = f32::from_bits(leaves as u32);
         store.extend(words);
         for slot in (0..8).filter(|&s| node.leaves & (1 << s) != 0) {
             let first = node.child[slot] as usize;

@@ -11,8 +11,8 @@ pub mod build;
 pub(crate) mod build;
 pub mod emission_layers;
 mod limits;
-mod prim;
 pub mod machinery;
+mod prim;
 pub mod ray_count;
 mod rebuild;
 #[cfg(feature = "testing")]
