@@ -42,3 +42,43 @@ pub fn flatten(meshes: &[Mesh]) -> (Vec<Prim>, Vec<[Vec3; 3]>) {
     }
     (prims, tris)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::normal_map::Tangents;
+
+    fn mesh(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
+        Mesh {
+            prim_path: "/m".into(),
+            positions,
+            indices,
+            normals: None,
+            uvs: None,
+            tangents: Tangents::Unused,
+            material: 0,
+            light_offset: None,
+        }
+    }
+
+    /// Primitives come mesh by mesh in triangle order, each with its triangle's vertices and
+    /// unit normal (the authored front face's), zero for a degenerate triangle.
+    #[test]
+    fn flatten_orders_and_normals() {
+        let quad = mesh(
+            vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::Z],
+            vec![[0, 2, 1], [0, 3, 2]],
+        );
+        let sliver = mesh(vec![Vec3::ZERO, Vec3::Y, 2.0 * Vec3::Y], vec![[0, 1, 2]]);
+        let (prims, tris) = flatten(&[quad, sliver]);
+        let refs: Vec<(u32, u32)> = prims.iter().map(|p| (p.tri.mesh, p.tri.tri)).collect();
+        assert_eq!(refs, [(0, 0), (0, 1), (1, 0)]);
+        assert_eq!(tris[1], [Vec3::ZERO, Vec3::Z, Vec3::new(1.0, 0.0, 1.0)]);
+        assert_eq!(prims[0].ng, Vec3::Y);
+        assert_eq!(prims[1].ng, Vec3::Y);
+        assert_eq!(prims[2].ng, Vec3::ZERO);
+        for (p, t) in prims.iter().zip(&tris) {
+            assert_eq!(p.ng.to_array(), geometric_normal(*t).to_array());
+        }
+    }
+}
