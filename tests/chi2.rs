@@ -908,7 +908,7 @@ fn distribution_cases() -> Vec<Case> {
                 .test_count(m)
                 .run(
                     |s| {
-                        let (i, pmf) = d.sample_discrete(s.get_1d());
+                        let (i, pmf, _) = d.sample_discrete(s.get_1d());
                         Some(((i as f32 + 0.5) / n as f32, pmf as f64 * n as f64))
                     },
                     |x| step_pdf(&WEIGHTS_1D, x),

@@ -40,7 +40,7 @@ impl PowerShare {
 
     /// A light chosen by power (light subpaths).
     pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
-        let (i, pmf) = self.power.sample_discrete(u);
+        let (i, pmf, _) = self.power.sample_discrete(u);
         (pmf > 0.0).then_some((i, pmf))
     }
 

@@ -67,7 +67,7 @@ impl LightSampler {
             LightSampler::Empty => None,
             LightSampler::Single => Some((0, 1.0)),
             LightSampler::Power(d) => {
-                let (i, pmf) = d.sample_discrete(u);
+                let (i, pmf, _) = d.sample_discrete(u);
                 (pmf > 0.0).then_some((i, pmf))
             }
             LightSampler::Spatial(s) => s.sample_by_power(u),

@@ -96,7 +96,7 @@ impl SpatialSampler {
             None => Some((g.lights[0], p_group)),
             Some(t) => {
                 let v = ((target - below) / imp[k]).clamp(0.0, 1.0 - f32::EPSILON / 2.0);
-                let (m, pm) = t.sample_discrete(v);
+                let (m, pm, _) = t.sample_discrete(v);
                 (pm > 0.0).then_some((g.lights[m], p_group * pm))
             }
         }

@@ -53,14 +53,17 @@ impl Distribution1D {
         self.integral
     }
 
-    /// Samples a discrete index; returns (index, probability). It also returned u remapped to
-    /// [0, 1) within the index's cell, (u − cdf[i]) / width, which no caller used: a division
-    /// at the end of the light choice's chain, 2.5 times a path sample (design.md §8, tenth
-    /// pass).
+    /// Samples a discrete index; returns (index, probability, remapped u in [0,1)).
     #[inline]
-    pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
+    pub fn sample_discrete(&self, u: f32) -> (usize, f32, f32) {
         let i = self.find_interval(u);
-        (i, self.discrete_pmf(i))
+        let width = self.cdf[i + 1] - self.cdf[i];
+        let remapped = if width > 0.0 {
+            ((u - self.cdf[i]) / width).clamp(0.0, 1.0 - f32::EPSILON)
+        } else {
+            0.0
+        };
+        (i, self.discrete_pmf(i), remapped)
     }
 
     /// Probability of index `i` under [`Self::sample_discrete`].

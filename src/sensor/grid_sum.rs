@@ -73,10 +73,14 @@ impl Grid {
     }
 
     /// An XYZ triple on the grid, and how many channels were clamped.
-    #[inline(always)]
-    pub fn triple(self, [x, y, z]: [f64; 3]) -> (Fixed3, u64) {
-        let ((x, cx), (y, cy), (z, cz)) = (self.term(x), self.term(y), self.term(z));
-        ([x, y, z], u64::from(cx) + u64::from(cy) + u64::from(cz))
+    pub fn triple(self, xyz: [f64; 3]) -> (Fixed3, u64) {
+        let mut clamped = 0;
+        let t = xyz.map(|c| {
+            let (v, c) = self.term(c);
+            clamped += u64::from(c);
+            v
+        });
+        (t, clamped)
     }
 }
 
@@ -106,18 +110,13 @@ fn scale_by_power_of_two(x: f64, k: i32) -> f64 {
 /// 2^k, the value `2f64.powi(k)` gives: for a normal result (−1022 ≤ k ≤ 1023, which covers
 /// every exponent `for_scale` makes) built from its IEEE 754 exponent field (biased by 1023,
 /// mantissa 0, IEEE 754-2019 §3.4) without `powi`'s per-call loop of multiplications
-/// (`__powidf2`, twice per film term). Beyond, powi's own results, also without the call:
-/// it squares up to 2^|k| and takes the reciprocal for k < 0, so 2^−1023 (subnormal, exact)
-/// at k = −1023, 0 below (2^1024 overflows), ∞ above 1023 (tested). A `powi` left in the
-/// other branch was hoisted above the range test by LLVM (a pure intrinsic), so that
-/// `Film::variance_y` called `__powidf2` twice a pixel every pass (design.md §8, tenth pass).
+/// (`__powidf2`, twice per film term).
 #[inline]
 fn power_of_two(k: i32) -> f64 {
-    match k {
-        -1022..=1023 => f64::from_bits(((k + 1023) as u64) << 52),
-        -1023 => f64::from_bits(1 << 51),
-        1024.. => f64::INFINITY,
-        _ => 0.0,
+    if (-1022..=1023).contains(&k) {
+        f64::from_bits(((k + 1023) as u64) << 52)
+    } else {
+        2f64.powi(k)
     }
 }
 

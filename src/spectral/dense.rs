@@ -2,7 +2,7 @@
 //! curve (CIE observer, illuminants, reflectances, metal n and k).
 
 use super::{LAMBDA_MAX, LAMBDA_MIN, N_LAMBDA};
-use glam::Vec4;
+use glam::{UVec4, Vec4};
 
 /// Number of 1 nm samples in [`LAMBDA_MIN`, `LAMBDA_MAX`].
 pub const DENSE_LEN: usize = (LAMBDA_MAX - LAMBDA_MIN) as usize + 1;
@@ -74,8 +74,9 @@ impl DenseSpectrum {
         // `contains`: false for NaN; such lanes are read at index 0 and give 0.
         let inside = x.cmpge(Vec4::ZERO) & x.cmple(last);
         let x = Vec4::select(inside, x, Vec4::ZERO);
-        let (i, index) = cells(x);
-        let t = x - i;
+        let i = x.as_uvec4().min(UVec4::splat(DENSE_LEN as u32 - 2));
+        let t = x - i.as_vec4();
+        let index = i.to_array().map(|k| k as usize);
         let lo = Vec4::from_array(index.map(|k| self.values[k]));
         let hi = Vec4::from_array(index.map(|k| self.values[k + 1]));
         let v = lo * (Vec4::ONE - t) + hi * t;
@@ -100,28 +101,6 @@ impl DenseSpectrum {
     pub fn max_value(&self) -> f32 {
         self.values.iter().copied().fold(0.0, f32::max)
     }
-}
-
-/// 2²³: a float x in [0, 2²³) plus it is x rounded to an integer (to nearest), exactly, as the
-/// sum's ulp is 1 (IEEE 754-2019 §4.3); and the bits of 2²³ + k are those of 2²³ plus k.
-const ROUNDER: f32 = 8_388_608.0;
-
-/// For lanes in [0, DENSE_LEN − 1], the cell ⌊x⌋ clamped to DENSE_LEN − 2, as floats and as
-/// indices: the values of `x.as_uvec4().min(DENSE_LEN − 2)` and their floats, in vector
-/// operations. `as_uvec4` converts lane by lane through 64 bits and clamps each (about 45
-/// instructions a call; design.md §8, tenth pass). ⌊x⌋ is x rounded to nearest, less 1 where
-/// that rounded up (exact: integers below 2²⁴); the min of whole numbers commutes with the
-/// conversion; the indices are the bits of 2²³ + ⌊x⌋ less those of 2²³.
-#[inline]
-fn cells(x: Vec4) -> (Vec4, [usize; N_LAMBDA]) {
-    let rounder = Vec4::splat(ROUNDER);
-    let near = (x + rounder) - rounder;
-    let floor = near - Vec4::select(near.cmpgt(x), Vec4::ONE, Vec4::ZERO);
-    let cell = floor.min(Vec4::splat((DENSE_LEN - 2) as f32));
-    let index = (cell + rounder)
-        .to_array()
-        .map(|v| ((v.to_bits() - ROUNDER.to_bits()) as usize).min(DENSE_LEN - 2));
-    (cell, index)
 }
 
 /// Linear interpolation in a sorted (x, y) table, holding the end values outside it.
@@ -165,23 +144,6 @@ mod tests {
             let lanes: [f32; N_LAMBDA] = w.try_into().unwrap();
             let want = lanes.map(|l| d.eval(l).to_bits());
             assert_eq!(d.eval_lanes(lanes).map(f32::to_bits), want, "{lanes:?}");
-        }
-    }
-
-    #[test]
-    fn cells_are_the_u32_conversion_and_min() {
-        // Every float of [1, DENSE_LEN − 1] and of [0, 1) with a stride, and −0: the former
-        // `as_uvec4().min(..)` and its floats.
-        let last = (DENSE_LEN - 1) as f32;
-        let floats = (1.0f32.to_bits()..=last.to_bits())
-            .chain((0..1.0f32.to_bits()).step_by(97))
-            .map(f32::from_bits)
-            .chain([-0.0, 1.0f32.next_down(), 0.5, 468.5, 469.0, 469.5, last]);
-        for x in floats {
-            let (cell, index) = cells(Vec4::splat(x));
-            let want = (x as u32).min(DENSE_LEN as u32 - 2);
-            assert_eq!(index, [want as usize; N_LAMBDA], "{x}");
-            assert_eq!(cell.to_array().map(f32::to_bits), [(want as f32).to_bits(); N_LAMBDA]);
         }
     }
 
