@@ -60,10 +60,14 @@ struct InfoArgs {
     /// The depth cap to report on (default: the render's, unlimited).
     #[arg(long = "max-depth")]
     max_depth: Option<u32>,
-    /// The path tracer's first bounce of Russian roulette in the pilot (as for rendering).
-    #[arg(long = "rr-depth", default_value_t = crate::integrator::roulette::DEFAULT_RR_DEPTH,
-          value_parser = super::common::at_least::<u32>(1))]
-    rr_depth: u32,
+    /// The path tracer's first bounce of Russian roulette in the pilot (as for rendering:
+    /// `auto` or a whole number of at least 1).
+    #[arg(
+        long = "rr-depth",
+        default_value = "auto",
+        allow_negative_numbers = true
+    )]
+    rr_depth: crate::integrator::roulette::RrStart,
 }
 
 /// Entry point: `argv[0]` is "info".
