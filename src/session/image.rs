@@ -357,6 +357,11 @@ impl<'a> ImageSession<'a> {
         self.auto = Some(auto);
     }
 
+    /// The path tracer's roulette (`session::roulette`); None for the other integrators.
+    pub fn roulette(&self) -> Option<&Roulette> {
+        self.roulette.as_ref()
+    }
+
     /// Ray queries the session's samples have made so far (`pool::ray_queries`).
     pub fn ray_queries(&self) -> u64 {
         pool::ray_queries(&self.pool).wrapping_sub(self.pilot_rays)
