@@ -94,7 +94,7 @@ fn where_roulette_starts_does_not_move_the_mean() {
 /// pixel over 2 304 pixels, is added.
 #[test]
 fn the_pilot_predicts_the_rays_roulette_costs() {
-    use spectral_render::integrator::roulette_pilot::{choose, FIXED_COST};
+    use spectral_render::integrator::roulette_pilot::choose;
     use spectral_render::sampling::SamplerKind;
     use spectral_render::session::ImageSession;
     let scene = scene::load(&cbox_path(), Some((48, 48))).unwrap();
@@ -118,7 +118,7 @@ fn the_pilot_predicts_the_rays_roulette_costs() {
         session::run(&mut s, &mut session::quiet);
         let pixels = 48.0 * 48.0;
         let measured = s.ray_queries() as f64 / (s.samples() as f64 * pixels);
-        let predicted = c.cost - FIXED_COST;
+        let predicted = c.cost;
         let se = c.cost_se * (1.0 + 2.0 * pixels / (pixels * 64.0)).sqrt();
         eprintln!("start {start}: {measured:.4} rays a sample, predicted {predicted:.4} ± {se:.4}");
         assert!(

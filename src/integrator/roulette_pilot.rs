@@ -24,8 +24,9 @@
 //!   mean over the pilot's pixels: the expected squared error of the image, each pixel
 //!   alike, as relRMSE and MSE weigh them.
 //! - **Cost.** Ray queries, the renderer's deterministic measure of work (`scene::ray_count`,
-//!   as `auto`'s pilot uses): Σ_k P_k r_k, r_k the queries of group k, plus
-//!   [`FIXED_COST`] for the sample's camera, wavelengths and film.
+//!   as `auto`'s pilot uses): Σ_k P_k r_k, r_k the queries of group k. The path tracer's CPU
+//!   time is proportional to them across starts, with no fixed part to speak of (measured on
+//!   two scenes: docs/design.md §8, "Where roulette starts, chosen per scene").
 //!
 //! The start with the highest efficiency 1/(variance × cost) wins (Rath et al. 2022,
 //! "EARS: Efficiency-Aware Russian Roulette and Splitting", ACM TOG 41(4), §3, eq. (3): the
@@ -67,10 +68,9 @@ pub const PILOT_PIXELS: u64 = 4096;
 pub const PILOT_DEPTH: u32 = 32;
 /// The latest start considered; with a depth cap D, start D + 1 means no roulette.
 pub const LATEST_START: u32 = 8;
-/// A sample's work outside its rays, in ray queries: the camera ray's generation, the
-/// wavelengths and the film (about a third of a bounce's instructions, each bounce a closest
-/// hit, a shadow ray and the shading: design.md §8, "The per-sample cost, eighth pass").
-pub const FIXED_COST: f64 = 1.0;
+/// How many standard errors ahead of the default start another must be to be chosen: a
+/// one-sided 97.7 % test, as `auto` asks bdpt to show itself ahead of vcm.
+pub const SHOWN_SE: f64 = 2.0;
 /// Salts the pilot's seed so that its numbers are not the image's first samples.
 const PILOT_SALT: u64 = 0x7261_6f75_6c65_7474;
 
@@ -81,10 +81,15 @@ pub struct Candidate {
     pub start: u32,
     /// The mean variance of a pixel's luminance per sample (cd²/m⁴ before the exposure).
     pub variance: f64,
-    /// The mean ray queries a sample (plus [`FIXED_COST`]).
+    /// The mean ray queries a sample.
     pub cost: f64,
     /// The standard error of `cost` (from the spread over the pilot's pixels).
     pub cost_se: f64,
+    /// Shown ahead of [`DEFAULT_RR_DEPTH`]: its variance × cost is below the default's by more
+    /// than [`SHOWN_SE`] standard errors of their difference over the pilot's pixels (the
+    /// candidates are rated on the same paths, so the difference's error is small). True for
+    /// the default itself.
+    pub shown: bool,
 }
 
 impl Candidate {
@@ -172,28 +177,7 @@ pub fn choose(scene: &Scene, max_depth: u32, filter: TextureFilter, seed: u64) -
             },
         )
         .collect();
-    let n = per_pixel.len() as f64;
-    let candidates: Vec<Candidate> = starts
-        .iter()
-        .enumerate()
-        .map(|(i, &start)| {
-            let sum = per_pixel.iter().fold([0.0; 3], |acc, p| {
-                [
-                    acc[0] + p[i][0],
-                    acc[1] + p[i][1],
-                    acc[2] + p[i][1] * p[i][1],
-                ]
-            });
-            let cost = sum[1] / n;
-            let spread = (sum[2] / n - cost * cost).max(0.0) * n / (n - 1.0).max(1.0);
-            Candidate {
-                start,
-                variance: sum[0] / n,
-                cost: cost + FIXED_COST,
-                cost_se: (spread / n).sqrt(),
-            }
-        })
-        .collect();
+    let candidates = rate(&starts, &per_pixel);
     let best = best(&candidates)?;
     Some(Choice {
         start: best.start,
@@ -202,11 +186,46 @@ pub fn choose(scene: &Scene, max_depth: u32, filter: TextureFilter, seed: u64) -
     })
 }
 
-/// The most efficient candidate: [`DEFAULT_RR_DEPTH`] unless another is strictly more
-/// efficient, the earliest of equals otherwise (a scene whose paths roulette never reaches
-/// rates every start alike); None when no candidate has a positive, finite variance.
+/// Each start's figures from the pilot's per-pixel [variance, cost] (`per_pixel[pixel][i]`
+/// for `starts[i]`).
+fn rate(starts: &[u32], per_pixel: &[Vec<[f64; 2]>]) -> Vec<Candidate> {
+    let n = per_pixel.len() as f64;
+    let mean = |f: &dyn Fn(&Vec<[f64; 2]>) -> f64| per_pixel.iter().map(f).sum::<f64>() / n;
+    // The sample variance of the per-pixel values `f`, about their mean `m`.
+    let spread = |f: &dyn Fn(&Vec<[f64; 2]>) -> f64, m: f64| {
+        per_pixel.iter().map(|p| (f(p) - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)
+    };
+    let cost: Vec<f64> = (0..starts.len()).map(|i| mean(&|p| p[i][1])).collect();
+    let default = starts.iter().position(|&s| s == DEFAULT_RR_DEPTH);
+    (0..starts.len())
+        .map(|i| {
+            let variance = mean(&|p| p[i][0]);
+            // variance × cost against the default's, pixel by pixel on the same paths.
+            let shown = match default {
+                Some(d) if d != i => {
+                    let diff = |p: &Vec<[f64; 2]>| p[i][0] * cost[i] - p[d][0] * cost[d];
+                    let m = mean(&diff);
+                    m + SHOWN_SE * (spread(&diff, m) / n).sqrt() < 0.0
+                }
+                _ => true,
+            };
+            Candidate {
+                start: starts[i],
+                variance,
+                cost: cost[i],
+                cost_se: (spread(&|p| p[i][1], cost[i]) / n).sqrt(),
+                shown,
+            }
+        })
+        .collect()
+}
+
+/// The most efficient candidate among those shown ahead of [`DEFAULT_RR_DEPTH`] (and the
+/// default itself): the default unless another is strictly more efficient, the earliest of
+/// equals otherwise (a scene whose paths roulette never reaches rates every start alike);
+/// None when no candidate has a positive, finite variance.
 fn best(candidates: &[Candidate]) -> Option<&Candidate> {
-    let valid = |c: &&Candidate| c.variance > 0.0 && c.variance.is_finite();
+    let valid = |c: &&Candidate| c.shown && c.variance > 0.0 && c.variance.is_finite();
     let default = candidates
         .iter()
         .filter(valid)
@@ -380,6 +399,7 @@ mod tests {
             variance,
             cost: 2.0,
             cost_se: 0.0,
+            shown: true,
         };
         let same = [c(1, 1.0), c(2, 1.0), c(3, 1.0)];
         assert_eq!(best(&same).unwrap().start, 2);
@@ -388,6 +408,30 @@ mod tests {
         let broken = [c(1, f64::NAN), c(2, 0.0), c(3, -1.0)];
         assert!(best(&broken).is_none());
         assert_eq!(best(&[c(1, 0.5), c(2, f64::INFINITY)]).unwrap().start, 1);
+        let not_shown = Candidate {
+            shown: false,
+            ..c(3, 0.5)
+        };
+        assert_eq!(best(&[c(2, 1.0), not_shown]).unwrap().start, 2);
+    }
+
+    /// A start is shown ahead of the default only when its variance × cost is lower on the
+    /// same pixels by more than the noise of the difference.
+    #[test]
+    fn a_start_must_show_itself_ahead_of_the_default() {
+        // Pixel values [variance, cost] for starts 2 and 3: start 3 lower everywhere by 10 %
+        // (shown), start 4 lower on average but as often higher (not shown).
+        let per_pixel: Vec<Vec<[f64; 2]>> = (0..100)
+            .map(|i| {
+                let v = 1.0 + (i % 7) as f64;
+                let noisy = if i % 2 == 0 { 0.5 * v } else { 1.4 * v };
+                vec![[v, 1.0], [0.9 * v, 1.0], [noisy, 1.0]]
+            })
+            .collect();
+        let rated = rate(&[2, 3, 4], &per_pixel);
+        assert!(rated[0].shown && rated[1].shown, "{rated:?}");
+        assert!(!rated[2].shown, "{rated:?}");
+        assert_eq!(best(&rated).unwrap().start, 3);
     }
 
     #[test]
