@@ -60,8 +60,9 @@
 //! (`--sampler`; default zsobol, the reference's too), e.g. `bdpt,bdpt@independent` for the
 //! variance the low-discrepancy sequence saves BDPT at the same sample count.
 //!
-//! `path:rrN` is the path tracer with Russian roulette from bounce N (`--rr-depth N`, default
-//! `roulette::DEFAULT_RR_DEPTH`), e.g. `path,path:rr5,path@independent,path:rr5@independent`.
+//! `path:rrN` is the path tracer with Russian roulette from bounce N (`--rr-depth N`; `path`
+//! alone takes the default, `auto`: the roulette pilot's choice per seed), e.g.
+//! `path,path:rr2,path:rr5,path@independent,path:rr5@independent`.
 //!
 //! `vcm:bins=B` is VCM with per-sample wavelength tuples and merges within B hero bins
 //! (`VcmWavelengths::PerSample`), the measured alternative to one tuple per iteration.
@@ -70,7 +71,7 @@
 use spectral_render::converge::mask::emitter_mask;
 use spectral_render::converge::metrics::REL_MSE_OFFSET;
 use spectral_render::integrator::bidir::MergeRule;
-use spectral_render::integrator::roulette::DEFAULT_RR_DEPTH;
+use spectral_render::integrator::roulette::RrStart;
 use spectral_render::integrator::vcm::{VcmParams, VcmWavelengths};
 use spectral_render::output::exr;
 use spectral_render::sampling::SamplerKind;
@@ -110,7 +111,7 @@ enum Metric {
 
 /// An integrator, the sampler its samples draw from and the path tracer's first bounce of
 /// Russian roulette (`--rr-depth`).
-type Config = (Integrator, SamplerKind, u32);
+type Config = (Integrator, SamplerKind, RrStart);
 
 /// `NAME[@SAMPLER]`: the integrator `NAME` ([`integrator`]) on `SAMPLER` (default zsobol);
 /// `path:rrN` is the path tracer with roulette from bounce N (`--rr-depth N`).
@@ -127,9 +128,9 @@ fn config(name: &str) -> Result<Config, String> {
         if rr == 0 {
             return Err(format!("{n}: the roulette's first bounce is at least 1"));
         }
-        return Ok((Integrator::Path, sampler, rr));
+        return Ok((Integrator::Path, sampler, RrStart::At(rr)));
     }
-    Ok((integrator(n)?, sampler, DEFAULT_RR_DEPTH))
+    Ok((integrator(n)?, sampler, RrStart::Auto))
 }
 
 fn integrator(name: &str) -> Result<Integrator, String> {
@@ -184,7 +185,7 @@ fn parse() -> Result<Args, String> {
         integrators: vec![
             (
                 "path".into(),
-                (Integrator::Path, SamplerKind::default(), DEFAULT_RR_DEPTH),
+                (Integrator::Path, SamplerKind::default(), RrStart::Auto),
             ),
             (
                 "bdpt".into(),
@@ -193,7 +194,7 @@ fn parse() -> Result<Args, String> {
                         mis: MisHeuristic::Power,
                     },
                     SamplerKind::default(),
-                    DEFAULT_RR_DEPTH,
+                    RrStart::Auto,
                 ),
             ),
         ],
@@ -370,7 +371,7 @@ fn reference(scene: &spectral_render::scene::Scene, args: &Args) -> (Vec<f64>, V
         args.reference_spp.map(|n| n.div_ceil(2)),
     );
     let kind = args.reference_integrator;
-    let config = (kind, SamplerKind::default(), DEFAULT_RR_DEPTH);
+    let config = (kind, SamplerKind::default(), RrStart::Auto);
     let a = render_y(scene, args, config, half, 1001, None);
     let b = render_y(scene, args, config, half, 1002, None);
     let (sa, sb, ta, tb) = (a.spp, b.spp, a.wall, b.wall);

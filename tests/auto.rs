@@ -101,6 +101,12 @@ fn cornell_boxes_have_no_caustics_and_the_pilot_chooses() {
         if let Some(c) = expected {
             assert_eq!(choice(&doc), c, "{}: {doc}", path.display());
         }
+        // The path tracer's roulette start, as `--rr-depth auto` chose it, ends the reasons.
+        if choice(&doc) == "path" {
+            let reasons = doc["integrator"]["reasons"].as_array().unwrap();
+            let last = reasons.last().unwrap().as_str().unwrap();
+            assert!(last.starts_with("Russian roulette from bounce "), "{doc}");
+        }
         // No cap by default: only the safety cap's ρ^1024 / (1 − ρ), nothing.
         assert!(doc["max_depth"]["value"].is_null(), "{doc}");
         let bound = doc["max_depth"]["bound_cut"].as_f64().unwrap();

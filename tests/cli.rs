@@ -161,6 +161,7 @@ fn bad_options_are_rejected() {
         ["small.usda", "--integrator", "magic"],
         ["small.usda", "--rr-depth", "0"],
         ["small.usda", "--rr-depth", "-2"],
+        ["small.usda", "--rr-depth", "automatic"],
     ] {
         let o = spectral_render(&args, &dir);
         assert!(!o.status.success(), "{args:?} accepted");
@@ -197,4 +198,15 @@ fn rr_depth_is_an_option_of_render_and_info() {
     let o = spectral_render(&["small.usda", "--spp", "2", "--integrator", "bdpt"], &dir);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!rr(&dir).contains_key(exr::RR_DEPTH_ATTRIBUTE));
+    // By default (`auto`) a pilot chooses the start, says so, and the EXR names its choice.
+    for args in [
+        &["small.usda", "--spp", "2"][..],
+        &["small.usda", "--spp", "2", "--rr-depth", "auto"],
+    ] {
+        let o = spectral_render(args, &dir);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let start: u32 = rr(&dir)[exr::RR_DEPTH_ATTRIBUTE].parse().unwrap();
+        let said = format!("note: Russian roulette from bounce {start} (chosen by a pilot");
+        assert!(stderr(&o).contains(&said), "{}", stderr(&o));
+    }
 }

@@ -12,7 +12,7 @@ mod common;
 use common::*;
 use glam::Vec3;
 use spectral_render::integrator::path::PathIntegrator;
-use spectral_render::integrator::roulette::DEFAULT_RR_DEPTH;
+use spectral_render::integrator::roulette::{RrStart, DEFAULT_RR_DEPTH};
 use spectral_render::sampling::Sampler;
 use spectral_render::scene::Scene;
 use spectral_render::session::{self, measure, DepthCut, MeterOptions, RenderOptions, Stop};
@@ -103,7 +103,12 @@ fn without_a_cap_nothing_is_cut_unless_the_safety_cap_is_reached() {
     // limit either: 1025 bounces' worth of Le kept, 1024 more found, a lower bound. Whatever
     // bounce roulette starts at: its survival probability is min(max β, 1) = 1 (`roulette.rs`).
     let white = furnace(1.0);
-    for rr_depth in [1, 2, 5] {
+    for rr_depth in [
+        RrStart::At(1),
+        RrStart::At(2),
+        RrStart::At(5),
+        RrStart::Auto,
+    ] {
         let opts = RenderOptions {
             spp: Some(16),
             rr_depth,

@@ -436,8 +436,9 @@ fn a_resume_of_another_run_is_one_line() {
     let err = stderr(&other);
     assert_eq!(other.status.code(), Some(1), "{err}");
     assert!(err.contains("another run: seed 0 there, 9 here"), "{err}");
-    // The roulette's start is part of the run; at its default it is not named, so checkpoints
-    // written before `--rr-depth` existed still resume.
+    // The roulette's start is part of the run: `auto`, the default, is named; 2, the default
+    // before it, is not, so checkpoints written before `--rr-depth` existed still resume with
+    // `--rr-depth 2`.
     let mut args = vec![s.as_str()];
     args.extend(INTERRUPTED_RUN);
     args.extend(["--spp", "4000", "--rr-depth", "5", "--resume", "ck"]);
@@ -445,7 +446,7 @@ fn a_resume_of_another_run_is_one_line() {
     let err = stderr(&rr);
     assert_eq!(rr.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("another run: rr depth missing there, 5 here"),
+        err.contains("another run: rr depth auto there, 5 here"),
         "{err}"
     );
     std::fs::write(dir.join("junk"), b"spectral-render checkpoint\nxx").unwrap();

@@ -5,6 +5,7 @@
 use crate::error::{Error, Result};
 use crate::integrator::bidir::MergeRule;
 use crate::integrator::cut;
+use crate::integrator::roulette::RrStart;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::exr::{ExrMetadata, TimeMetadata};
@@ -120,11 +121,12 @@ pub struct IntegratorArgs {
     #[arg(long = "vcm-light-paths", allow_negative_numbers = true, value_parser = at_least::<u64>(1))]
     pub vcm_light_paths: Option<u64>,
     /// The path tracer's first bounce at which Russian roulette may end a path (Mitsuba's
-    /// rr_depth; 2 is pbrt-v4's rule); survival max β·η², at most 1. BDPT and VCM keep
-    /// pbrt-v4's.
-    #[arg(long = "rr-depth", default_value_t = crate::integrator::roulette::DEFAULT_RR_DEPTH,
-          allow_negative_numbers = true, value_parser = at_least::<u32>(1))]
-    pub rr_depth: u32,
+    /// rr_depth; 2 is pbrt-v4's rule); survival max β·η², at most 1. `auto` (images): chosen
+    /// per scene by a pilot of a few thousand paths, as the start that reaches a given error
+    /// soonest; meters take 2. BDPT and VCM keep pbrt-v4's.
+    #[arg(long = "rr-depth", default_value = "auto", allow_negative_numbers = true,
+          value_parser = parse_rr_start)]
+    pub rr_depth: RrStart,
 }
 
 impl IntegratorArgs {
@@ -210,9 +212,14 @@ impl MachineryArgs {
 
 /// Prints the integrator's report (`Estimator::report`) as a note.
 pub fn print_report(report: &Option<String>) {
-    if let Some(r) = report {
-        eprintln!("note: {r}");
+    for line in report.iter().flat_map(|r| r.lines()) {
+        eprintln!("note: {line}");
     }
+}
+
+/// `--rr-depth`: `auto` or a whole number of at least 1 (`RrStart`).
+fn parse_rr_start(s: &str) -> std::result::Result<RrStart, String> {
+    s.trim().parse()
 }
 
 /// A value parser for a `ValueEnum` whose error names the kind of value and lists the
@@ -435,9 +442,9 @@ pub struct Made<'a> {
     pub integrator: &'a Integrator,
     pub seed: u64,
     pub max_depth: Option<u32>,
-    /// The path tracer's first bounce of Russian roulette (`--rr-depth`); written only when
-    /// `integrator` is the path tracer, the only one it applies to.
-    pub rr_depth: u32,
+    /// The path tracer's first bounce of Russian roulette (`--rr-depth`, as resolved:
+    /// `RenderOutput::rr_depth`); None for the other integrators, which it does not apply to.
+    pub rr_depth: Option<u32>,
     pub spp: u64,
     pub wall_time_s: f64,
     /// The sampler the samples drew from (`RenderOutput::sampler`), when known.
@@ -454,7 +461,7 @@ impl Made<'_> {
             sampler: self.sampler.map(|s| s.name().into()),
             seed: self.seed,
             max_depth: self.max_depth,
-            rr_depth: matches!(self.integrator, Integrator::Path).then_some(self.rr_depth),
+            rr_depth: self.rr_depth,
             exposure: camera.exposure,
             wall_time_s: self.wall_time_s,
             version: env!("CARGO_PKG_VERSION").into(),

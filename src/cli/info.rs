@@ -60,10 +60,14 @@ struct InfoArgs {
     /// The depth cap to report on (default: the render's, unlimited).
     #[arg(long = "max-depth")]
     max_depth: Option<u32>,
-    /// The path tracer's first bounce of Russian roulette in the pilot (as for rendering).
-    #[arg(long = "rr-depth", default_value_t = crate::integrator::roulette::DEFAULT_RR_DEPTH,
-          value_parser = super::common::at_least::<u32>(1))]
-    rr_depth: u32,
+    /// The path tracer's first bounce of Russian roulette in the pilot (as for rendering:
+    /// `auto` or a whole number of at least 1).
+    #[arg(
+        long = "rr-depth",
+        default_value = "auto",
+        allow_negative_numbers = true
+    )]
+    rr_depth: crate::integrator::roulette::RrStart,
 }
 
 /// Entry point: `argv[0]` is "info".
@@ -95,7 +99,7 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
     };
     let (auto, cost) = choose(&scene, &opts)?;
     let out = if args.json {
-        document(&scene.features, &auto, depth)?
+        document(&scene.features, &auto, depth, &cost.roulette)?
     } else {
         text(&scene, &auto, depth, &cost)
     };
@@ -109,6 +113,8 @@ struct Cost {
     spp: u64,
     seconds_per_spp: f64,
     rays_per_sample: f64,
+    /// What the roulette pilot chose for the path tracer (`session::roulette`).
+    roulette: Option<String>,
 }
 
 /// Runs `auto`'s pilot for `opts` and measures the chosen integrator's cost.
@@ -132,12 +138,14 @@ fn choose(scene: &Scene, opts: &RenderOptions) -> Result<(AutoReport, Cost)> {
         spp: u64::from(opts.spp.unwrap_or(DEFAULT_SPP)),
         seconds_per_spp: seconds / samples as f64,
         rays_per_sample: session.ray_queries() as f64 / (samples * pixels.max(1)) as f64,
+        roulette: session.roulette().and_then(|r| r.report.clone()),
     };
     Ok((auto, cost))
 }
 
-/// The reasons of the choice: the analysis's, each candidate's pilot, the summary line.
-fn reasons(auto: &AutoReport) -> Vec<String> {
+/// The reasons of the choice: the analysis's, each candidate's pilot, the summary line, and
+/// where the chosen path tracer's roulette starts when its pilot chose (`--rr-depth auto`).
+fn reasons(auto: &AutoReport, roulette: &Option<String>) -> Vec<String> {
     let mut out = auto.reasons.clone();
     for p in &auto.pilot {
         out.push(format!(
@@ -150,6 +158,7 @@ fn reasons(auto: &AutoReport) -> Vec<String> {
         ));
     }
     out.push(auto.summary());
+    out.extend(roulette.clone());
     out
 }
 
@@ -185,7 +194,12 @@ fn bound_cut(f: &SceneFeatures, depth: Option<u32>) -> Option<f64> {
     f.bound_cut(depth.unwrap_or(SAFETY_DEPTH))
 }
 
-fn document(f: &SceneFeatures, auto: &AutoReport, depth: Option<u32>) -> Result<String> {
+fn document(
+    f: &SceneFeatures,
+    auto: &AutoReport,
+    depth: Option<u32>,
+    roulette: &Option<String>,
+) -> Result<String> {
     let features = f
         .all()
         .into_iter()
@@ -202,7 +216,7 @@ fn document(f: &SceneFeatures, auto: &AutoReport, depth: Option<u32>) -> Result<
         features,
         integrator: IntegratorJson {
             choice: auto.choice.name(),
-            reasons: reasons(auto),
+            reasons: reasons(auto, roulette),
         },
         max_depth: MaxDepthJson {
             value: depth,
@@ -245,7 +259,7 @@ fn text(scene: &Scene, auto: &AutoReport, depth: Option<u32>, cost: &Cost) -> St
         );
     }
     let _ = writeln!(s, "integrator: {}", auto.choice.name());
-    for r in reasons(auto) {
+    for r in reasons(auto, &cost.roulette) {
         let _ = writeln!(s, "  {r}");
     }
     let _ = match (depth, bound_cut(f, depth)) {

@@ -741,7 +741,7 @@ pub(super) fn options(a: &MeterArgs) -> Result<MeterOptions> {
         time_budget: a.time,
         seed: a.seed,
         max_depth: a.max_depth,
-        rr_depth: a.integrator.rr_depth,
+        rr_depth: a.integrator.rr_depth.or_default(),
         threads: a.threads,
         integrator: a.integrator.integrator(true)?,
         max_memory: a.max_memory,

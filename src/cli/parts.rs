@@ -10,6 +10,8 @@
 
 use super::common::Made;
 use crate::error::{Error, Result};
+use crate::integrator::cut::depth_cap;
+use crate::integrator::roulette::{RrStart, DEFAULT_RR_DEPTH};
 use crate::integrator::Integrator;
 use crate::output::atomic::write_atomically;
 use crate::output::target::{Format, Target};
@@ -17,6 +19,7 @@ use crate::scene::Scene;
 use crate::session::checkpoint::Checkpoint;
 use crate::session::crop::{self, Crop, CropSpec};
 use crate::session::part::{self, Part};
+use crate::session::roulette;
 use crate::session::{ImageSession, RenderOptions, RenderOutput, DEFAULT_SPP};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -201,11 +204,14 @@ pub fn made<'a>(
         Some(d) => Some(d.parse().map_err(|_| bad("max depth"))?),
         None => return Err(bad("max depth")),
     };
-    // Named in the identity only when not the default (`session::checkpoint::identity`).
-    let rr_depth = match part::value(identity, "rr depth") {
+    // Named in the identity unless 2, the default before `auto` (`session::checkpoint::
+    // identity`); `auto` is resolved again, as every part resolved it (`session::roulette`).
+    let rr = match part::value(identity, "rr depth") {
         Some(d) => d.parse().map_err(|_| bad("rr depth"))?,
-        None => crate::integrator::roulette::DEFAULT_RR_DEPTH,
+        None => RrStart::At(DEFAULT_RR_DEPTH),
     };
+    let rr_depth =
+        roulette::resolve(scene, integrator, rr, depth_cap(max_depth), seed).map(|r| r.start);
     Ok(Made {
         stage,
         scene,

@@ -380,7 +380,7 @@ fn made<'a>(
         integrator,
         seed: opts.seed,
         max_depth: opts.max_depth,
-        rr_depth: opts.rr_depth,
+        rr_depth: out.rr_depth,
         spp: out.spp,
         wall_time_s: out.wall_time_s,
         sampler: out.sampler,

@@ -35,6 +35,9 @@ pub struct ReferenceInfo {
     pub time_s: f64,
     /// The sampler both halves drew from.
     pub sampler: Option<SamplerKind>,
+    /// The path tracer's roulette start (`RenderOutput::rr_depth`), when both halves took
+    /// the same.
+    pub rr_depth: Option<u32>,
 }
 
 /// The integrator of a reference of `scene`'s image when none is named (module docs).
@@ -77,6 +80,7 @@ pub fn render(
         spp_per_half: a.spp,
         time_s: clock.seconds(),
         sampler: a.sampler,
+        rr_depth: a.rr_depth.filter(|_| a.rr_depth == b.rr_depth),
     };
     Ok((from_halves(&a, &b), info))
 }

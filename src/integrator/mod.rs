@@ -29,6 +29,7 @@ pub mod meter;
 pub mod path;
 pub(crate) mod radiance_memo;
 pub mod roulette;
+pub mod roulette_pilot;
 pub mod vcm;
 
 pub use bidir::{MisHeuristic, Workspace};

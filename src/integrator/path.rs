@@ -24,6 +24,7 @@ use super::gathered::Gathered;
 use super::meter::MeterIntegrator;
 use super::radiance_memo::RadianceMemo;
 use super::roulette;
+use super::roulette_pilot::PilotGroup;
 use super::{Estimator, Settings, Workspace};
 use crate::bxdf::{BsdfAt, TransportMode};
 use crate::geometry::offset::{spawn_ray, SpawnPoint};
@@ -33,7 +34,7 @@ use crate::light::{Light, LightHit, LightLiSample, LightSampleContext};
 use crate::material::{Material, SpectraCache};
 use crate::sampling::dimensions::{self, BSDF, LIGHT, ROULETTE};
 use crate::sampling::{power_heuristic, Sampler};
-use crate::scene::{Hit, Scene, SurfaceHit};
+use crate::scene::{ray_count, Hit, Scene, SurfaceHit};
 use crate::sensor::meter::{MeterKind, MeterSensor};
 use crate::spectral::{SampledSpectrum, SampledWavelengths};
 use crate::texture::TextureFilter;
@@ -200,6 +201,65 @@ impl PathIntegrator {
         g.l = lambda_in.rebase(g.l, &lambda);
         for s in g.sums.iter_mut() {
             *s = lambda_in.rebase(*s, &lambda);
+        }
+    }
+
+    /// One path of the roulette pilot (`roulette_pilot.rs`): `li_gather`'s walk without
+    /// roulette, to this integrator's depth cap, recording each group of contributions that
+    /// one roulette test decides (the emission found on arriving at a vertex and next event
+    /// estimation there), relative to `lambda_in`, with the ray queries it took and the max
+    /// β·η² of the test before it (1 before the first); the emission the camera ray finds is
+    /// not recorded. No cut: the cap ends the path.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn pilot_walk(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        lambda_in: &SampledWavelengths,
+        sampler: &mut Sampler,
+        spectra: &mut SpectraCache,
+        out: &mut Vec<PilotGroup>,
+    ) {
+        let pt = PathIntegrator {
+            rr_depth: u32::MAX,
+            ..*self
+        };
+        let mut lambda = *lambda_in;
+        let mut st = PathState::new(ray, t_max, None);
+        spectra.begin(&scene.materials, lambda_in);
+        let mut g = Gathered::plain();
+        let mut b = 1.0;
+        loop {
+            let (l0, rays0) = (g.l, ray_count::on_this_thread());
+            let hit = pt.next_vertex(scene, &mut st, &lambda, sampler, &mut g);
+            // Emitters the camera sees directly are left out: roulette does not touch them.
+            let seen = if st.depth == 0 {
+                g.l - l0
+            } else {
+                SampledSpectrum::ZERO
+            };
+            let more = match &hit {
+                Some(Hit::Surface(si)) if st.depth < self.max_depth => {
+                    let (l, s) = (&mut lambda, &mut *spectra);
+                    if scene.dispersive {
+                        pt.scatter::<true>(scene, si, &mut st, l, sampler, &mut g, s)
+                    } else {
+                        pt.scatter::<false>(scene, si, &mut st, l, sampler, &mut g, s)
+                    }
+                }
+                _ => false,
+            };
+            let rays = ray_count::on_this_thread().wrapping_sub(rays0);
+            out.push(PilotGroup {
+                l: lambda_in.rebase(g.l - l0 - seen, &lambda),
+                b,
+                rays: rays as u32,
+            });
+            if !more {
+                return;
+            }
+            b = st.beta.max_value() * st.eta_scale;
         }
     }
 

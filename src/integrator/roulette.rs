@@ -1,4 +1,5 @@
-//! The path tracer's Russian roulette (`--rr-depth`).
+//! The path tracer's Russian roulette (`--rr-depth`); where it starts by default is chosen
+//! per scene by `roulette_pilot.rs`.
 //!
 //! After its `start`-th scattering event (and every later one) a path whose throughput has
 //! dropped below 1 survives with probability p = max β·η² and carries 1/p from then on;
@@ -23,9 +24,52 @@ use crate::spectral::SampledSpectrum;
 /// camera subpaths past a cap (`cut.rs`).
 pub const PBRT_RR_DEPTH: u32 = 2;
 
-/// The default first bounce at which roulette may end a path (`--rr-depth`), chosen by the
-/// measurements of docs/design.md §8 "Variance per sample (issue 18)".
+/// The first bounce at which roulette may end a path when no pilot chooses it: light
+/// meters, and images whose pilot found no light (`roulette_pilot.rs`); pbrt-v4's.
 pub const DEFAULT_RR_DEPTH: u32 = 2;
+
+/// Where the path tracer's roulette starts (`--rr-depth`): chosen per scene by a pilot
+/// (`roulette_pilot.rs`; the default), or a given scattering event (1 or later).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RrStart {
+    #[default]
+    Auto,
+    At(u32),
+}
+
+impl RrStart {
+    /// The start for a run that has no pilot (meters): the given one, or [`DEFAULT_RR_DEPTH`].
+    pub fn or_default(self) -> u32 {
+        match self {
+            RrStart::Auto => DEFAULT_RR_DEPTH,
+            RrStart::At(n) => n,
+        }
+    }
+}
+
+impl std::fmt::Display for RrStart {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RrStart::Auto => f.write_str("auto"),
+            RrStart::At(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+impl std::str::FromStr for RrStart {
+    type Err = String;
+
+    /// `auto`, or a whole number of at least 1.
+    fn from_str(s: &str) -> Result<RrStart, String> {
+        if s == "auto" {
+            return Ok(RrStart::Auto);
+        }
+        match s.parse::<u32>() {
+            Ok(n) if n >= 1 => Ok(RrStart::At(n)),
+            _ => Err(format!("'{s}': auto or a whole number of at least 1")),
+        }
+    }
+}
 
 /// Russian roulette after scattering event `depth` (1 for the first) of a path with
 /// throughput `beta` and refraction scale `eta_scale`, for roulette from bounce `rr_depth`;
@@ -57,6 +101,23 @@ mod tests {
 
     fn sampler() -> Sampler<'static> {
         Sampler::new(7, 0, 0)
+    }
+
+    #[test]
+    fn starts_parse_and_print() {
+        for (text, start) in [
+            ("auto", RrStart::Auto),
+            ("1", RrStart::At(1)),
+            ("5", RrStart::At(5)),
+        ] {
+            assert_eq!(text.parse::<RrStart>(), Ok(start));
+            assert_eq!(start.to_string(), text);
+        }
+        for bad in ["0", "-2", "x", "", "Auto", "2.5"] {
+            assert!(bad.parse::<RrStart>().is_err(), "{bad}");
+        }
+        assert_eq!(RrStart::Auto.or_default(), DEFAULT_RR_DEPTH);
+        assert_eq!(RrStart::At(4).or_default(), 4);
     }
 
     #[test]

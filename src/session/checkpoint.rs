@@ -18,7 +18,7 @@ use crate::desc::ContentHash;
 use crate::error::Reason;
 use crate::integrator::bidir::strategies::StrategySums;
 use crate::integrator::cut::{BatchedRatio, BATCHES};
-use crate::integrator::roulette::DEFAULT_RR_DEPTH;
+use crate::integrator::roulette::{RrStart, DEFAULT_RR_DEPTH};
 use crate::scene::Scene;
 use crate::sensor::film_state::FilmState;
 use crate::sensor::raw_bytes::{ByteReader, ByteWriter};
@@ -81,7 +81,7 @@ pub fn identity(scene: &Scene, opts: &RenderOptions) -> Vec<(String, String)> {
         pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
     // Named only when not the default, so that checkpoints and parts written before the option
     // existed (all at the default) still resume and merge.
-    if opts.rr_depth != DEFAULT_RR_DEPTH {
+    if opts.rr_depth != RrStart::At(DEFAULT_RR_DEPTH) {
         id.push(("rr depth".into(), opts.rr_depth.to_string()));
     }
     id

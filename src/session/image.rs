@@ -38,11 +38,13 @@ use super::auto::AutoReport;
 use super::checkpoint::{self, Checkpoint};
 use super::crop::Crop;
 use super::layers::{FirstHitSetup, LayerFilms, LayerImages, LayerOptions, LayerTile};
+use super::roulette::{self, Roulette};
 use super::{pool, DepthCut, PassStats, Progressive};
 use crate::error::{Reason, Result};
 use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
 use crate::integrator::cut::{depth_cap, BatchedRatio};
+use crate::integrator::roulette::RrStart;
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::{dimensions, PixelSamplers, SamplerKind};
 use crate::scene::{ray_count, Scene};
@@ -84,9 +86,9 @@ pub struct RenderOptions {
     /// paths, behind the safety cap `SAFETY_DEPTH`. Whatever the cap, the output says what
     /// it cut when a path reached it ([`RenderOutput::depth_cut`]).
     pub max_depth: Option<u32>,
-    /// The path tracer's first bounce of Russian roulette (`--rr-depth`,
-    /// `integrator::roulette`); the other integrators ignore it.
-    pub rr_depth: u32,
+    /// Where the path tracer's Russian roulette starts (`--rr-depth`: `integrator::roulette`;
+    /// auto, the default, by a pilot: `session::roulette`); the other integrators ignore it.
+    pub rr_depth: RrStart,
     /// The light-transport algorithm and its settings.
     pub integrator: Integrator,
     /// Record the per-(s, t) decomposition (`Capabilities::strategy_images`).
@@ -128,7 +130,7 @@ impl Default for RenderOptions {
             seed: 0,
             threads: None,
             max_depth: None,
-            rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
+            rr_depth: RrStart::Auto,
             integrator: Integrator::Path,
             strategies: false,
             filter_textures: true,
@@ -159,6 +161,9 @@ pub struct RenderOutput {
     pub report: Option<String>,
     /// What `--integrator auto` chose and why (`session::auto`).
     pub auto: Option<AutoReport>,
+    /// The path tracer's first bounce of Russian roulette (`session::roulette`); None for
+    /// the other integrators.
+    pub rr_depth: Option<u32>,
     /// What the depth cap cut of the image's mean luminance, when a path reached it.
     pub depth_cut: Option<DepthCut>,
     /// Contributions clamped to the film's range (`sensor::grid_sum`; should be 0).
@@ -211,6 +216,10 @@ pub struct ImageSession<'a> {
     /// Seconds spent before this session started (a resumed checkpoint's).
     prior_s: f64,
     auto: Option<AutoReport>,
+    /// The path tracer's roulette (`session::roulette`), None for the other integrators.
+    roulette: Option<Roulette>,
+    /// Ray queries the roulette's pilot made, left out of [`ImageSession::ray_queries`].
+    pilot_rays: u64,
     /// The samplers of every (pixel, sample).
     samplers: PixelSamplers,
     /// An adaptive render's state (`RenderOptions::adaptive`).
@@ -258,16 +267,23 @@ impl<'a> ImageSession<'a> {
         };
         let emission = scene.emission_layers.names();
         let layers = LayerFilms::new((w, h), &opts.layers, &emission, film.grid(), first_hit);
+        let pool = pool::new(opts.threads)?;
+        // The roulette's pilot is part of the render: its time counts.
+        let start = Instant::now();
+        let before = pool::ray_queries(&pool);
+        let (integrator, rr) = (&opts.integrator, opts.rr_depth);
+        let roulette = pool.install(|| roulette::resolve(scene, integrator, rr, cap, opts.seed));
+        let pilot_rays = pool::ray_queries(&pool).wrapping_sub(before);
         let settings = Settings {
             max_depth: cap,
-            rr_depth: opts.rr_depth,
+            rr_depth: roulette.as_ref().map_or(rr.or_default(), |r| r.start),
             filter: texture_filter(opts),
             meters: false,
         };
         let splats = opts.integrator.capabilities().splats;
         let mut session = ImageSession {
             scene,
-            pool: pool::new(opts.threads)?,
+            pool,
             estimator: opts.integrator.estimator(scene, settings)?,
             splats,
             tiles: film.tiles(TILE_SIZE),
@@ -292,9 +308,11 @@ impl<'a> ImageSession<'a> {
             done: 0,
             dropped: 0,
             passes: 0,
-            start: Instant::now(),
+            start,
             prior_s: 0.0,
             auto: None,
+            roulette,
+            pilot_rays,
             samplers: pixel_samplers(opts, w as u64),
             opts: opts.clone(),
             adaptive: plan.map(|p| AdaptiveRun::new(p, w * h, (w * h) as u64)),
@@ -339,9 +357,14 @@ impl<'a> ImageSession<'a> {
         self.auto = Some(auto);
     }
 
+    /// The path tracer's roulette (`session::roulette`); None for the other integrators.
+    pub fn roulette(&self) -> Option<&Roulette> {
+        self.roulette.as_ref()
+    }
+
     /// Ray queries the session's samples have made so far (`pool::ray_queries`).
     pub fn ray_queries(&self) -> u64 {
-        pool::ray_queries(&self.pool)
+        pool::ray_queries(&self.pool).wrapping_sub(self.pilot_rays)
     }
 
     /// Samples per pixel so far.
@@ -468,6 +491,15 @@ impl<'a> ImageSession<'a> {
         Ok(())
     }
 
+    /// The integrator's report (`Estimator::report`) and the roulette pilot's, one line each.
+    fn report(&self) -> Option<String> {
+        let pilot = self.roulette.as_ref().and_then(|r| r.report.clone());
+        match (self.estimator.report(), pilot) {
+            (Some(a), Some(b)) => Some(format!("{a}\n{b}")),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// Wall-clock seconds of the render, a resumed checkpoint's included.
     fn elapsed(&self) -> f64 {
         self.prior_s + self.start.elapsed().as_secs_f64()
@@ -490,8 +522,9 @@ impl<'a> ImageSession<'a> {
             wall_time_s: self.elapsed(),
             dropped_samples: self.dropped,
             strategies: self.strategy_films.as_ref().map(|sf| sf.images(exposure)),
-            report: self.estimator.report(),
+            report: self.report(),
             auto: self.auto.clone(),
+            rr_depth: self.roulette.as_ref().map(|r| r.start),
             depth_cut: DepthCut::new(
                 self.opts.max_depth,
                 &self.cut.sums(),

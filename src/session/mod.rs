@@ -22,6 +22,7 @@ pub mod memory;
 pub mod meter;
 pub mod part;
 mod pool;
+pub mod roulette;
 
 pub use auto::{AutoReport, PilotFigures};
 pub use depth_cut::DepthCut;
