@@ -8,6 +8,8 @@
 #        tools/compare_builds.sh /tmp/old/target/release/spectral-render target/release/spectral-render
 # Renders 6 scenes × path, light, bdpt (96×64, 8 spp, seed 3), reads room.usda's meters with each
 # integrator and its light report. Prints one line per comparison; exits 1 if any differs.
+# RENDER_ARGS (environment) is added to every render, e.g. RENDER_ARGS="--rr-depth 2" to hold
+# a default that one of the builds changes.
 set -uo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 OLD="$1"; NEW="$2"; OUT="${3:-$(mktemp -d)}"; mkdir -p "$OUT"
@@ -24,7 +26,7 @@ for scene in cornell-box materials room prism colorchecker gap; do
     for which in old new; do
       bin=$OLD; [ $which = new ] && bin=$NEW
       "$bin" "$S/$scene.usda" -o "$OUT/${scene}_${integ}_$which.exr" --integrator $integ \
-        --spp 8 --resolution 96x64 --seed 3 --threads 2 --max-depth 7 >/dev/null 2>&1 \
+        --spp 8 --resolution 96x64 --seed 3 --threads 2 --max-depth 7 ${RENDER_ARGS:-} >/dev/null 2>&1 \
         || echo "render failed: $which $scene $integ"
     done
     printf '%-13s %-6s ' "$scene" "$integ"
