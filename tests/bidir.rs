@@ -28,6 +28,7 @@ use spectral_render::integrator::bidir::connect::{
 };
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
+use spectral_render::integrator::roulette::{RrStart, DEFAULT_RR_DEPTH};
 use spectral_render::texture::TextureFilter;
 use spectral_render::SamplerKind;
 
@@ -356,6 +357,7 @@ fn render_sampled(
         spp: Some(spp),
         seed,
         max_depth: Some(max_depth),
+        rr_depth: roulette_start(scene, max_depth),
         integrator,
         sampler,
         ..Default::default()
@@ -363,6 +365,15 @@ fn render_sampled(
     let out = session::render(scene, &opts).unwrap();
     assert_finite(&out);
     out
+}
+
+/// The path tracer's roulette start that `--rr-depth auto` chooses for `scene` at seed 0,
+/// given to every seed's render: the batches of a z-test must be identically distributed,
+/// and auto's pilot may choose differently at other seeds (docs/design.md §8, "Where
+/// roulette starts, chosen per scene").
+fn roulette_start(scene: &Scene, max_depth: u32) -> RrStart {
+    let pilot = session::roulette::resolve(scene, &Integrator::Path, RrStart::Auto, max_depth, 0);
+    RrStart::At(pilot.map_or(DEFAULT_RR_DEPTH, |r| r.start))
 }
 
 // ---------------------------------------------------------------------------------------------
