@@ -343,6 +343,7 @@ fn auto_has_no_estimator_of_its_own() {
     let settings = spectral_render::integrator::Settings {
         max_depth: 7,
         rr_depth: spectral_render::integrator::roulette::DEFAULT_RR_DEPTH,
+        split: 1,
         filter: spectral_render::texture::TextureFilter::Finest,
         meters: false,
     };

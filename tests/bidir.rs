@@ -29,6 +29,7 @@ use spectral_render::integrator::bidir::connect::{
 use spectral_render::integrator::bidir::subpath::first_hit_direct;
 use spectral_render::integrator::bidir::vertex::bsdf_at;
 use spectral_render::integrator::roulette::{RrStart, DEFAULT_RR_DEPTH};
+use spectral_render::integrator::split::Split;
 use spectral_render::texture::TextureFilter;
 use spectral_render::SamplerKind;
 
@@ -353,11 +354,13 @@ fn render_sampled(
     seed: u64,
     max_depth: u32,
 ) -> RenderOutput {
+    let (rr_depth, split) = roulette_start(scene, max_depth);
     let opts = RenderOptions {
         spp: Some(spp),
         seed,
         max_depth: Some(max_depth),
-        rr_depth: roulette_start(scene, max_depth),
+        rr_depth,
+        split,
         integrator,
         sampler,
         ..Default::default()
@@ -367,13 +370,17 @@ fn render_sampled(
     out
 }
 
-/// The path tracer's roulette start that `--rr-depth auto` chooses for `scene` at seed 0,
-/// given to every seed's render: the batches of a z-test must be identically distributed,
-/// and auto's pilot may choose differently at other seeds (docs/design.md §8, "Where
-/// roulette starts, chosen per scene").
-fn roulette_start(scene: &Scene, max_depth: u32) -> RrStart {
-    let pilot = session::roulette::resolve(scene, &Integrator::Path, RrStart::Auto, max_depth, 0);
-    RrStart::At(pilot.map_or(DEFAULT_RR_DEPTH, |r| r.start))
+/// The path tracer's roulette start and split that `--rr-depth auto` and `--split auto`
+/// choose for `scene` at seed 0, given to every seed's render: the batches of a z-test must be
+/// identically distributed, and auto's pilot may choose differently at other seeds
+/// (docs/design.md §8, "Where roulette starts, chosen per scene").
+fn roulette_start(scene: &Scene, max_depth: u32) -> (RrStart, Split) {
+    let auto = (RrStart::Auto, Split::Auto);
+    let pilot = session::roulette::resolve(scene, &Integrator::Path, auto, max_depth, 0);
+    (
+        RrStart::At(pilot.as_ref().map_or(DEFAULT_RR_DEPTH, |r| r.start)),
+        Split::At(pilot.as_ref().map_or(1, |r| r.split)),
+    )
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -136,6 +136,7 @@ fn the_continuation_leaves_the_capped_estimate_alone() {
         max_depth: CAP,
         rr_depth: DEFAULT_RR_DEPTH,
         filter: TextureFilter::Finest,
+        split: 1,
     };
     let mut continued = 0;
     for k in 0..256 {

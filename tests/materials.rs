@@ -789,6 +789,7 @@ fn path_tracer_collapses_wavelengths_only_at_dispersive_glass() {
             max_depth: 5,
             rr_depth: spectral_render::integrator::roulette::DEFAULT_RR_DEPTH,
             filter: spectral_render::texture::TextureFilter::Finest,
+            split: 1,
         };
         let (mut hero, mut secondary) = (0.0f32, 0.0f32);
         for s in 0..64 {

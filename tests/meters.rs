@@ -947,6 +947,7 @@ fn meters_agree_through_dispersive_glass() {
     let sensor = MeterSensor::new(&meters[0], scene.point_error(meters[0].p));
     let settings = Settings {
         max_depth: 7,
+        split: 1,
         rr_depth: spectral_render::integrator::roulette::DEFAULT_RR_DEPTH,
         filter: TextureFilter::Finest,
         meters: true,

@@ -148,6 +148,7 @@ fn spot_centroid(
         max_depth: 7,
         rr_depth: spectral_render::integrator::roulette::DEFAULT_RR_DEPTH,
         filter: spectral_render::texture::TextureFilter::Finest,
+        split: 1,
     };
     let lambda = SampledWavelengths {
         lambda: [lambda_nm as f32; 4],

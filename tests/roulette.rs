@@ -5,6 +5,8 @@ mod common;
 use common::*;
 use glam::Vec3;
 use spectral_render::integrator::roulette::RrStart;
+use spectral_render::integrator::roulette_pilot::Fixed;
+use spectral_render::integrator::split::Split;
 use spectral_render::scene::{self, Scene};
 use spectral_render::session::{self, measure, MeterOptions, Reading, RenderOptions, Stop};
 use spectral_render::{Integrator, Meter};
@@ -86,10 +88,11 @@ fn where_roulette_starts_does_not_move_the_mean() {
 }
 
 /// The roulette pilot (`--rr-depth auto`, `integrator::roulette_pilot`) predicts the ray
-/// queries a sample makes under each start from paths traced without roulette. Against the
-/// path tracer's own roulette on the box (independent numbers, 48², 64 spp, no depth cap, so
-/// that no path is continued past a cap): the measured queries per sample within 5 standard
-/// errors of the prediction at starts 1, 3 and 8. The prediction's error is the pilot's; the
+/// queries a sample makes under each start and split from paths traced without roulette, split
+/// in two. Against the path tracer's own roulette and splitting on the box (independent
+/// numbers, 48², 64 spp, no depth cap, so that no path is continued past a cap): the measured
+/// queries per sample within 5 standard errors of the prediction at starts 1, 3 and 8 unsplit
+/// and (2, split 2), (3, split 4). The prediction's error is the pilot's; the
 /// render's, with the same per-sample spread over 147 456 samples against the pilot's 2 per
 /// pixel over 2 304 pixels, is added.
 #[test]
@@ -100,15 +103,20 @@ fn the_pilot_predicts_the_rays_roulette_costs() {
     let scene = scene::load(&cbox_path(), Some((48, 48))).unwrap();
     let filter = spectral_render::texture::TextureFilter::Finest;
     let cap = spectral_render::integrator::cut::SAFETY_DEPTH;
-    let choice = choose(&scene, cap, filter, 5).expect("the box's pilot finds light");
+    let choice = choose(&scene, cap, filter, 5, Fixed::default()).expect("the pilot finds light");
     assert_eq!(choice.paths, 2 * 48 * 48);
-    for start in [1, 3, 8] {
-        let c = choice.candidates.iter().find(|c| c.start == start).unwrap();
+    for (start, split) in [(1, 1), (3, 1), (8, 1), (2, 2), (3, 4)] {
+        let c = choice
+            .candidates
+            .iter()
+            .find(|c| c.start == start && c.split == split)
+            .unwrap();
         let opts = RenderOptions {
             spp: Some(64),
             seed: 9,
             max_depth: None,
             rr_depth: RrStart::At(start),
+            split: Split::At(split),
             integrator: Integrator::Path,
             sampler: SamplerKind::Independent,
             threads: Some(2),
@@ -118,12 +126,13 @@ fn the_pilot_predicts_the_rays_roulette_costs() {
         session::run(&mut s, &mut session::quiet);
         let pixels = 48.0 * 48.0;
         let measured = s.ray_queries() as f64 / (s.samples() as f64 * pixels);
-        let predicted = c.cost;
-        let se = c.cost_se * (1.0 + 2.0 * pixels / (pixels * 64.0)).sqrt();
-        eprintln!("start {start}: {measured:.4} rays a sample, predicted {predicted:.4} ± {se:.4}");
+        let predicted = c.rays;
+        let se = c.rays_se * (1.0 + 2.0 * pixels / (pixels * 64.0)).sqrt();
+        let case = format!("start {start} split {split}");
+        eprintln!("{case}: {measured:.4} rays a sample, predicted {predicted:.4} ± {se:.4}");
         assert!(
             (measured - predicted).abs() < 5.0 * se,
-            "start {start}: {measured} rays a sample, the pilot predicted {predicted} ± {se}"
+            "{case}: {measured} rays a sample, the pilot predicted {predicted} ± {se}"
         );
     }
 }
@@ -132,7 +141,7 @@ fn the_pilot_predicts_the_rays_roulette_costs() {
 /// numbers are fixed by the image and the seed, its sums taken in pixel order.
 #[test]
 fn the_pilot_is_the_same_on_any_thread_count() {
-    use spectral_render::integrator::roulette_pilot::choose;
+    use spectral_render::integrator::roulette_pilot::{choose, SPLITS};
     let scene = scene::load(&cbox_path(), Some((40, 30))).unwrap();
     let filter = spectral_render::texture::TextureFilter::Finest;
     let on = |threads| {
@@ -140,10 +149,11 @@ fn the_pilot_is_the_same_on_any_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| choose(&scene, 1024, filter, 2))
+        pool.install(|| choose(&scene, 1024, filter, 2, Fixed::default()))
     };
     let one = on(1).expect("the box's pilot finds light");
     assert_eq!(Some(&one), on(2).as_ref());
-    assert_eq!(one.candidates.len(), 8);
+    assert_eq!(one.candidates.len(), 8 * SPLITS.len());
     assert!((1..=8).contains(&one.start));
+    assert!(SPLITS.contains(&one.split));
 }

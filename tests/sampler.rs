@@ -99,6 +99,43 @@ fn each_replicate_of_a_pixel_is_a_0_k_2_net_in_every_projection() {
     }
 }
 
+/// A path split at its first vertex into 2^bits continuations (`--split`): the pixel's N
+/// samples of a replicate give N · 2^bits continuations, and those are one (0, k, 2)-net in
+/// every projection the continuations draw, as N · 2^bits samples' would be; continuation 0
+/// of 1 is the sample's own stream.
+#[test]
+fn a_replicates_continuations_are_one_net() {
+    let samplers = PixelSamplers::new(SamplerKind::ZSobol, 5, 300, Some(64));
+    for (x, y) in [(0u32, 0u32), (7, 2), (299, 150)] {
+        let pixel = samplers.pixel(x, y);
+        let mut own = pixel.sampler(6);
+        let mut first = pixel.sampler(6);
+        first.enter_continuation(0, 0);
+        assert_eq!(draws(&mut own), draws(&mut first));
+        for bits in 1..=3u32 {
+            for r in 0..2u64 {
+                let all: Vec<_> = (0..32u64)
+                    .flat_map(|j| (0..1u32 << bits).map(move |c| (j, c)))
+                    .map(|(j, c)| {
+                        let mut s = pixel.sampler(2 * j + r);
+                        s.enter_continuation(c, bits);
+                        draws(&mut s)
+                    })
+                    .collect();
+                let k = 5 + bits;
+                for d in 0..all[0].0.len() {
+                    let v: Vec<f32> = all.iter().map(|s| s.0[d]).collect();
+                    assert!(is_net_1d(&v, k), "pixel {x},{y} bits {bits} rep {r} 1D {d}");
+                }
+                for d in 0..all[0].1.len() {
+                    let p: Vec<[f32; 2]> = all.iter().map(|s| s.1[d]).collect();
+                    assert!(is_net_2d(&p, k), "pixel {x},{y} bits {bits} rep {r} 2D {d}");
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn the_independent_sampler_is_not_a_net() {
     // The test above can fail: 16 independent 2D points are a (0, 4, 2)-net with

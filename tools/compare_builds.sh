@@ -9,7 +9,8 @@
 # Renders 6 scenes × path, light, bdpt (96×64, 8 spp, seed 3), reads room.usda's meters with each
 # integrator and its light report. Prints one line per comparison; exits 1 if any differs.
 # RENDER_ARGS (environment) is added to every render, e.g. RENDER_ARGS="--rr-depth 2" to hold
-# a default that one of the builds changes.
+# a default that one of the builds changes; NEW_ARGS to the new build's renders only, for an
+# option the old build does not have (NEW_ARGS="--split 1").
 set -uo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 OLD="$1"; NEW="$2"; OUT="${3:-$(mktemp -d)}"; mkdir -p "$OUT"
@@ -24,9 +25,9 @@ verdict() { if "$@"; then echo IDENTICAL; else status=1; echo DIFFERENT; fi; }
 for scene in cornell-box materials room prism colorchecker gap; do
   for integ in path light bdpt; do
     for which in old new; do
-      bin=$OLD; [ $which = new ] && bin=$NEW
+      bin=$OLD; extra=""; [ $which = new ] && bin=$NEW && extra="${NEW_ARGS:-}"
       "$bin" "$S/$scene.usda" -o "$OUT/${scene}_${integ}_$which.exr" --integrator $integ \
-        --spp 8 --resolution 96x64 --seed 3 --threads 2 --max-depth 7 ${RENDER_ARGS:-} >/dev/null 2>&1 \
+        --spp 8 --resolution 96x64 --seed 3 --threads 2 --max-depth 7 ${RENDER_ARGS:-} $extra >/dev/null 2>&1 \
         || echo "render failed: $which $scene $integ"
     done
     printf '%-13s %-6s ' "$scene" "$integ"

@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 use crate::integrator::bidir::MergeRule;
 use crate::integrator::cut;
 use crate::integrator::roulette::RrStart;
+use crate::integrator::split::Split;
 use crate::integrator::vcm::{VcmMode, VcmParams};
 use crate::integrator::{Integrator, MisHeuristic};
 use crate::output::exr::{ExrMetadata, TimeMetadata};
@@ -127,6 +128,13 @@ pub struct IntegratorArgs {
     #[arg(long = "rr-depth", default_value = "auto", allow_negative_numbers = true,
           value_parser = parse_rr_start)]
     pub rr_depth: RrStart,
+    /// The continuations the path tracer splits each image path into at its first vertex
+    /// (a power of two up to 16: 1 is no splitting): they share the camera ray and the first
+    /// vertex's light sample, each weighted 1/n, which is unbiased. `auto` (images): chosen
+    /// per scene with the roulette start by the same pilot; meters, BDPT and VCM do not split.
+    #[arg(long = "split", default_value = "auto", allow_negative_numbers = true,
+          value_parser = parse_split)]
+    pub split: Split,
 }
 
 impl IntegratorArgs {
@@ -219,6 +227,11 @@ pub fn print_report(report: &Option<String>) {
 
 /// `--rr-depth`: `auto` or a whole number of at least 1 (`RrStart`).
 fn parse_rr_start(s: &str) -> std::result::Result<RrStart, String> {
+    s.trim().parse()
+}
+
+/// `--split`: `auto` or a power of two from 1 to 16 (`Split`).
+fn parse_split(s: &str) -> std::result::Result<Split, String> {
     s.trim().parse()
 }
 
@@ -445,6 +458,9 @@ pub struct Made<'a> {
     /// The path tracer's first bounce of Russian roulette (`--rr-depth`, as resolved:
     /// `RenderOutput::rr_depth`); None for the other integrators, which it does not apply to.
     pub rr_depth: Option<u32>,
+    /// The path tracer's split at the first vertex (`--split`, as resolved); None for the
+    /// other integrators.
+    pub split: Option<u32>,
     pub spp: u64,
     pub wall_time_s: f64,
     /// The sampler the samples drew from (`RenderOutput::sampler`), when known.
@@ -462,6 +478,7 @@ impl Made<'_> {
             seed: self.seed,
             max_depth: self.max_depth,
             rr_depth: self.rr_depth,
+            split: self.split,
             exposure: camera.exposure,
             wall_time_s: self.wall_time_s,
             version: env!("CARGO_PKG_VERSION").into(),

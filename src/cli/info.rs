@@ -68,6 +68,10 @@ struct InfoArgs {
         allow_negative_numbers = true
     )]
     rr_depth: crate::integrator::roulette::RrStart,
+    /// The path tracer's split at the first vertex in the pilot (as for rendering: `auto`
+    /// or a power of two from 1 to 16).
+    #[arg(long = "split", default_value = "auto", allow_negative_numbers = true)]
+    split: crate::integrator::split::Split,
 }
 
 /// Entry point: `argv[0]` is "info".
@@ -92,6 +96,7 @@ pub fn main(argv: Vec<OsString>) -> Result<()> {
         threads: args.threads,
         max_depth: depth,
         rr_depth: args.rr_depth,
+        split: args.split,
         integrator: Integrator::Auto {
             mis: MisHeuristic::Power,
         },

@@ -183,6 +183,7 @@ fn output(scene: &scene::Scene, m: &part::Merged) -> Result<RenderOutput> {
         auto: None,
         // The metadata's start comes from the parts' identity (`parts::made`).
         rr_depth: None,
+        split: None,
         depth_cut: DepthCut::new(max_depth, &cut.sums(), cut.capped, cut.limited),
         clamped: m.film.clamped(),
         crop: m.window,

@@ -12,6 +12,7 @@ use super::common::Made;
 use crate::error::{Error, Result};
 use crate::integrator::cut::depth_cap;
 use crate::integrator::roulette::{RrStart, DEFAULT_RR_DEPTH};
+use crate::integrator::split::Split;
 use crate::integrator::Integrator;
 use crate::output::atomic::write_atomically;
 use crate::output::target::{Format, Target};
@@ -210,15 +211,20 @@ pub fn made<'a>(
         Some(d) => d.parse().map_err(|_| bad("rr depth"))?,
         None => RrStart::At(DEFAULT_RR_DEPTH),
     };
-    let rr_depth =
-        roulette::resolve(scene, integrator, rr, depth_cap(max_depth), seed).map(|r| r.start);
+    // The split likewise: named unless 1, the default before `auto`.
+    let split = match part::value(identity, "split") {
+        Some(n) => n.parse().map_err(|_| bad("split"))?,
+        None => Split::At(1),
+    };
+    let resolved = roulette::resolve(scene, integrator, (rr, split), depth_cap(max_depth), seed);
     Ok(Made {
         stage,
         scene,
         integrator,
         seed,
         max_depth,
-        rr_depth,
+        rr_depth: resolved.as_ref().map(|r| r.start),
+        split: resolved.as_ref().map(|r| r.split),
         spp: out.spp,
         wall_time_s: out.wall_time_s,
         sampler: out.sampler,

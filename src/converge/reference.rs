@@ -38,6 +38,8 @@ pub struct ReferenceInfo {
     /// The path tracer's roulette start (`RenderOutput::rr_depth`), when both halves took
     /// the same.
     pub rr_depth: Option<u32>,
+    /// The path tracer's split (`RenderOutput::split`), when both halves took the same.
+    pub split: Option<u32>,
 }
 
 /// The integrator of a reference of `scene`'s image when none is named (module docs).
@@ -81,6 +83,7 @@ pub fn render(
         time_s: clock.seconds(),
         sampler: a.sampler,
         rr_depth: a.rr_depth.filter(|_| a.rr_depth == b.rr_depth),
+        split: a.split.filter(|_| a.split == b.split),
     };
     Ok((from_halves(&a, &b), info))
 }

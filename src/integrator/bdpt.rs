@@ -214,6 +214,7 @@ fn continue_past_cap(
         max_depth: ctx.max_depth,
         rr_depth: super::roulette::PBRT_RR_DEPTH,
         filter: ctx.filter,
+        split: 1,
     };
     let depth = walk.depth - 1;
     let spectra = &mut ws.light.spectra;

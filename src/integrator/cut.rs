@@ -52,7 +52,15 @@ pub fn continuation_limit(cap: u32) -> u32 {
 /// the path's current state, which is left as it is.
 #[inline]
 pub fn continuation<'a>(sampler: &Sampler<'a>) -> Option<Sampler<'a>> {
-    let mut s = sampler.fork(STREAM);
+    continuation_of(sampler, 0)
+}
+
+/// [`continuation`] of branch `b` of a path split at its first vertex (`integrator::path`):
+/// the branches share the sampler's free stream, so each forks its own (branch 0 is the
+/// unsplit path's).
+#[inline]
+pub fn continuation_of<'a>(sampler: &Sampler<'a>, b: u32) -> Option<Sampler<'a>> {
+    let mut s = sampler.fork(STREAM.wrapping_add(u64::from(b)));
     (s.get_1d() < Q).then_some(s)
 }
 

@@ -22,6 +22,9 @@ pub struct Settings {
     /// The path tracer's first bounce of Russian roulette (`roulette.rs`, `--rr-depth`); the
     /// bidirectional integrators' subpaths keep their own rule.
     pub rr_depth: u32,
+    /// The continuations the path tracer's image paths split into at their first vertex
+    /// (`split.rs`, `--split`); the other integrators and meters take none.
+    pub split: u32,
     /// Texture footprints: the camera's for images, the finest level for meters.
     pub filter: TextureFilter,
     /// The run measures light meters rather than an image.

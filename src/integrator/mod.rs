@@ -30,6 +30,7 @@ pub mod path;
 pub(crate) mod radiance_memo;
 pub mod roulette;
 pub mod roulette_pilot;
+pub mod split;
 pub mod vcm;
 
 pub use bidir::{MisHeuristic, Workspace};

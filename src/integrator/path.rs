@@ -19,14 +19,14 @@
 //!   caller's `sampled_to_xyz(l, lambda)` stays unbiased without seeing the termination.
 
 use super::bidir::Contribution;
-use super::cut::{continuation, continuation_limit, CutSample};
+use super::cut::{continuation, continuation_limit, continuation_of, CutSample};
 use super::gathered::Gathered;
 use super::meter::MeterIntegrator;
 use super::radiance_memo::RadianceMemo;
 use super::roulette;
 use super::roulette_pilot::PilotGroup;
 use super::{Estimator, Settings, Workspace};
-use crate::bxdf::{BsdfAt, TransportMode};
+use crate::bxdf::{Bsdf, BsdfAt, TransportMode};
 use crate::geometry::offset::{spawn_ray, SpawnPoint};
 use crate::geometry::Ray;
 use crate::light::emission_layers::LayerSource;
@@ -48,6 +48,10 @@ pub struct PathIntegrator {
     pub rr_depth: u32,
     /// Texture footprints: the camera's for images, none for meters.
     pub filter: TextureFilter,
+    /// The continuations an image's path splits into at its first vertex (a power of two,
+    /// `--split`: [`li_split`](Self::li_split)); 1 for meters and the bidirectional
+    /// integrators' uses.
+    pub split: u32,
 }
 
 /// What the previous vertex knew, for MIS when a BSDF-sampled ray finds an emitter.
@@ -77,6 +81,14 @@ struct PathState {
     /// The radiance at the path's wavelengths of the light class next event estimation
     /// sampled last (`radiance_memo.rs`).
     le: RadianceMemo,
+}
+
+/// A scattering vertex's BSDF, the point its rays leave from and its bounce's block of
+/// dimensions (`dimensions::bounce`).
+struct Vertex {
+    bsdf: Bsdf,
+    from: SpawnPoint,
+    block: u32,
 }
 
 impl PathState {
@@ -204,12 +216,96 @@ impl PathIntegrator {
         }
     }
 
-    /// One path of the roulette pilot (`roulette_pilot.rs`): `li_gather`'s walk without
-    /// roulette, to this integrator's depth cap, recording each group of contributions that
-    /// one roulette test decides (the emission found on arriving at a vertex and next event
-    /// estimation there), relative to `lambda_in`, with the ray queries it took and the max
-    /// β·η² of the test before it (1 before the first); the emission the camera ray finds is
-    /// not recorded. No cut: the cap ends the path.
+    /// [`li_gather`](Self::li_gather) with the path split at its first vertex into
+    /// `self.split` (2^k) continuations: the camera ray, the first vertex's BSDF and next
+    /// event estimation there are taken once, then each continuation samples its own
+    /// direction from the vertex and walks on (its own roulette, its own wavelengths), on the
+    /// sampler's continuation stream (`Sampler::enter_continuation`). The estimate is the mean
+    /// of the continuations' full-path estimates, (1/n) Σ_c (shared + continuation c), each
+    /// re-expressed against `lambda_in` with its own wavelengths: unbiased for any n chosen
+    /// before the continuations are drawn (splitting, Rath et al. 2022, "EARS:
+    /// Efficiency-Aware Russian Roulette and Splitting", §3; Arvo and Kirk 1990). A specular
+    /// first vertex is not split (its continuations would share their direction), and a
+    /// cap of 0 ends every path there: both are `li_gather`'s estimate itself.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn li_split<const DISPERSION: bool>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        lambda_in: &SampledWavelengths,
+        sampler: &mut Sampler,
+        mut cut: Option<&mut CutSample>,
+        g: &mut Gathered,
+        spectra: &mut SpectraCache,
+    ) {
+        let mut lambda = *lambda_in;
+        let mut st = PathState::new(ray, t_max, None);
+        spectra.begin(&scene.materials, lambda_in);
+        let hit = self.next_vertex(scene, &mut st, &lambda, sampler, g);
+        let Some(Hit::Surface(si)) = &hit else {
+            return;
+        };
+        let wo = -st.ray.d;
+        let v = self.prepare::<DISPERSION>(scene, si, &mut st, &mut lambda, spectra);
+        let at = v.bsdf.at(wo);
+        self.nee(scene, si, &v, &at, &mut st, &lambda, sampler, g);
+        let n = if v.bsdf.is_specular() { 1 } else { self.split };
+        let bits = n.trailing_zeros();
+        let shared = (g.l, g.sums.to_vec());
+        let mut sums = vec![SampledSpectrum::ZERO; shared.1.len()];
+        let (mut l, w) = (SampledSpectrum::ZERO, 1.0 / n as f32);
+        for c in 0..n {
+            if n > 1 {
+                sampler.enter_continuation(c, bits);
+            }
+            let (mut sc, mut lc) = (st, lambda);
+            g.l = shared.0;
+            g.sums.copy_from_slice(&shared.1);
+            let capped = if self.bounce(si, &v, &at, &mut sc, sampler) {
+                self.walk::<DISPERSION>(
+                    scene,
+                    &mut sc,
+                    self.max_depth,
+                    &mut lc,
+                    sampler,
+                    g,
+                    spectra,
+                )
+            } else {
+                None
+            };
+            if let (Some(end), Some(cut)) = (capped, cut.as_deref_mut()) {
+                cut.capped += 1;
+                if let Some(mut ext) = continuation_of(sampler, c) {
+                    let (x, limited) =
+                        self.continue_past_cap(scene, &end, &sc, &lc, &mut ext, spectra);
+                    cut.add(lambda_in.rebase(x, &lc), w, limited);
+                }
+            }
+            l += lambda_in.rebase(g.l, &lc);
+            for (sum, s) in sums.iter_mut().zip(g.sums.iter()) {
+                *sum += lambda_in.rebase(*s, &lc);
+            }
+        }
+        g.l = l * w;
+        for (s, sum) in g.sums.iter_mut().zip(sums) {
+            *s = sum * w;
+        }
+    }
+
+    /// One camera sample of the roulette pilot (`roulette_pilot.rs`): `li_split`'s walk
+    /// without roulette, to this integrator's depth cap, split at the first vertex into two
+    /// continuations (none at a specular vertex or a cap of 0), recording each group of
+    /// contributions that one roulette test decides (the emission found on arriving at a
+    /// vertex and next event estimation there), relative to `lambda_in`, with the ray queries
+    /// it took and the max β·η² of the test before it (1 before the first). `shared` gets
+    /// the first group (the camera ray, the first vertex's next event estimation: the
+    /// emission the camera ray finds is not recorded, roulette and splitting do not touch
+    /// it), `split[c]` continuation c's groups after it; `split[1]` stays empty when the
+    /// path is not split. Returns how many continuations were taken (0 when the camera ray
+    /// found no vertex to scatter at). No cut: the cap ends the path.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn pilot_walk(
         &self,
@@ -219,47 +315,120 @@ impl PathIntegrator {
         lambda_in: &SampledWavelengths,
         sampler: &mut Sampler,
         spectra: &mut SpectraCache,
-        out: &mut Vec<PilotGroup>,
-    ) {
+        (shared, split): (&mut PilotGroup, &mut [Vec<PilotGroup>; 2]),
+    ) -> u32 {
         let pt = PathIntegrator {
             rr_depth: u32::MAX,
             ..*self
         };
+        if scene.dispersive {
+            pt.pilot_split::<true>(
+                scene, ray, t_max, lambda_in, sampler, spectra, shared, split,
+            )
+        } else {
+            pt.pilot_split::<false>(
+                scene, ray, t_max, lambda_in, sampler, spectra, shared, split,
+            )
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn pilot_split<const DISPERSION: bool>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        t_max: f32,
+        lambda_in: &SampledWavelengths,
+        sampler: &mut Sampler,
+        spectra: &mut SpectraCache,
+        shared: &mut PilotGroup,
+        split: &mut [Vec<PilotGroup>; 2],
+    ) -> u32 {
+        split.iter_mut().for_each(Vec::clear);
         let mut lambda = *lambda_in;
         let mut st = PathState::new(ray, t_max, None);
         spectra.begin(&scene.materials, lambda_in);
         let mut g = Gathered::plain();
-        let mut b = 1.0;
+        let rays0 = ray_count::on_this_thread();
+        let hit = self.next_vertex(scene, &mut st, &lambda, sampler, &mut g);
+        // Emitters the camera sees directly are left out.
+        g.l = SampledSpectrum::ZERO;
+        let first = match &hit {
+            Some(Hit::Surface(si)) if self.max_depth > 0 => Some(*si),
+            _ => None,
+        };
+        let Some(si) = first else {
+            let rays = ray_count::on_this_thread().wrapping_sub(rays0) as u32;
+            *shared = PilotGroup {
+                l: g.l,
+                b: 1.0,
+                rays,
+            };
+            return 0;
+        };
+        let wo = -st.ray.d;
+        let v = self.prepare::<DISPERSION>(scene, &si, &mut st, &mut lambda, spectra);
+        let at = v.bsdf.at(wo);
+        self.nee(scene, &si, &v, &at, &mut st, &lambda, sampler, &mut g);
+        *shared = PilotGroup {
+            l: lambda_in.rebase(g.l, &lambda),
+            b: 1.0,
+            rays: ray_count::on_this_thread().wrapping_sub(rays0) as u32,
+        };
+        let n = if v.bsdf.is_specular() { 1 } else { 2 };
+        for (c, out) in split.iter_mut().enumerate().take(n) {
+            if n > 1 {
+                sampler.enter_continuation(c as u32, 1);
+            }
+            let (mut sc, mut lc) = (st, lambda);
+            let rays0 = ray_count::on_this_thread();
+            if !self.bounce(&si, &v, &at, &mut sc, sampler) {
+                continue;
+            }
+            let b = sc.beta.max_value() * sc.eta_scale;
+            let rays = ray_count::on_this_thread().wrapping_sub(rays0) as u32;
+            self.pilot_groups::<DISPERSION>(
+                scene, &mut sc, &mut lc, lambda_in, b, rays, sampler, spectra, out,
+            );
+        }
+        n as u32
+    }
+
+    /// The groups of a pilot's continuation from the state `st` (its ray leaving a vertex),
+    /// `b` the max β·η² of the test before the first, `rays` those already taken.
+    #[allow(clippy::too_many_arguments)]
+    fn pilot_groups<const DISPERSION: bool>(
+        &self,
+        scene: &Scene,
+        st: &mut PathState,
+        lambda: &mut SampledWavelengths,
+        lambda_in: &SampledWavelengths,
+        mut b: f32,
+        mut rays: u32,
+        sampler: &mut Sampler,
+        spectra: &mut SpectraCache,
+        out: &mut Vec<PilotGroup>,
+    ) {
+        let mut g = Gathered::plain();
         loop {
             let (l0, rays0) = (g.l, ray_count::on_this_thread());
-            let hit = pt.next_vertex(scene, &mut st, &lambda, sampler, &mut g);
-            // Emitters the camera sees directly are left out: roulette does not touch them.
-            let seen = if st.depth == 0 {
-                g.l - l0
-            } else {
-                SampledSpectrum::ZERO
-            };
+            let hit = self.next_vertex(scene, st, lambda, sampler, &mut g);
             let more = match &hit {
                 Some(Hit::Surface(si)) if st.depth < self.max_depth => {
-                    let (l, s) = (&mut lambda, &mut *spectra);
-                    if scene.dispersive {
-                        pt.scatter::<true>(scene, si, &mut st, l, sampler, &mut g, s)
-                    } else {
-                        pt.scatter::<false>(scene, si, &mut st, l, sampler, &mut g, s)
-                    }
+                    self.scatter::<DISPERSION>(scene, si, st, lambda, sampler, &mut g, spectra)
                 }
                 _ => false,
             };
-            let rays = ray_count::on_this_thread().wrapping_sub(rays0);
+            rays += ray_count::on_this_thread().wrapping_sub(rays0) as u32;
             out.push(PilotGroup {
-                l: lambda_in.rebase(g.l - l0 - seen, &lambda),
+                l: lambda_in.rebase(g.l - l0, lambda),
                 b,
-                rays: rays as u32,
+                rays,
             });
             if !more {
                 return;
             }
-            b = st.beta.max_value() * st.eta_scale;
+            (b, rays) = (st.beta.max_value() * st.eta_scale, 0);
         }
     }
 
@@ -412,7 +581,9 @@ impl PathIntegrator {
     /// One scattering event at `si`: next-event estimation into `l`, a BSDF-sampled
     /// direction and Russian roulette; false when the path ends. Inlined into the walk (and
     /// the cut's continuation): as a call it cost about 19 instructions a vertex in frame and
-    /// arguments (design.md §8, eighth pass).
+    /// arguments (design.md §8, eighth pass). Its three steps are also those of a path split
+    /// at its first vertex (`li_split`), which takes the first two once and the third once a
+    /// continuation.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn scatter<const DISPERSION: bool>(
@@ -425,28 +596,75 @@ impl PathIntegrator {
         g: &mut Gathered,
         spectra: &mut SpectraCache,
     ) -> bool {
+        let wo = -st.ray.d;
+        let v = self.prepare::<DISPERSION>(scene, si, st, lambda, spectra);
+        // The BSDF's terms of ωo, shared by next event estimation and the BSDF sample.
+        let at = v.bsdf.at(wo);
+        self.nee(scene, si, &v, &at, st, lambda, sampler, g);
+        self.bounce(si, &v, &at, st, sampler)
+    }
+
+    /// The vertex's BSDF and spawn point, its bounce's block of dimensions; counts the
+    /// scattering event and terminates the secondary wavelengths at a dispersive material.
+    #[inline(always)]
+    fn prepare<const DISPERSION: bool>(
+        &self,
+        scene: &Scene,
+        si: &SurfaceHit,
+        st: &mut PathState,
+        lambda: &mut SampledWavelengths,
+        spectra: &mut SpectraCache,
+    ) -> Vertex {
         // Each decision draws from its own dimensions of this bounce (`dimensions.rs`).
         let block = dimensions::bounce(st.depth, 0);
         st.depth += 1;
-        let wo = -st.ray.d;
         let index = si.material as usize;
         let material = &scene.materials[index];
         if DISPERSION && material.is_dispersive() {
             lambda.terminate_secondary();
         }
         let tc = scene.tex_coord(si, self.filter);
-        let bsdf = spectra.bsdf(material, index, tc, si.ns, lambda);
-        // The offset off the surface, shared by the shadow ray and the next ray.
-        let from = SpawnPoint::new(si.p, si.p_error, si.ng);
-        // The BSDF's terms of ωo, shared by next event estimation and the BSDF sample.
-        let at = bsdf.at(wo);
-        if !bsdf.is_specular() {
-            sampler.set_dimension(dimensions::in_block(block, LIGHT));
-            let v = (si, &from);
-            let l = (st.beta, &mut st.le);
-            self.sample_ld(scene, v, &at, lambda, sampler, l, g);
+        Vertex {
+            bsdf: spectra.bsdf(material, index, tc, si.ns, lambda),
+            // The offset off the surface, shared by the shadow ray and the next ray.
+            from: SpawnPoint::new(si.p, si.p_error, si.ng),
+            block,
         }
-        sampler.set_dimension(dimensions::in_block(block, BSDF));
+    }
+
+    /// Next-event estimation at the vertex `v` (none at a specular one), into `g`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn nee(
+        &self,
+        scene: &Scene,
+        si: &SurfaceHit,
+        v: &Vertex,
+        at: &BsdfAt,
+        st: &mut PathState,
+        lambda: &SampledWavelengths,
+        sampler: &mut Sampler,
+        g: &mut Gathered,
+    ) {
+        if !v.bsdf.is_specular() {
+            sampler.set_dimension(dimensions::in_block(v.block, LIGHT));
+            let l = (st.beta, &mut st.le);
+            self.sample_ld(scene, (si, &v.from), at, lambda, sampler, l, g);
+        }
+    }
+
+    /// The BSDF-sampled direction from the vertex `v` into `st` and Russian roulette; false
+    /// when the path ends.
+    #[inline(always)]
+    fn bounce(
+        &self,
+        si: &SurfaceHit,
+        v: &Vertex,
+        at: &BsdfAt,
+        st: &mut PathState,
+        sampler: &mut Sampler,
+    ) -> bool {
+        sampler.set_dimension(dimensions::in_block(v.block, BSDF));
         let (uc, u) = (sampler.get_1d(), sampler.get_2d());
         let Some(bs) = at.sample_f(uc, u, TransportMode::Radiance) else {
             return false;
@@ -460,9 +678,9 @@ impl PathIntegrator {
             pdf_bsdf_w: bs.pdf_w,
             specular: bs.specular,
         });
-        st.ray = from.ray(bs.wi);
+        st.ray = v.from.ray(bs.wi);
         st.t_max = f32::INFINITY;
-        sampler.set_dimension(dimensions::in_block(block, ROULETTE));
+        sampler.set_dimension(dimensions::in_block(v.block, ROULETTE));
         roulette::survives(&mut st.beta, st.eta_scale, st.depth, self.rr_depth, sampler)
     }
 
@@ -790,6 +1008,7 @@ impl<'a> PathEstimator<'a> {
                 max_depth: settings.max_depth,
                 rr_depth: settings.rr_depth,
                 filter: settings.filter,
+                split: if settings.meters { 1 } else { settings.split },
             },
         }
     }
@@ -820,9 +1039,18 @@ impl Estimator for PathEstimator<'_> {
         };
         let cut = Some(&mut rec.cut);
         let spectra = &mut ws.light.spectra;
-        self.pt.li_gather(
-            self.scene, ray, t_max, None, lambda, sampler, cut, &mut g, spectra,
-        );
+        let (pt, scene) = (&self.pt, self.scene);
+        match (pt.split > 1 && pt.max_depth > 0, scene.dispersive) {
+            (false, _) => pt.li_gather(
+                scene, ray, t_max, None, lambda, sampler, cut, &mut g, spectra,
+            ),
+            (true, false) => {
+                pt.li_split::<false>(scene, ray, t_max, lambda, sampler, cut, &mut g, spectra)
+            }
+            (true, true) => {
+                pt.li_split::<true>(scene, ray, t_max, lambda, sampler, cut, &mut g, spectra)
+            }
+        }
         rec.camera = Contribution::new(g.l, 1.0);
     }
 

@@ -35,6 +35,19 @@
 //! the image's low-discrepancy samples have less variance at every start, which the choice
 //! does not model.
 //!
+//! **Splitting** (`--split auto`, `integrator::split`). The same pilot chooses n, the
+//! continuations a path splits into at its first vertex, with the start: each pilot sample
+//! takes its first vertex once and two continuations from it. With c₀ the first group (the
+//! camera ray's vertex and next event estimation there), B₁, B₂ the continuations' sums and
+//! M_c the second moment of the path through continuation c (above), the estimate
+//! X_n = c₀ + (1/n) Σ B has E[X_n²] = (1/n) E[(c₀ + B)²] + (1 − 1/n) E[(c₀ + E[B | v₁])²], estimated
+//! without bias by (1/n)(M₁ + M₂)/2 + (1 − 1/n)(c₀² + c₀(B₁ + B₂) + B₁B₂): B₁ and B₂ are
+//! independent given the first vertex v₁, so B₁B₂ estimates E[B | v₁]² (the classic splitting
+//! variance, Arvo and Kirk 1990, "Particle transport and image synthesis", §4). The cost of n
+//! is w·r₀ + n·r_B, r₀ the first group's ray queries and r_B a continuation's expected ones:
+//! the first vertex's rays weigh [`FIRST_VERTEX_WEIGHT`] of a continuation's, as measured
+//! (the camera ray is coherent, and the first vertex has no BSDF sample or roulette of its own).
+//!
 //! Deterministic: the pilot's pixels and numbers depend on the image's size and the seed
 //! only (not on a crop, the threads or a part), and its sums are taken in pixel order.
 
@@ -49,7 +62,7 @@ use crate::texture::TextureFilter;
 use rayon::prelude::*;
 
 /// One group of a pilot path's contributions (`PathIntegrator::pilot_walk`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PilotGroup {
     /// The group's radiance at the path's wavelengths (relative to the sample's pdfs).
     pub l: SampledSpectrum,
@@ -74,166 +87,311 @@ pub const SHOWN_SE: f64 = 2.0;
 /// Salts the pilot's seed so that its numbers are not the image's first samples.
 const PILOT_SALT: u64 = 0x7261_6f75_6c65_7474;
 
-/// One candidate start as the pilot rates it.
+/// The splits the pilot considers (`integrator::split`): powers of two.
+pub const SPLITS: [u32; 4] = [1, 2, 4, 8];
+/// The weight of the first vertex's ray queries (the camera ray and the first shadow ray)
+/// against a continuation's in a sample's cost: the render time of the peers' box split in 1,
+/// 2 and 4 against their rays (docs/design.md §8, "Splitting at the first vertex").
+pub const FIRST_VERTEX_WEIGHT: f64 = 0.55;
+
+/// What the user fixed of the path tracer's roulette and splitting; None: the pilot chooses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Fixed {
+    pub start: Option<u32>,
+    pub split: Option<u32>,
+}
+
+impl Fixed {
+    /// The candidate another must be shown ahead of: the given start and split, or the
+    /// defaults (start [`DEFAULT_RR_DEPTH`], no split).
+    pub fn reference(&self) -> (u32, u32) {
+        (
+            self.start.unwrap_or(DEFAULT_RR_DEPTH),
+            self.split.unwrap_or(1),
+        )
+    }
+}
+
+/// One candidate (roulette start, split) as the pilot rates it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Candidate {
-    /// The first scattering event after which roulette may end a path (`--rr-depth`).
     pub start: u32,
-    /// The mean variance of a pixel's luminance per sample (cd²/m⁴ before the exposure).
+    pub split: u32,
+    /// Mean over the pilot's pixels of one sample's variance (luminance²).
     pub variance: f64,
-    /// The mean ray queries a sample.
+    /// Mean cost of one sample: ray queries, the first vertex's weighted.
     pub cost: f64,
-    /// The standard error of `cost` (from the spread over the pilot's pixels).
-    pub cost_se: f64,
-    /// Shown ahead of [`DEFAULT_RR_DEPTH`]: its variance × cost is below the default's by more
-    /// than [`SHOWN_SE`] standard errors of their difference over the pilot's pixels (the
-    /// candidates are rated on the same paths, so the difference's error is small). True for
-    /// the default itself.
+    /// Mean ray queries of one sample, and their standard error over the pixels.
+    pub rays: f64,
+    pub rays_se: f64,
+    /// Ahead of the reference (`Fixed::reference`) by [`SHOWN_SE`] standard errors of the
+    /// per-pixel difference in variance × cost (always true for the reference itself).
     pub shown: bool,
 }
 
 impl Candidate {
-    /// 1/(variance × cost), in the units above.
+    /// Efficiency, 1/(variance × cost) (Rath et al. 2022, §3).
     pub fn efficiency(&self) -> f64 {
         1.0 / (self.variance * self.cost)
     }
 }
 
-/// The pilot's verdict: the chosen start and every candidate's figures.
+/// The pilot's verdict: the chosen start and split and every candidate's figures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Choice {
     pub start: u32,
+    pub split: u32,
     pub candidates: Vec<Candidate>,
-    /// Paths the pilot traced.
+    /// Camera samples the pilot traced.
     pub paths: u64,
+    pub fixed: Fixed,
 }
 
 impl Choice {
-    /// The chosen start's efficiency over `start`'s (None if `start` was not a candidate).
-    pub fn gain_over(&self, start: u32) -> Option<f64> {
-        let of = |s: u32| self.candidates.iter().find(|c| c.start == s);
-        Some(of(self.start)?.efficiency() / of(start)?.efficiency())
+    /// The chosen candidate's efficiency over that of (`start`, `split`), when both are
+    /// candidates.
+    pub fn gain_over(&self, (start, split): (u32, u32)) -> Option<f64> {
+        let of = |s: u32, n: u32| {
+            self.candidates
+                .iter()
+                .find(|c| c.start == s && c.split == n)
+        };
+        Some(of(self.start, self.split)?.efficiency() / of(start, split)?.efficiency())
     }
 
-    /// One line for the log: the start and its gain over `default`.
-    pub fn describe(&self, default: u32) -> String {
+    /// One line for the log: what was chosen and by how much it beats the reference.
+    pub fn describe(&self) -> String {
+        let (s0, n0) = self.fixed.reference();
+        let mut chosen = Vec::new();
+        if self.fixed.start.is_none() {
+            chosen.push(format!("Russian roulette from bounce {}", self.start));
+        }
+        if self.fixed.split.is_none() {
+            chosen.push(match self.split {
+                1 => "paths not split".to_string(),
+                n => format!("paths split in {n} at their first vertex"),
+            });
+        }
+        let reference = match (self.fixed.start.is_none(), self.fixed.split.is_none()) {
+            (true, true) => format!("start {s0} unsplit"),
+            (true, false) => format!("start {s0}"),
+            _ => "no split".to_string(),
+        };
         let gain = self
-            .gain_over(default)
-            .map(|g| format!(", {g:.2}× the efficiency of start {default}"))
+            .gain_over((s0, n0))
+            .map(|g| format!(", {g:.2}× the efficiency of {reference}"))
             .unwrap_or_default();
         format!(
-            "Russian roulette from bounce {} (chosen by a pilot of {} paths{gain})",
-            self.start, self.paths
+            "{} (chosen by a pilot of {} paths{gain})",
+            chosen.join(", "),
+            self.paths
         )
     }
 }
 
-/// The candidate starts for a depth cap `max_depth` (scattering events; `cut::SAFETY_DEPTH`
-/// when unlimited): 1 to [`LATEST_START`], and no later than `max_depth` + 1 (no roulette).
-pub fn candidates(max_depth: u32) -> std::ops::RangeInclusive<u32> {
-    1..=LATEST_START.min(max_depth.saturating_add(1))
+/// The candidates (start, split) for a depth cap `max_depth` (scattering events;
+/// `cut::SAFETY_DEPTH` when unlimited): starts 1 to [`LATEST_START`] and no later than
+/// `max_depth` + 1 (no roulette), splits [`SPLITS`] (none with a cap of 0: no path
+/// continues), each only the user's when fixed.
+pub fn candidates(max_depth: u32, fixed: Fixed) -> Vec<(u32, u32)> {
+    let starts: Vec<u32> = match fixed.start {
+        Some(s) => vec![s],
+        None => (1..=LATEST_START.min(max_depth.saturating_add(1))).collect(),
+    };
+    let splits: &[u32] = match fixed.split {
+        Some(ref n) => std::slice::from_ref(n),
+        None if max_depth == 0 => &[1],
+        None => &SPLITS,
+    };
+    starts
+        .iter()
+        .flat_map(|&s| splits.iter().map(move |&n| (s, n)))
+        .collect()
+}
+
+/// One pilot camera sample: its first group and its continuations (none, one when the first
+/// vertex is specular, two when split), each as the whole path's luminance groups.
+struct PilotSample {
+    c0: f64,
+    r0: f64,
+    paths: Vec<(Vec<f64>, Vec<PilotGroup>)>,
+}
+
+impl PilotSample {
+    /// The continuations' sums of luminance (B above).
+    fn sums(&self) -> Vec<f64> {
+        self.paths
+            .iter()
+            .map(|(c, _)| c[1..].iter().sum())
+            .collect()
+    }
+
+    /// An unbiased estimate of the pixel's mean: c₀ + the mean of the continuations' sums.
+    fn estimate(&self) -> f64 {
+        let b = self.sums();
+        self.c0 + b.iter().sum::<f64>() / (b.len().max(1) as f64)
+    }
+
+    /// [E[X²], cost, rays] of this sample split in `n` with roulette from `start`, as the
+    /// module's comment derives them.
+    fn moments(&self, start: u32, n: u32) -> [f64; 3] {
+        if self.paths.is_empty() {
+            return [self.c0 * self.c0, FIRST_VERTEX_WEIGHT * self.r0, self.r0];
+        }
+        let k = self.paths.len() as f64;
+        let (mut m2, mut rays) = (0.0, 0.0);
+        for (c, g) in &self.paths {
+            let (m, r) = moments(c, g, start);
+            (m2, rays) = (m2 + m / k, rays + r / k);
+        }
+        let b = self.sums();
+        let n = if b.len() == 2 { f64::from(n) } else { 1.0 };
+        if b.len() == 2 {
+            let shared = self.c0 * self.c0 + self.c0 * (b[0] + b[1]) + b[0] * b[1];
+            m2 = m2 / n + (1.0 - 1.0 / n) * shared;
+        }
+        let rest = rays - self.r0;
+        [
+            m2,
+            FIRST_VERTEX_WEIGHT * self.r0 + n * rest,
+            self.r0 + n * rest,
+        ]
+    }
 }
 
 /// Runs the pilot on `scene` for a path tracer capped at `max_depth` with texture filter
-/// `filter`, numbers from `seed`; None when no pilot path found any light (nothing to
-/// choose by). Uses the current rayon pool.
-pub fn choose(scene: &Scene, max_depth: u32, filter: TextureFilter, seed: u64) -> Option<Choice> {
+/// `filter`, numbers from `seed`, choosing what `fixed` leaves open; None when no pilot path
+/// found any light (nothing to choose by). Uses the current rayon pool.
+pub fn choose(
+    scene: &Scene,
+    max_depth: u32,
+    filter: TextureFilter,
+    seed: u64,
+    fixed: Fixed,
+) -> Option<Choice> {
     let pt = PathIntegrator {
         max_depth: max_depth.min(PILOT_DEPTH),
         rr_depth: u32::MAX,
         filter,
+        split: 1,
     };
-    let starts: Vec<u32> = candidates(max_depth).collect();
+    let cands = candidates(max_depth, fixed);
     let pixels = pilot_pixels(scene.camera.width as u64, scene.camera.height as u64);
-    let per_pixel: Vec<Vec<[f64; 2]>> = pixels
+    let per_pixel: Vec<Vec<[f64; 3]>> = pixels
         .par_iter()
         .map_init(
-            || (SpectraCache::default(), Vec::new()),
-            |(spectra, groups), &(x, y)| {
+            || (SpectraCache::default(), [Vec::new(), Vec::new()]),
+            |(spectra, split), &(x, y)| {
                 let index = y * scene.camera.width as u64 + x;
                 let mut one = |sample| {
                     let mut sampler = Sampler::new(seed ^ PILOT_SALT, index, sample);
                     let lambda = SampledWavelengths::sample_visible(sampler.get_1d());
                     let film = [x as f32 + sampler.get_1d(), y as f32 + sampler.get_1d()];
                     let (ray, t_max) = scene.camera.generate_ray(film, sampler.get_2d());
-                    groups.clear();
-                    pt.pilot_walk(scene, ray, t_max, &lambda, &mut sampler, spectra, groups);
-                    let c: Vec<f64> = groups
+                    let mut shared = PilotGroup::default();
+                    let n = pt.pilot_walk(
+                        scene,
+                        ray,
+                        t_max,
+                        &lambda,
+                        &mut sampler,
+                        spectra,
+                        (&mut shared, split),
+                    );
+                    let y = |g: &PilotGroup| f64::from(sampled_to_xyz(g.l, &lambda)[1]);
+                    let c0 = y(&shared);
+                    let paths = split[..n as usize]
                         .iter()
-                        .map(|g| f64::from(sampled_to_xyz(g.l, &lambda)[1]))
+                        .map(|cont| {
+                            let g: Vec<PilotGroup> = std::iter::once(shared)
+                                .chain(cont.iter().copied())
+                                .collect();
+                            (g.iter().map(y).collect(), g)
+                        })
                         .collect();
-                    (c, groups.clone())
+                    PilotSample {
+                        c0,
+                        r0: f64::from(shared.rays),
+                        paths,
+                    }
                 };
                 let (a, b) = (one(0), one(1));
-                let (xa, xb) = (a.0.iter().sum::<f64>(), b.0.iter().sum::<f64>());
-                starts
+                let mean2 = a.estimate() * b.estimate();
+                cands
                     .iter()
-                    .map(|&s| {
-                        let (ma, ca) = moments(&a.0, &a.1, s);
-                        let (mb, cb) = moments(&b.0, &b.1, s);
-                        [0.5 * (ma + mb) - xa * xb, 0.5 * (ca + cb)]
+                    .map(|&(s, n)| {
+                        let (ma, mb) = (a.moments(s, n), b.moments(s, n));
+                        [
+                            0.5 * (ma[0] + mb[0]) - mean2,
+                            0.5 * (ma[1] + mb[1]),
+                            0.5 * (ma[2] + mb[2]),
+                        ]
                     })
                     .collect()
             },
         )
         .collect();
-    let candidates = rate(&starts, &per_pixel);
-    let best = best(&candidates)?;
+    let reference = cands.iter().position(|&c| c == fixed.reference());
+    let rated = rate(&cands, reference, &per_pixel);
+    let best = best(&rated, reference)?;
     Some(Choice {
         start: best.start,
+        split: best.split,
         paths: 2 * pixels.len() as u64,
-        candidates,
+        candidates: rated,
+        fixed,
     })
 }
 
-/// Each start's figures from the pilot's per-pixel [variance, cost] (`per_pixel[pixel][i]`
-/// for `starts[i]`).
-fn rate(starts: &[u32], per_pixel: &[Vec<[f64; 2]>]) -> Vec<Candidate> {
+/// Each candidate's figures from the pilot's per-pixel [variance, cost, rays]
+/// (`per_pixel[pixel][i]` for `cands[i]`), shown or not against `cands[reference]`.
+fn rate(
+    cands: &[(u32, u32)],
+    reference: Option<usize>,
+    per_pixel: &[Vec<[f64; 3]>],
+) -> Vec<Candidate> {
     let n = per_pixel.len() as f64;
-    let mean = |f: &dyn Fn(&Vec<[f64; 2]>) -> f64| per_pixel.iter().map(f).sum::<f64>() / n;
-    // The sample variance of the per-pixel values `f`, about their mean `m`.
-    let spread = |f: &dyn Fn(&Vec<[f64; 2]>) -> f64, m: f64| {
+    let mean = |f: &dyn Fn(&Vec<[f64; 3]>) -> f64| per_pixel.iter().map(f).sum::<f64>() / n;
+    let spread = |f: &dyn Fn(&Vec<[f64; 3]>) -> f64, m: f64| {
         per_pixel.iter().map(|p| (f(p) - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)
     };
-    let cost: Vec<f64> = (0..starts.len()).map(|i| mean(&|p| p[i][1])).collect();
-    let default = starts.iter().position(|&s| s == DEFAULT_RR_DEPTH);
-    (0..starts.len())
+    let cost: Vec<f64> = (0..cands.len()).map(|i| mean(&|p| p[i][1])).collect();
+    (0..cands.len())
         .map(|i| {
             let variance = mean(&|p| p[i][0]);
-            // variance × cost against the default's, pixel by pixel on the same paths.
-            let shown = match default {
+            let shown = match reference {
                 Some(d) if d != i => {
-                    let diff = |p: &Vec<[f64; 2]>| p[i][0] * cost[i] - p[d][0] * cost[d];
+                    let diff = |p: &Vec<[f64; 3]>| p[i][0] * cost[i] - p[d][0] * cost[d];
                     let m = mean(&diff);
                     m + SHOWN_SE * (spread(&diff, m) / n).sqrt() < 0.0
                 }
                 _ => true,
             };
+            let rays = mean(&|p| p[i][2]);
             Candidate {
-                start: starts[i],
+                start: cands[i].0,
+                split: cands[i].1,
                 variance,
                 cost: cost[i],
-                cost_se: (spread(&|p| p[i][1], cost[i]) / n).sqrt(),
+                rays,
+                rays_se: (spread(&|p| p[i][2], rays) / n).sqrt(),
                 shown,
             }
         })
         .collect()
 }
 
-/// The most efficient candidate among those shown ahead of [`DEFAULT_RR_DEPTH`] (and the
-/// default itself): the default unless another is strictly more efficient, the earliest of
-/// equals otherwise (a scene whose paths roulette never reaches rates every start alike);
+/// The most efficient candidate among those shown ahead of the reference (and the
+/// reference itself): the reference unless another is strictly more efficient, the earliest
+/// of equals otherwise (a scene whose paths roulette never reaches rates every start alike);
 /// None when no candidate has a positive, finite variance.
-fn best(candidates: &[Candidate]) -> Option<&Candidate> {
+fn best(candidates: &[Candidate], reference: Option<usize>) -> Option<&Candidate> {
     let valid = |c: &&Candidate| c.shown && c.variance > 0.0 && c.variance.is_finite();
-    let default = candidates
-        .iter()
-        .filter(valid)
-        .find(|c| c.start == DEFAULT_RR_DEPTH);
+    let first = reference.and_then(|r| candidates.get(r)).filter(valid);
     candidates
         .iter()
         .filter(valid)
-        .fold(default, |best, c| match best {
+        .fold(first, |best, c| match best {
             Some(b) if b.efficiency() >= c.efficiency() => Some(b),
             _ => Some(c),
         })
@@ -390,55 +548,123 @@ mod tests {
         }
     }
 
-    /// Equal candidates keep the default start; a strictly better one wins; invalid
-    /// variances never do.
+    /// Equal candidates keep the reference; a strictly better one wins; invalid variances
+    /// never do.
     #[test]
-    fn ties_keep_the_default_start() {
+    fn ties_keep_the_reference() {
         let c = |start, variance| Candidate {
             start,
+            split: 1,
             variance,
             cost: 2.0,
-            cost_se: 0.0,
+            rays: 2.0,
+            rays_se: 0.0,
             shown: true,
         };
         let same = [c(1, 1.0), c(2, 1.0), c(3, 1.0)];
-        assert_eq!(best(&same).unwrap().start, 2);
+        assert_eq!(best(&same, Some(1)).unwrap().start, 2);
         let better = [c(1, 1.0), c(2, 1.0), c(3, 0.9), c(4, 0.9)];
-        assert_eq!(best(&better).unwrap().start, 3);
+        assert_eq!(best(&better, Some(1)).unwrap().start, 3);
         let broken = [c(1, f64::NAN), c(2, 0.0), c(3, -1.0)];
-        assert!(best(&broken).is_none());
-        assert_eq!(best(&[c(1, 0.5), c(2, f64::INFINITY)]).unwrap().start, 1);
+        assert!(best(&broken, Some(1)).is_none());
+        assert_eq!(
+            best(&[c(1, 0.5), c(2, f64::INFINITY)], Some(1))
+                .unwrap()
+                .start,
+            1
+        );
         let not_shown = Candidate {
             shown: false,
             ..c(3, 0.5)
         };
-        assert_eq!(best(&[c(2, 1.0), not_shown]).unwrap().start, 2);
+        assert_eq!(best(&[c(2, 1.0), not_shown], Some(0)).unwrap().start, 2);
     }
 
-    /// A start is shown ahead of the default only when its variance × cost is lower on the
-    /// same pixels by more than the noise of the difference.
+    /// A candidate is shown ahead of the reference only when its variance × cost is lower on
+    /// the same pixels by more than the noise of the difference.
     #[test]
-    fn a_start_must_show_itself_ahead_of_the_default() {
-        // Pixel values [variance, cost] for starts 2 and 3: start 3 lower everywhere by 10 %
-        // (shown), start 4 lower on average but as often higher (not shown).
-        let per_pixel: Vec<Vec<[f64; 2]>> = (0..100)
+    fn a_candidate_must_show_itself_ahead_of_the_reference() {
+        // Pixel values [variance, cost, rays] for starts 2, 3 and 4: start 3 lower everywhere
+        // by 10 % (shown), start 4 lower on average but as often higher (not shown).
+        let per_pixel: Vec<Vec<[f64; 3]>> = (0..100)
             .map(|i| {
                 let v = 1.0 + (i % 7) as f64;
                 let noisy = if i % 2 == 0 { 0.5 * v } else { 1.4 * v };
-                vec![[v, 1.0], [0.9 * v, 1.0], [noisy, 1.0]]
+                vec![[v, 1.0, 1.0], [0.9 * v, 1.0, 1.0], [noisy, 1.0, 1.0]]
             })
             .collect();
-        let rated = rate(&[2, 3, 4], &per_pixel);
+        let rated = rate(&[(2, 1), (3, 1), (4, 1)], Some(0), &per_pixel);
         assert!(rated[0].shown && rated[1].shown, "{rated:?}");
         assert!(!rated[2].shown, "{rated:?}");
-        assert_eq!(best(&rated).unwrap().start, 3);
+        assert_eq!(best(&rated, Some(0)).unwrap().start, 3);
     }
 
     #[test]
     fn candidates_stop_at_no_roulette() {
-        assert_eq!(candidates(7), 1..=8);
-        assert_eq!(candidates(3), 1..=4);
-        assert_eq!(candidates(u32::MAX), 1..=LATEST_START);
+        let starts = |d| {
+            let c = candidates(d, Fixed::default());
+            let mut s: Vec<u32> = c.iter().map(|&(s, _)| s).collect();
+            s.dedup();
+            s
+        };
+        assert_eq!(starts(7), (1..=8).collect::<Vec<_>>());
+        assert_eq!(starts(3), (1..=4).collect::<Vec<_>>());
+        assert_eq!(starts(u32::MAX), (1..=LATEST_START).collect::<Vec<_>>());
+        assert_eq!(candidates(7, Fixed::default()).len(), 8 * SPLITS.len());
+        // No split with a cap of 0; what the user fixes is the only candidate.
+        assert_eq!(candidates(0, Fixed::default()), [(1, 1)]);
+        let start = Fixed {
+            start: Some(5),
+            split: None,
+        };
+        assert_eq!(candidates(7, start), SPLITS.map(|n| (5, n)));
+        let split = Fixed {
+            start: None,
+            split: Some(4),
+        };
+        assert!(candidates(7, split).iter().all(|&(_, n)| n == 4));
+        assert_eq!(split.reference(), (DEFAULT_RR_DEPTH, 4));
+    }
+
+    /// The split's second moment: a first group c₀ = 1 and continuations that bring 0 or 2
+    /// with probability ½ each, independently given the vertex, have E[X_n²] = (c₀ + E B)² +
+    /// Var B / n = 4 + 1/n. The pilot's estimate from one pair of continuations, averaged
+    /// over the four equally likely pairs, is that exactly; its cost counts the first vertex's
+    /// rays at [`FIRST_VERTEX_WEIGHT`] and n continuations'.
+    #[test]
+    fn the_split_moments_are_the_splitting_estimators() {
+        let g = |b: f32, rays| PilotGroup {
+            l: SampledSpectrum::ZERO,
+            b,
+            rays,
+        };
+        let sample = |b1: f64, b2: f64| PilotSample {
+            c0: 1.0,
+            r0: 2.0,
+            paths: [b1, b2]
+                .iter()
+                .map(|&b| (vec![1.0, b], vec![g(1.0, 2), g(1.0, 3)]))
+                .collect(),
+        };
+        for n in SPLITS {
+            let pairs = [(0.0, 0.0), (0.0, 2.0), (2.0, 0.0), (2.0, 2.0)];
+            let m2: f64 = pairs
+                .iter()
+                .map(|&(a, b)| sample(a, b).moments(9, n)[0] / 4.0)
+                .sum();
+            let want = 4.0 + 1.0 / f64::from(n);
+            assert!((m2 - want).abs() < 1e-12, "n {n}: {m2} against {want}");
+            let [_, cost, rays] = sample(0.0, 2.0).moments(9, n);
+            assert!((cost - (FIRST_VERTEX_WEIGHT * 2.0 + 3.0 * f64::from(n))).abs() < 1e-12);
+            assert!((rays - (2.0 + 3.0 * f64::from(n))).abs() < 1e-12);
+        }
+        // Unsplit (one continuation: a specular first vertex), n changes nothing.
+        let single = PilotSample {
+            paths: sample(2.0, 0.0).paths[..1].to_vec(),
+            ..sample(0.0, 0.0)
+        };
+        assert_eq!(single.moments(9, 1), single.moments(9, 8));
+        assert_eq!(single.moments(9, 4)[0], 9.0);
     }
 
     #[test]

@@ -566,6 +566,7 @@ mod tests {
         Settings {
             max_depth: 5,
             rr_depth: crate::integrator::roulette::DEFAULT_RR_DEPTH,
+            split: 1,
             filter: TextureFilter::Finest,
             meters: false,
         }

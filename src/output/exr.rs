@@ -21,6 +21,7 @@
 //! | `spectralRender:seed` | int | sampler seed; a seed above 2^31 − 1 is a string of its decimal digits (EXR's int is 32-bit) |
 //! | `spectralRender:maxDepth` | int | maximum number of scattering events; −1: unlimited (Russian roulette and the safety cap) |
 //! | `spectralRender:rrDepth` | int | the path tracer's first bounce of Russian roulette (`--rr-depth`), when the path tracer made the image |
+//! | `spectralRender:split` | int | the continuations the path tracer split each path into at its first vertex (`--split`), when the path tracer made the image |
 //! | `spectralRender:exposure` | float | the camera's exposure in stops |
 //! | `spectralRender:integrator` | string | integrator name |
 //! | `spectralRender:mis` | string | the MIS heuristic (`power`, `balance`), for integrators that combine techniques |
@@ -77,6 +78,7 @@ pub const VERSION_ATTRIBUTE: &str = "spectralRender:version";
 pub const SCENE_ATTRIBUTE: &str = "spectralRender:scene";
 pub const MAX_DEPTH_ATTRIBUTE: &str = "spectralRender:maxDepth";
 pub const RR_DEPTH_ATTRIBUTE: &str = "spectralRender:rrDepth";
+pub const SPLIT_ATTRIBUTE: &str = "spectralRender:split";
 pub const EXPOSURE_ATTRIBUTE: &str = "spectralRender:exposure";
 pub const MIS_ATTRIBUTE: &str = "spectralRender:mis";
 pub const TIME_CODE_ATTRIBUTE: &str = "spectralRender:timeCode";
@@ -105,6 +107,8 @@ pub struct ExrMetadata {
     pub max_depth: Option<u32>,
     /// The path tracer's first bounce of Russian roulette, when the path tracer made the image.
     pub rr_depth: Option<u32>,
+    /// The path tracer's split at the first vertex, when the path tracer made the image.
+    pub split: Option<u32>,
     /// The camera's exposure in stops: the image was scaled by 2^exposure.
     pub exposure: f32,
     pub wall_time_s: f64,
@@ -487,6 +491,9 @@ fn layer_attributes(meta: &ExrMetadata) -> LayerAttributes {
     if let Some(d) = meta.rr_depth.and_then(|d| int(u64::from(d))) {
         typed.push((RR_DEPTH_ATTRIBUTE, d));
     }
+    if let Some(n) = meta.split.and_then(|n| int(u64::from(n))) {
+        typed.push((SPLIT_ATTRIBUTE, n));
+    }
     let time = &meta.time;
     for (name, v) in [
         (TIME_CODE_ATTRIBUTE, time.time_code),
@@ -621,6 +628,7 @@ mod tests {
             seed: u64::MAX,
             max_depth: Some(12),
             rr_depth: Some(5),
+            split: Some(4),
             exposure: -8.0,
             wall_time_s: 12.345678901234567,
             version: "0.1.0".into(),
@@ -730,6 +738,7 @@ mod tests {
         assert_eq!(attributes[SEED_ATTRIBUTE], "18446744073709551615");
         assert_eq!(attributes[MAX_DEPTH_ATTRIBUTE], "12");
         assert_eq!(attributes[RR_DEPTH_ATTRIBUTE], "5");
+        assert_eq!(attributes[SPLIT_ATTRIBUTE], "4");
         assert_eq!(attributes[EXPOSURE_ATTRIBUTE], "-8");
         let wall_time: f64 = attributes[WALL_TIME_ATTRIBUTE].parse().unwrap();
         assert_eq!(wall_time, 12.345678901234567);
@@ -747,6 +756,7 @@ mod tests {
             (SPP_ATTRIBUTE, "int"),
             (MAX_DEPTH_ATTRIBUTE, "int"),
             (RR_DEPTH_ATTRIBUTE, "int"),
+            (SPLIT_ATTRIBUTE, "int"),
             (SEED_ATTRIBUTE, "string"),
             (EXPOSURE_ATTRIBUTE, "float"),
             ("whiteLuminance", "float"),

@@ -125,6 +125,18 @@ impl<'a> Sampler<'a> {
     /// A uniform number in [0, 1) from PCG32 whatever the sampler, for decisions a path
     /// takes a variable number of times (stochastic opacity), which have no place in the
     /// dimension layout. For the independent sampler it is [`get_1d`](Self::get_1d).
+    /// Switches to continuation `c` of the 2^`bits` that a path splits into at its first
+    /// vertex (`integrator::path`): the low-discrepancy stream takes the continuation's points
+    /// (`Stream::continuation`) at the current dimension; the independent sampler, and the
+    /// free draws of both, go on with their own numbers, so that the continuations, drawn
+    /// one after another, are independent.
+    #[inline]
+    pub fn enter_continuation(&mut self, c: u32, bits: u32) {
+        if let Some(q) = &mut self.lds {
+            *q = q.continuation(c, bits);
+        }
+    }
+
     #[inline]
     pub fn get_1d_free(&mut self) -> f32 {
         self.seed_pcg();

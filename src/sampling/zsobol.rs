@@ -86,10 +86,18 @@ impl ZSobol {
     /// caller that draws several samples of one pixel.
     #[inline]
     pub fn stream_at(&self, m: u64, s: u64) -> Stream<'_> {
-        let (r, j) = (s & 1, s >> 1);
-        let l = self.log2;
+        self.stream_in(m, s, 0, 0)
+    }
+
+    /// Sample `s` of the pixel of Morton index `m`, in its continuation `c` of 2^`bits`
+    /// (`Stream::continuation`): in its replicate, index j · 2^bits + c of blocks 2^bits
+    /// times larger, so that the pixel's continuations are one aligned block of the sequence
+    /// as its samples are. `bits` 0 (and `c` 0) is the sample's own stream.
+    #[inline]
+    fn stream_in(&self, m: u64, s: u64, c: u64, bits: u32) -> Stream<'_> {
+        let (r, j) = (s & 1, ((s >> 1) << bits) | c);
+        let l = self.log2 + bits;
         let epoch = j >> l;
-        // The index bits above 32 select a scramble of their own, like an epoch.
         let high = m >> (32 - l);
         let low = ((m << l) | (j & ((1 << l) - 1))) as u32;
         let (key, seeds) = if epoch | high == 0 {
@@ -102,12 +110,11 @@ impl ZSobol {
             seeds,
             index_reversed: low.reverse_bits(),
             dim: 0,
+            origin: (self, m, s),
         }
     }
 }
 
-/// The seed of the scrambles of replicate `r` of the run seeded `seed`, in epoch `epoch`, for
-/// the index bits `high` above 32.
 fn key(seed: u64, r: u64, epoch: u64, high: u64) -> u64 {
     mix64(seed ^ mix64(r ^ mix64(epoch ^ mix64(high))))
 }
@@ -132,9 +139,12 @@ pub struct Stream<'a> {
     seeds: &'a [[u64; 2]],
     index_reversed: u32,
     dim: u32,
+    /// The sequence, the pixel's Morton index and the sample this stream belongs to, for
+    /// its continuations.
+    origin: (&'a ZSobol, u64, u64),
 }
 
-impl Stream<'_> {
+impl<'a> Stream<'a> {
     /// The seed hash of dimension `d` (`seed_hash`).
     #[inline]
     fn seeds(&self, d: u32) -> u64 {
@@ -188,6 +198,20 @@ impl Stream<'_> {
     #[inline]
     pub fn set_dimension(&mut self, d: u32) {
         self.dim = d;
+    }
+
+    /// This sample's continuation `c` of 2^`bits` (a path split at its first vertex,
+    /// `integrator::path`), at the current dimension: the points of index j · 2^bits + c of its
+    /// replicate, so that the 2^bits continuations of the pixel's N samples of a replicate
+    /// are one (0, k, 2)-net of 2^bits · N points in every 1D and 2D projection, as N · 2^bits
+    /// samples would be (design.md §8, "Splitting at the first vertex").
+    #[inline]
+    pub fn continuation(&self, c: u32, bits: u32) -> Stream<'a> {
+        let (z, m, s) = self.origin;
+        Stream {
+            dim: self.dim,
+            ..z.stream_in(m, s, u64::from(c), bits)
+        }
     }
 
     /// Steps past the next `n` dimensions without drawing them.

@@ -19,6 +19,7 @@ use crate::error::Reason;
 use crate::integrator::bidir::strategies::StrategySums;
 use crate::integrator::cut::{BatchedRatio, BATCHES};
 use crate::integrator::roulette::{RrStart, DEFAULT_RR_DEPTH};
+use crate::integrator::split::Split;
 use crate::scene::Scene;
 use crate::sensor::film_state::FilmState;
 use crate::sensor::raw_bytes::{ByteReader, ByteWriter};
@@ -83,6 +84,9 @@ pub fn identity(scene: &Scene, opts: &RenderOptions) -> Vec<(String, String)> {
     // existed (all at the default) still resume and merge.
     if opts.rr_depth != RrStart::At(DEFAULT_RR_DEPTH) {
         id.push(("rr depth".into(), opts.rr_depth.to_string()));
+    }
+    if opts.split != Split::At(1) {
+        id.push(("split".into(), opts.split.to_string()));
     }
     id
 }

@@ -45,6 +45,7 @@ use crate::integrator::bidir::strategies::{StrategyFilms, StrategyImage};
 use crate::integrator::bidir::TileAccumulator;
 use crate::integrator::cut::{depth_cap, BatchedRatio};
 use crate::integrator::roulette::RrStart;
+use crate::integrator::split::Split;
 use crate::integrator::{Estimator, Integrator, Iteration, Settings, Workspace};
 use crate::sampling::{dimensions, PixelSamplers, SamplerKind};
 use crate::scene::{ray_count, Scene};
@@ -89,6 +90,10 @@ pub struct RenderOptions {
     /// Where the path tracer's Russian roulette starts (`--rr-depth`: `integrator::roulette`;
     /// auto, the default, by a pilot: `session::roulette`); the other integrators ignore it.
     pub rr_depth: RrStart,
+    /// The continuations the path tracer's paths split into at their first vertex
+    /// (`--split`: `integrator::split`; auto, the default, chosen with the roulette start);
+    /// the other integrators ignore it.
+    pub split: Split,
     /// The light-transport algorithm and its settings.
     pub integrator: Integrator,
     /// Record the per-(s, t) decomposition (`Capabilities::strategy_images`).
@@ -131,6 +136,7 @@ impl Default for RenderOptions {
             threads: None,
             max_depth: None,
             rr_depth: RrStart::Auto,
+            split: Split::Auto,
             integrator: Integrator::Path,
             strategies: false,
             filter_textures: true,
@@ -164,6 +170,9 @@ pub struct RenderOutput {
     /// The path tracer's first bounce of Russian roulette (`session::roulette`); None for
     /// the other integrators.
     pub rr_depth: Option<u32>,
+    /// The path tracer's split at the first vertex (`session::roulette`); None for the
+    /// other integrators.
+    pub split: Option<u32>,
     /// What the depth cap cut of the image's mean luminance, when a path reached it.
     pub depth_cut: Option<DepthCut>,
     /// Contributions clamped to the film's range (`sensor::grid_sum`; should be 0).
@@ -271,12 +280,14 @@ impl<'a> ImageSession<'a> {
         // The roulette's pilot is part of the render: its time counts.
         let start = Instant::now();
         let before = pool::ray_queries(&pool);
-        let (integrator, rr) = (&opts.integrator, opts.rr_depth);
-        let roulette = pool.install(|| roulette::resolve(scene, integrator, rr, cap, opts.seed));
+        let (integrator, rr, split) = (&opts.integrator, opts.rr_depth, opts.split);
+        let roulette =
+            pool.install(|| roulette::resolve(scene, integrator, (rr, split), cap, opts.seed));
         let pilot_rays = pool::ray_queries(&pool).wrapping_sub(before);
         let settings = Settings {
             max_depth: cap,
             rr_depth: roulette.as_ref().map_or(rr.or_default(), |r| r.start),
+            split: roulette.as_ref().map_or(1, |r| r.split),
             filter: texture_filter(opts),
             meters: false,
         };
@@ -525,6 +536,7 @@ impl<'a> ImageSession<'a> {
             report: self.report(),
             auto: self.auto.clone(),
             rr_depth: self.roulette.as_ref().map(|r| r.start),
+            split: self.roulette.as_ref().map(|r| r.split),
             depth_cut: DepthCut::new(
                 self.opts.max_depth,
                 &self.cut.sums(),

@@ -260,6 +260,7 @@ impl<'a> MeterSession<'a> {
         let settings = Settings {
             max_depth: depth_cap(opts.max_depth),
             rr_depth: opts.rr_depth,
+            split: 1,
             filter: TextureFilter::Finest,
             meters: true,
         };

@@ -1,0 +1,168 @@
+//! Splitting at the first vertex (`--split`, `PathIntegrator::li_split`): unbiased against the
+//! unsplit path tracer (plain, dispersive, with the depth cap's report), the same bits on any
+//! number of threads, and `--split 1` the unsplit estimator itself.
+
+mod common;
+
+use common::*;
+use spectral_render::integrator::roulette::RrStart;
+use spectral_render::integrator::split::Split;
+use spectral_render::integrator::Integrator;
+use spectral_render::sampling::SamplerKind;
+use spectral_render::scene::{self, Scene};
+use spectral_render::session::layers::LayerOptions;
+use spectral_render::session::{self, RenderOptions, RenderOutput};
+use std::path::Path;
+
+fn options(spp: u32, seed: u64, sampler: SamplerKind, split: u32) -> RenderOptions {
+    RenderOptions {
+        spp: Some(spp),
+        seed,
+        threads: Some(2),
+        max_depth: Some(7),
+        rr_depth: RrStart::At(3),
+        split: Split::At(split),
+        integrator: Integrator::Path,
+        sampler,
+        layers: LayerOptions {
+            variance: true,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+fn render(scene: &Scene, opts: &RenderOptions) -> RenderOutput {
+    let out = session::render(scene, opts).unwrap_or_else(|e| panic!("{e}"));
+    assert_finite(&out);
+    out
+}
+
+/// (mean of Y over `pixels`, the variance of that mean from the per-pixel variance estimates
+/// of the film's even and odd samples).
+fn mean_y(out: &RenderOutput, pixels: &[usize]) -> (f64, f64) {
+    let v = out.layers.variance.as_ref().unwrap();
+    let n = pixels.len() as f64;
+    let mean = pixels
+        .iter()
+        .map(|&i| f64::from(out.xyz[i][1]))
+        .sum::<f64>()
+        / n;
+    let var = pixels.iter().map(|&i| f64::from(v[i])).sum::<f64>() / (n * n);
+    (mean, var)
+}
+
+/// z of the difference of `a`'s and `b`'s mean luminance over each quarter of the image and
+/// over the whole, `a`'s scaled by `scale`.
+fn z_scores(a: &RenderOutput, b: &RenderOutput, scale: f64) -> Vec<f64> {
+    let (w, h) = (a.width, a.height);
+    let quarter = |q: usize| -> Vec<usize> {
+        (0..w * h)
+            .filter(|i| usize::from(i % w >= w / 2) + 2 * usize::from(i / w >= h / 2) == q)
+            .collect()
+    };
+    let regions = (0..4).map(quarter).chain([(0..w * h).collect()]);
+    regions
+        .map(|px| {
+            let ((ma, va), (mb, vb)) = (mean_y(a, &px), mean_y(b, &px));
+            (scale * ma - mb) / (scale * scale * va + vb).sqrt()
+        })
+        .collect()
+}
+
+/// Split renders agree with unsplit ones: mean luminance over each quarter and the whole
+/// within |z| < 3.5 (two-sided p = 4.7e-4 each), on the box with both samplers (split 4) and
+/// on the prism, whose dispersive glass terminates a continuation's secondary wavelengths on
+/// its own (split 2). The seeds differ, so the renders are independent; the test sees a bias
+/// of 2 % in the box's mean.
+#[test]
+fn split_images_agree_with_unsplit_ones() {
+    let cbox = scene::load(&cbox_path(), Some((96, 72))).unwrap();
+    let prism_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/prism.usda");
+    let prism = scene::load(&prism_path, Some((64, 48))).unwrap();
+    assert!(prism.dispersive);
+    let cases = [
+        ("box zsobol", &cbox, SamplerKind::ZSobol, 4, 32),
+        ("box independent", &cbox, SamplerKind::Independent, 4, 32),
+        ("prism zsobol", &prism, SamplerKind::ZSobol, 2, 64),
+    ];
+    for (name, scene, sampler, n, spp) in cases {
+        let split = render(scene, &options(spp, 11, sampler, n));
+        let unsplit = render(scene, &options(spp * n, 12, sampler, 1));
+        let z = z_scores(&split, &unsplit, 1.0);
+        eprintln!("{name}: z {z:.2?}");
+        assert!(z.iter().all(|z| z.abs() < 3.5), "{name}: biased: {z:?}");
+        if name == "box zsobol" {
+            let biased = z_scores(&split, &unsplit, 1.02);
+            assert!(biased[4].abs() > 3.5, "{name}: 2 % unseen: {biased:?}");
+        }
+    }
+}
+
+/// The depth cap's report counts a split path's continuations: what the cap cut agrees with
+/// the unsplit render's within 3.5 of their combined 95 % half-widths / 1.96.
+#[test]
+fn the_depth_cut_of_a_split_render_agrees() {
+    let scene = scene::load(&cbox_path(), Some((48, 36))).unwrap();
+    let split = render(&scene, &options(64, 3, SamplerKind::ZSobol, 4));
+    let unsplit = render(&scene, &options(256, 4, SamplerKind::ZSobol, 1));
+    let (a, b) = (split.depth_cut.unwrap(), unsplit.depth_cut.unwrap());
+    let se = ((a.ci95 / 1.96).powi(2) + (b.ci95 / 1.96).powi(2)).sqrt();
+    eprintln!(
+        "cut {} ± {} against {} ± {}",
+        a.fraction, a.ci95, b.fraction, b.ci95
+    );
+    assert!(a.fraction > 0.0 && (a.fraction - b.fraction).abs() < 3.5 * se);
+    // Four continuations a sample reach the cap where one path did.
+    assert!(
+        a.capped > 2 * b.capped / 4,
+        "{} against {}",
+        a.capped,
+        b.capped
+    );
+}
+
+#[test]
+fn split_images_are_bit_identical_for_one_and_two_threads() {
+    let scene = scene::load(&cbox_path(), Some((40, 30))).unwrap();
+    for sampler in [SamplerKind::ZSobol, SamplerKind::Independent] {
+        let run = |threads| {
+            let opts = RenderOptions {
+                threads: Some(threads),
+                ..options(8, 5, sampler, 4)
+            };
+            render(&scene, &opts)
+        };
+        assert_eq!(run(1).xyz, run(2).xyz, "{sampler:?}");
+    }
+}
+
+/// The split is an estimator of its own: its image differs from the unsplit one at the same
+/// seed, and `auto` reports the split it took.
+#[test]
+fn auto_reports_its_split() {
+    let scene = scene::load(&cbox_path(), Some((40, 30))).unwrap();
+    let opts = options(4, 5, SamplerKind::ZSobol, 1);
+    let one = render(&scene, &opts);
+    let two = render(
+        &scene,
+        &RenderOptions {
+            split: Split::At(2),
+            ..opts.clone()
+        },
+    );
+    assert_ne!(one.xyz, two.xyz);
+    assert_eq!((one.split, two.split), (Some(1), Some(2)));
+    let auto = render(
+        &scene,
+        &RenderOptions {
+            split: Split::Auto,
+            ..opts
+        },
+    );
+    assert!(
+        matches!(auto.split, Some(1 | 2 | 4 | 8)),
+        "{:?}",
+        auto.split
+    );
+}
