@@ -198,15 +198,33 @@ fn rr_depth_is_an_option_of_render_and_info() {
     let o = spectral_render(&["small.usda", "--spp", "2", "--integrator", "bdpt"], &dir);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!rr(&dir).contains_key(exr::RR_DEPTH_ATTRIBUTE));
-    // By default (`auto`) a pilot chooses the start, says so, and the EXR names its choice.
+    // By default (`auto`) a pilot chooses the start and the split, says so, and the EXR names
+    // its choice.
     for args in [
         &["small.usda", "--spp", "2"][..],
-        &["small.usda", "--spp", "2", "--rr-depth", "auto"],
+        &["small.usda", "--spp", "2", "--rr-depth", "auto", "--split", "auto"],
     ] {
         let o = spectral_render(args, &dir);
         assert!(o.status.success(), "{}", stderr(&o));
         let start: u32 = rr(&dir)[exr::RR_DEPTH_ATTRIBUTE].parse().unwrap();
-        let said = format!("note: Russian roulette from bounce {start} (chosen by a pilot");
+        let split: u32 = rr(&dir)[exr::SPLIT_ATTRIBUTE].parse().unwrap();
+        let paths = match split {
+            1 => "paths not split".to_string(),
+            n => format!("paths split in {n} at their first vertex"),
+        };
+        let said = format!("note: Russian roulette from bounce {start}, {paths} (chosen by a pilot");
         assert!(stderr(&o).contains(&said), "{}", stderr(&o));
+    }
+    // A given split is kept (the pilot still chooses the start) and named in the EXR; the
+    // split must be a power of two up to 16.
+    let o = spectral_render(&["small.usda", "--spp", "2", "--split", "4"], &dir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(rr(&dir)[exr::SPLIT_ATTRIBUTE], "4");
+    assert!(stderr(&o).contains("note: Russian roulette from bounce "), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("paths split"), "{}", stderr(&o));
+    for bad in ["3", "0", "32", "two"] {
+        let o = spectral_render(&["small.usda", "--spp", "2", "--split", bad], &dir);
+        assert!(!o.status.success(), "--split {bad}");
+        assert!(stderr(&o).contains("power of two"), "{}", stderr(&o));
     }
 }

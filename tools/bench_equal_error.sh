@@ -5,7 +5,8 @@
 # relRMSE 5 % with the visible light masked, and the ratios (tools/equal_error.py says how each
 # is measured).
 #
-#   tools/bench_equal_error.sh [--rounds N] [--spp 64 256 1024] [--rr-depth N…] [--no-adaptive]
+#   tools/bench_equal_error.sh [--rounds N] [--spp 64 256 1024] [--rr-depth N…] [--split N…]
+#   [--no-adaptive]
 #   (equal_error.py)
 #
 # Needs the peers' venv (../shared/peers/README.md; PEERS_VENV, default ~/peers/venv) and

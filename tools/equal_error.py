@@ -47,9 +47,10 @@ from compare_mitsuba import emitter_mask  # noqa: E402
 EXE = os.path.join(ROOT, "target", "release", "spectral-render")
 
 
-def ours(sampler, spp, res, seed, tmp, rr_depth=None, adaptive=False):
-    out = os.path.join(tmp, f"ours_{sampler}_{rr_depth}_{adaptive}_{spp}_{seed}.exr")
+def ours(sampler, spp, res, seed, tmp, rr_depth=None, adaptive=False, split=None):
+    out = os.path.join(tmp, f"ours_{sampler}_{rr_depth}_{adaptive}_{split}_{spp}_{seed}.exr")
     rr = ["--rr-depth", str(rr_depth)] if rr_depth else []
+    rr += ["--split", str(split)] if split else []
     rr += ["--adaptive"] if adaptive else []
     t0 = time.perf_counter()
     subprocess.run([EXE, os.path.join(PEERS, "cbox.usda"), "-o", out, "--spp", str(spp),
@@ -122,6 +123,8 @@ def main():
     ap.add_argument("--variants", nargs="+", default=["llvm_ad_spectral", "scalar_spectral"])
     ap.add_argument("--rr-depth", type=int, nargs="*", default=[],
                     help="extra rows: ours (zsobol) with --rr-depth N")
+    ap.add_argument("--split", type=int, nargs="*", default=[],
+                    help="extra rows: ours (zsobol) with --split N")
     ap.add_argument("--no-adaptive", action="store_true",
                     help="leave out the row of ours with --adaptive")
     a = ap.parse_args()
@@ -138,6 +141,9 @@ def main():
     for d in a.rr_depth:
         configs.append((f"ours path zsobol rr-depth {d}",
                         lambda spp, s, tmp, d=d: ours("zsobol", spp, a.res, s, tmp, d)))
+    for n in a.split:
+        configs.append((f"ours path zsobol split {n}",
+                        lambda spp, s, tmp, n=n: ours("zsobol", spp, a.res, s, tmp, split=n)))
     scenes = {}
     for v in a.variants:
         configs.append((f"Mitsuba {v}",
