@@ -202,7 +202,15 @@ fn rr_depth_is_an_option_of_render_and_info() {
     // its choice.
     for args in [
         &["small.usda", "--spp", "2"][..],
-        &["small.usda", "--spp", "2", "--rr-depth", "auto", "--split", "auto"],
+        &[
+            "small.usda",
+            "--spp",
+            "2",
+            "--rr-depth",
+            "auto",
+            "--split",
+            "auto",
+        ],
     ] {
         let o = spectral_render(args, &dir);
         assert!(o.status.success(), "{}", stderr(&o));
@@ -212,7 +220,8 @@ fn rr_depth_is_an_option_of_render_and_info() {
             1 => "paths not split".to_string(),
             n => format!("paths split in {n} at their first vertex"),
         };
-        let said = format!("note: Russian roulette from bounce {start}, {paths} (chosen by a pilot");
+        let said =
+            format!("note: Russian roulette from bounce {start}, {paths} (chosen by a pilot");
         assert!(stderr(&o).contains(&said), "{}", stderr(&o));
     }
     // A given split is kept (the pilot still chooses the start) and named in the EXR; the
@@ -220,7 +229,11 @@ fn rr_depth_is_an_option_of_render_and_info() {
     let o = spectral_render(&["small.usda", "--spp", "2", "--split", "4"], &dir);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(rr(&dir)[exr::SPLIT_ATTRIBUTE], "4");
-    assert!(stderr(&o).contains("note: Russian roulette from bounce "), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("note: Russian roulette from bounce "),
+        "{}",
+        stderr(&o)
+    );
     assert!(!stderr(&o).contains("paths split"), "{}", stderr(&o));
     for bad in ["3", "0", "32", "two"] {
         let o = spectral_render(&["small.usda", "--spp", "2", "--split", bad], &dir);
