@@ -126,8 +126,8 @@ fn the_pilot_predicts_the_rays_roulette_costs() {
         session::run(&mut s, &mut session::quiet);
         let pixels = 48.0 * 48.0;
         let measured = s.ray_queries() as f64 / (s.samples() as f64 * pixels);
-        let predicted = c.rays;
-        let se = c.rays_se * (1.0 + 2.0 * pixels / (pixels * 64.0)).sqrt();
+        let predicted = c.cost;
+        let se = c.cost_se * (1.0 + 2.0 * pixels / (pixels * 64.0)).sqrt();
         let case = format!("start {start} split {split}");
         eprintln!("{case}: {measured:.4} rays a sample, predicted {predicted:.4} ± {se:.4}");
         assert!(

@@ -8,7 +8,8 @@
 # one thread, `--integrator path --sampler SAMPLER` (default zsobol), STAGE default
 # ../shared/peers/cbox.usda. The whole program is counted, so the progress display's passes
 # move it by up to ±2 % between runs of one binary; the count inside
-# `PathEstimator::image_sample` (tools/callgrind_calls.py) is steadier. Needs valgrind.
+# `PathEstimator::image_sample` (tools/callgrind_calls.py) is steadier. EXTRA_ARGS
+# (environment) is added to both renders, e.g. EXTRA_ARGS="--rr-depth 2". Needs valgrind.
 set -euo pipefail
 BIN=$1
 SAMPLER=${2:-zsobol}
@@ -18,7 +19,7 @@ trap 'rm -rf "$DIR"' EXIT
 total() {
     valgrind --tool=callgrind --callgrind-out-file="$DIR/cg.$1" "$BIN" "$STAGE" -o "$DIR/$1.exr" \
         --resolution 128x128 --spp "$1" --max-depth 7 --seed 1 --threads 1 --integrator path \
-        --sampler "$SAMPLER" >/dev/null 2>&1
+        --sampler "$SAMPLER" ${EXTRA_ARGS:-} >/dev/null 2>&1
     awk '/^(summary|totals):/ {print $2; exit}' "$DIR/cg.$1"
 }
 A=$(total 4)

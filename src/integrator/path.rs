@@ -226,8 +226,9 @@ impl PathIntegrator {
     /// before the continuations are drawn (splitting, Rath et al. 2022, "EARS:
     /// Efficiency-Aware Russian Roulette and Splitting", §3; Arvo and Kirk 1990). A specular
     /// first vertex is not split (its continuations would share their direction), and a
-    /// cap of 0 ends every path there: both are `li_gather`'s estimate itself.
-    #[inline(always)]
+    /// cap of 0 ends every path there: both are `li_gather`'s estimate itself. A call of its
+    /// own: inlined into `image_sample` beside `li_gather` it slowed the unsplit samples.
+    #[inline(never)]
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn li_split<const DISPERSION: bool>(
         &self,

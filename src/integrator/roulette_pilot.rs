@@ -44,9 +44,9 @@
 //! without bias by (1/n)(M₁ + M₂)/2 + (1 − 1/n)(c₀² + c₀(B₁ + B₂) + B₁B₂): B₁ and B₂ are
 //! independent given the first vertex v₁, so B₁B₂ estimates E[B | v₁]² (the classic splitting
 //! variance, Arvo and Kirk 1990, "Particle transport and image synthesis", §4). The cost of n
-//! is w·r₀ + n·r_B, r₀ the first group's ray queries and r_B a continuation's expected ones:
-//! the first vertex's rays weigh [`FIRST_VERTEX_WEIGHT`] of a continuation's, as measured
-//! (the camera ray is coherent, and the first vertex has no BSDF sample or roulette of its own).
+//! is r₀ + n·r_B, r₀ the first group's ray queries and r_B a continuation's expected ones: the
+//! CPU time of split renders is proportional to their rays as it is across starts (measured
+//! on six scenes: docs/design.md §8, "Splitting at the first vertex").
 //!
 //! Deterministic: the pilot's pixels and numbers depend on the image's size and the seed
 //! only (not on a crop, the threads or a part), and its sums are taken in pixel order.
@@ -89,10 +89,15 @@ const PILOT_SALT: u64 = 0x7261_6f75_6c65_7474;
 
 /// The splits the pilot considers (`integrator::split`): powers of two.
 pub const SPLITS: [u32; 4] = [1, 2, 4, 8];
-/// The weight of the first vertex's ray queries (the camera ray and the first shadow ray)
-/// against a continuation's in a sample's cost: the render time of the peers' box split in 1,
-/// 2 and 4 against their rays (docs/design.md §8, "Splitting at the first vertex").
-pub const FIRST_VERTEX_WEIGHT: f64 = 0.55;
+/// The largest share of a sample's variance that its first vertex may carry for the pilot to
+/// split (V_A / (V_A + V_B), from the unsplit and split-in-2 variances: 2V₂ − V₁ over V₁).
+/// The pilot's independent numbers do not see how fast the low-discrepancy sampler shrinks
+/// the first vertex's variance with more camera samples (its integrand is low-dimensional:
+/// the pixel, the wavelengths, the first light sample); where that variance is more than a
+/// few per cent, more samples beat splitting. Measured on six scenes (docs/design.md §8,
+/// "Splitting at the first vertex"): the boxes' shares are 0.00–0.07 and splitting gains
+/// there; open-office's are 0.10–0.33 and splitting loses 0.6× at n = 2.
+pub const SPLIT_MAX_FIRST_SHARE: f64 = 0.1;
 
 /// What the user fixed of the path tracer's roulette and splitting; None: the pilot chooses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -119,11 +124,9 @@ pub struct Candidate {
     pub split: u32,
     /// Mean over the pilot's pixels of one sample's variance (luminance²).
     pub variance: f64,
-    /// Mean cost of one sample: ray queries, the first vertex's weighted.
+    /// Mean cost of one sample (ray queries) and its standard error over the pixels.
     pub cost: f64,
-    /// Mean ray queries of one sample, and their standard error over the pixels.
-    pub rays: f64,
-    pub rays_se: f64,
+    pub cost_se: f64,
     /// Ahead of the reference (`Fixed::reference`) by [`SHOWN_SE`] standard errors of the
     /// per-pixel difference in variance × cost (always true for the reference itself).
     pub shown: bool,
@@ -232,11 +235,11 @@ impl PilotSample {
         self.c0 + b.iter().sum::<f64>() / (b.len().max(1) as f64)
     }
 
-    /// [E[X²], cost, rays] of this sample split in `n` with roulette from `start`, as the
-    /// module's comment derives them.
-    fn moments(&self, start: u32, n: u32) -> [f64; 3] {
+    /// [E[X²], cost] of this sample split in `n` with roulette from `start`, as the module's
+    /// comment derives them.
+    fn moments(&self, start: u32, n: u32) -> [f64; 2] {
         if self.paths.is_empty() {
-            return [self.c0 * self.c0, FIRST_VERTEX_WEIGHT * self.r0, self.r0];
+            return [self.c0 * self.c0, self.r0];
         }
         let k = self.paths.len() as f64;
         let (mut m2, mut rays) = (0.0, 0.0);
@@ -250,12 +253,7 @@ impl PilotSample {
             let shared = self.c0 * self.c0 + self.c0 * (b[0] + b[1]) + b[0] * b[1];
             m2 = m2 / n + (1.0 - 1.0 / n) * shared;
         }
-        let rest = rays - self.r0;
-        [
-            m2,
-            FIRST_VERTEX_WEIGHT * self.r0 + n * rest,
-            self.r0 + n * rest,
-        ]
+        [m2, self.r0 + n * (rays - self.r0)]
     }
 }
 
@@ -277,7 +275,7 @@ pub fn choose(
     };
     let cands = candidates(max_depth, fixed);
     let pixels = pilot_pixels(scene.camera.width as u64, scene.camera.height as u64);
-    let per_pixel: Vec<Vec<[f64; 3]>> = pixels
+    let per_pixel: Vec<Vec<[f64; 2]>> = pixels
         .par_iter()
         .map_init(
             || (SpectraCache::default(), [Vec::new(), Vec::new()]),
@@ -321,18 +319,17 @@ pub fn choose(
                     .iter()
                     .map(|&(s, n)| {
                         let (ma, mb) = (a.moments(s, n), b.moments(s, n));
-                        [
-                            0.5 * (ma[0] + mb[0]) - mean2,
-                            0.5 * (ma[1] + mb[1]),
-                            0.5 * (ma[2] + mb[2]),
-                        ]
+                        [0.5 * (ma[0] + mb[0]) - mean2, 0.5 * (ma[1] + mb[1])]
                     })
                     .collect()
             },
         )
         .collect();
     let reference = cands.iter().position(|&c| c == fixed.reference());
-    let rated = rate(&cands, reference, &per_pixel);
+    let mut rated = rate(&cands, reference, &per_pixel);
+    if fixed.split.is_none() {
+        hold_back_splits(&mut rated);
+    }
     let best = best(&rated, reference)?;
     Some(Choice {
         start: best.start,
@@ -343,16 +340,16 @@ pub fn choose(
     })
 }
 
-/// Each candidate's figures from the pilot's per-pixel [variance, cost, rays]
+/// Each candidate's figures from the pilot's per-pixel [variance, cost]
 /// (`per_pixel[pixel][i]` for `cands[i]`), shown or not against `cands[reference]`.
 fn rate(
     cands: &[(u32, u32)],
     reference: Option<usize>,
-    per_pixel: &[Vec<[f64; 3]>],
+    per_pixel: &[Vec<[f64; 2]>],
 ) -> Vec<Candidate> {
     let n = per_pixel.len() as f64;
-    let mean = |f: &dyn Fn(&Vec<[f64; 3]>) -> f64| per_pixel.iter().map(f).sum::<f64>() / n;
-    let spread = |f: &dyn Fn(&Vec<[f64; 3]>) -> f64, m: f64| {
+    let mean = |f: &dyn Fn(&Vec<[f64; 2]>) -> f64| per_pixel.iter().map(f).sum::<f64>() / n;
+    let spread = |f: &dyn Fn(&Vec<[f64; 2]>) -> f64, m: f64| {
         per_pixel.iter().map(|p| (f(p) - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)
     };
     let cost: Vec<f64> = (0..cands.len()).map(|i| mean(&|p| p[i][1])).collect();
@@ -361,24 +358,46 @@ fn rate(
             let variance = mean(&|p| p[i][0]);
             let shown = match reference {
                 Some(d) if d != i => {
-                    let diff = |p: &Vec<[f64; 3]>| p[i][0] * cost[i] - p[d][0] * cost[d];
+                    let diff = |p: &Vec<[f64; 2]>| p[i][0] * cost[i] - p[d][0] * cost[d];
                     let m = mean(&diff);
                     m + SHOWN_SE * (spread(&diff, m) / n).sqrt() < 0.0
                 }
                 _ => true,
             };
-            let rays = mean(&|p| p[i][2]);
             Candidate {
                 start: cands[i].0,
                 split: cands[i].1,
                 variance,
                 cost: cost[i],
-                rays,
-                rays_se: (spread(&|p| p[i][2], rays) / n).sqrt(),
+                cost_se: (spread(&|p| p[i][1], cost[i]) / n).sqrt(),
                 shown,
             }
         })
         .collect()
+}
+
+/// Marks the splits of every start whose first vertex carries more than
+/// [`SPLIT_MAX_FIRST_SHARE`] of the unsplit variance as not shown.
+fn hold_back_splits(rated: &mut [Candidate]) {
+    let variance = |rated: &[Candidate], start, split| {
+        rated
+            .iter()
+            .find(|c| c.start == start && c.split == split)
+            .map(|c| c.variance)
+    };
+    for i in 0..rated.len() {
+        let c = rated[i];
+        if c.split == 1 {
+            continue;
+        }
+        let share = match (variance(rated, c.start, 1), variance(rated, c.start, 2)) {
+            (Some(v1), Some(v2)) => (2.0 * v2 - v1) / v1,
+            _ => f64::INFINITY,
+        };
+        if !(share <= SPLIT_MAX_FIRST_SHARE) {
+            rated[i].shown = false;
+        }
+    }
 }
 
 /// The most efficient candidate among those shown ahead of the reference (and the
@@ -557,8 +576,7 @@ mod tests {
             split: 1,
             variance,
             cost: 2.0,
-            rays: 2.0,
-            rays_se: 0.0,
+            cost_se: 0.0,
             shown: true,
         };
         let same = [c(1, 1.0), c(2, 1.0), c(3, 1.0)];
@@ -584,19 +602,41 @@ mod tests {
     /// the same pixels by more than the noise of the difference.
     #[test]
     fn a_candidate_must_show_itself_ahead_of_the_reference() {
-        // Pixel values [variance, cost, rays] for starts 2, 3 and 4: start 3 lower everywhere
-        // by 10 % (shown), start 4 lower on average but as often higher (not shown).
-        let per_pixel: Vec<Vec<[f64; 3]>> = (0..100)
+        // Pixel values [variance, cost] for starts 2, 3 and 4: start 3 lower everywhere by
+        // 10 % (shown), start 4 lower on average but as often higher (not shown).
+        let per_pixel: Vec<Vec<[f64; 2]>> = (0..100)
             .map(|i| {
                 let v = 1.0 + (i % 7) as f64;
                 let noisy = if i % 2 == 0 { 0.5 * v } else { 1.4 * v };
-                vec![[v, 1.0, 1.0], [0.9 * v, 1.0, 1.0], [noisy, 1.0, 1.0]]
+                vec![[v, 1.0], [0.9 * v, 1.0], [noisy, 1.0]]
             })
             .collect();
         let rated = rate(&[(2, 1), (3, 1), (4, 1)], Some(0), &per_pixel);
         assert!(rated[0].shown && rated[1].shown, "{rated:?}");
         assert!(!rated[2].shown, "{rated:?}");
         assert_eq!(best(&rated, Some(0)).unwrap().start, 3);
+    }
+
+    /// Splits are held back where the first vertex carries more than the allowed share of
+    /// the variance, and kept where it carries less.
+    #[test]
+    fn splits_need_a_small_first_vertex_share() {
+        let c = |split, variance| Candidate {
+            start: 2,
+            split,
+            variance,
+            cost: 1.0,
+            cost_se: 0.0,
+            shown: true,
+        };
+        // V_A share 0.04: (2 · 0.52 − 1) / 1.
+        let mut small = [c(1, 1.0), c(2, 0.52), c(4, 0.28)];
+        hold_back_splits(&mut small);
+        assert!(small.iter().all(|c| c.shown));
+        // V_A share 0.2.
+        let mut large = [c(1, 1.0), c(2, 0.6), c(4, 0.4)];
+        hold_back_splits(&mut large);
+        assert!(large[0].shown && !large[1].shown && !large[2].shown);
     }
 
     #[test]
@@ -630,7 +670,7 @@ mod tests {
     /// with probability ½ each, independently given the vertex, have E[X_n²] = (c₀ + E B)² +
     /// Var B / n = 4 + 1/n. The pilot's estimate from one pair of continuations, averaged
     /// over the four equally likely pairs, is that exactly; its cost counts the first vertex's
-    /// rays at [`FIRST_VERTEX_WEIGHT`] and n continuations'.
+    /// rays once and n continuations'.
     #[test]
     fn the_split_moments_are_the_splitting_estimators() {
         let g = |b: f32, rays| PilotGroup {
@@ -654,9 +694,8 @@ mod tests {
                 .sum();
             let want = 4.0 + 1.0 / f64::from(n);
             assert!((m2 - want).abs() < 1e-12, "n {n}: {m2} against {want}");
-            let [_, cost, rays] = sample(0.0, 2.0).moments(9, n);
-            assert!((cost - (FIRST_VERTEX_WEIGHT * 2.0 + 3.0 * f64::from(n))).abs() < 1e-12);
-            assert!((rays - (2.0 + 3.0 * f64::from(n))).abs() < 1e-12);
+            let [_, cost] = sample(0.0, 2.0).moments(9, n);
+            assert!((cost - (2.0 + 3.0 * f64::from(n))).abs() < 1e-12);
         }
         // Unsplit (one continuation: a specular first vertex), n changes nothing.
         let single = PilotSample {
