@@ -1,5 +1,6 @@
-//! Where the path tracer's Russian roulette starts, chosen per scene by a pilot
-//! (`--rr-depth auto`, the default of images rendered with the path tracer).
+//! Where the path tracer's Russian roulette starts and how many continuations its image paths
+//! split into at their first vertex, chosen per scene by a pilot (`--rr-depth auto` and
+//! `--split auto`, the defaults of images rendered with the path tracer).
 //!
 //! Roulette trades variance for time: each path it ends saves the rays the path would have
 //! traced and adds variance where the light it would have found was not negligible. The
@@ -46,7 +47,9 @@
 //! variance, Arvo and Kirk 1990, "Particle transport and image synthesis", §4). The cost of n
 //! is r₀ + n·r_B, r₀ the first group's ray queries and r_B a continuation's expected ones: the
 //! CPU time of split renders is proportional to their rays as it is across starts (measured
-//! on six scenes: docs/design.md §8, "Splitting at the first vertex").
+//! on six scenes: docs/design.md §8, "Splitting at the first vertex"). A split is held back
+//! where the first vertex carries more than [`SPLIT_MAX_FIRST_SHARE`] of the unsplit variance:
+//! there the image's low-discrepancy samples, which this model does not see, beat splitting.
 //!
 //! Deterministic: the pilot's pixels and numbers depend on the image's size and the seed
 //! only (not on a crop, the threads or a part), and its sums are taken in pixel order.
@@ -394,7 +397,7 @@ fn hold_back_splits(rated: &mut [Candidate]) {
             (Some(v1), Some(v2)) => (2.0 * v2 - v1) / v1,
             _ => f64::INFINITY,
         };
-        if !(share <= SPLIT_MAX_FIRST_SHARE) {
+        if share.is_nan() || share > SPLIT_MAX_FIRST_SHARE {
             rated[i].shown = false;
         }
     }
