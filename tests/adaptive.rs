@@ -35,37 +35,6 @@ fn render(scene: &Scene, opts: &RenderOptions) -> RenderOutput {
     out
 }
 
-/// (mean of Y over `pixels`, the variance of that mean from the per-pixel variance estimates).
-fn mean_y(out: &RenderOutput, pixels: &[usize]) -> (f64, f64) {
-    let v = out.layers.variance.as_ref().unwrap();
-    let n = pixels.len() as f64;
-    let mean = pixels
-        .iter()
-        .map(|&i| f64::from(out.xyz[i][1]))
-        .sum::<f64>()
-        / n;
-    let var = pixels.iter().map(|&i| f64::from(v[i])).sum::<f64>() / (n * n);
-    (mean, var)
-}
-
-/// z of the difference of `a`'s and `b`'s mean luminance over each quarter of the image and
-/// over the whole, `a`'s scaled by `scale`.
-fn z_scores(a: &RenderOutput, b: &RenderOutput, scale: f64) -> Vec<f64> {
-    let (w, h) = (a.width, a.height);
-    let quarter = |q: usize| -> Vec<usize> {
-        (0..w * h)
-            .filter(|i| usize::from(i % w >= w / 2) + 2 * usize::from(i / w >= h / 2) == q)
-            .collect()
-    };
-    let regions = (0..4).map(quarter).chain([(0..w * h).collect()]);
-    regions
-        .map(|px| {
-            let ((ma, va), (mb, vb)) = (mean_y(a, &px), mean_y(b, &px));
-            (scale * ma - mb) / (scale * scale * va + vb).sqrt()
-        })
-        .collect()
-}
-
 #[test]
 fn adaptive_images_agree_with_uniform_ones() {
     // The image is unbiased whatever the allocation (session::adaptive): its mean luminance
