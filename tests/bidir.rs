@@ -575,8 +575,13 @@ const AGREEMENT: &[SceneCase] = &[
         name: "glossy conductor (rough gold, GGX α 0.2) and a small bright light",
         scene: || load_text("glossy", &small_light_stage_with("Gold"), (20, 20)),
         max_depth: 7,
-        batches: 32,
-        spp: 192,
+        // 64 batches of 96 samples rather than 32 of 192: the gold panel's highlights make
+        // heavy-tailed pixels, whose variances 32 batches estimated too poorly for a 1 %
+        // family-wise level (session 39: PT against BDPT at |z| 4.96 with the new split, and
+        // BDPT against BDPT, which nothing changed, at 5.22 with other seeds); with 64 both
+        // seed sets pass, max |z| 3.74 and 4.10 over the seven families.
+        batches: 64,
+        spp: 96,
     },
 ];
 
