@@ -134,3 +134,28 @@ fn auto_reports_its_split() {
         auto.split
     );
 }
+
+/// A split path gathers the emission layers as it gathers the image: each illuminant layer of
+/// a split render is, bit for bit, the split render of the stage with that illuminant.
+#[test]
+fn split_emission_layers_are_the_replaced_scenes_renders() {
+    let stage = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/metamers.usda");
+    let load = || scene::load(&stage, Some((40, 20))).unwrap();
+    let opts = RenderOptions {
+        layers: LayerOptions::default(),
+        ..options(4, 11, SamplerKind::ZSobol, 4)
+    };
+    let names = ["D65", "A"];
+    let mut scene = load();
+    scene
+        .add_illuminant_layers(&names.map(String::from))
+        .unwrap();
+    let one_pass = render(&scene, &opts);
+    assert_eq!(one_pass.split, Some(4));
+    for (layer, name) in one_pass.layers.emission.iter().zip(names) {
+        let mut replaced = load();
+        replaced.replace_emission(name).unwrap();
+        let separate = render(&replaced, &opts);
+        assert!(layer.xyz == separate.xyz, "layer {name} differs");
+    }
+}

@@ -239,7 +239,7 @@ impl PathIntegrator {
         sampler: &mut Sampler,
         mut cut: Option<&mut CutSample>,
         g: &mut Gathered,
-        spectra: &mut SpectraCache,
+        (spectra, scratch): (&mut SpectraCache, &mut Vec<SampledSpectrum>),
     ) {
         let mut lambda = *lambda_in;
         let mut st = PathState::new(ray, t_max, None);
@@ -254,16 +254,20 @@ impl PathIntegrator {
         self.nee(scene, si, &v, &at, &mut st, &lambda, sampler, g);
         let n = if v.bsdf.is_specular() { 1 } else { self.split };
         let bits = n.trailing_zeros();
-        let shared = (g.l, g.sums.to_vec());
-        let mut sums = vec![SampledSpectrum::ZERO; shared.1.len()];
-        let (mut l, w) = (SampledSpectrum::ZERO, 1.0 / n as f32);
+        // The layers' shared sums, then their total over the continuations.
+        let layers = g.sums.len();
+        scratch.clear();
+        scratch.extend_from_slice(g.sums);
+        scratch.resize(2 * layers, SampledSpectrum::ZERO);
+        let (shared_layers, sums) = scratch.split_at_mut(layers);
+        let (shared, mut l, w) = (g.l, SampledSpectrum::ZERO, 1.0 / n as f32);
         for c in 0..n {
             if n > 1 {
                 sampler.enter_continuation(c, bits);
             }
             let (mut sc, mut lc) = (st, lambda);
-            g.l = shared.0;
-            g.sums.copy_from_slice(&shared.1);
+            g.l = shared;
+            g.sums.copy_from_slice(shared_layers);
             let capped = if self.bounce(si, &v, &at, &mut sc, sampler) {
                 self.walk::<DISPERSION>(
                     scene,
@@ -291,8 +295,8 @@ impl PathIntegrator {
             }
         }
         g.l = l * w;
-        for (s, sum) in g.sums.iter_mut().zip(sums) {
-            *s = sum * w;
+        for (s, sum) in g.sums.iter_mut().zip(sums.iter()) {
+            *s = *sum * w;
         }
     }
 
@@ -1031,6 +1035,7 @@ impl Estimator for PathEstimator<'_> {
     ) {
         let (ray, t_max) = self.scene.camera.generate_ray(film, u_lens);
         let rec = &mut ws.record;
+        let scratch = &mut rec.split_layers;
         let layers = &self.scene.emission_layers.layers;
         rec.layers.resize(layers.len(), SampledSpectrum::ZERO);
         let mut g = Gathered {
@@ -1046,10 +1051,12 @@ impl Estimator for PathEstimator<'_> {
                 scene, ray, t_max, None, lambda, sampler, cut, &mut g, spectra,
             ),
             (true, false) => {
-                pt.li_split::<false>(scene, ray, t_max, lambda, sampler, cut, &mut g, spectra)
+                let work = (spectra, scratch);
+                pt.li_split::<false>(scene, ray, t_max, lambda, sampler, cut, &mut g, work)
             }
             (true, true) => {
-                pt.li_split::<true>(scene, ray, t_max, lambda, sampler, cut, &mut g, spectra)
+                let work = (spectra, scratch);
+                pt.li_split::<true>(scene, ray, t_max, lambda, sampler, cut, &mut g, work)
             }
         }
         rec.camera = Contribution::new(g.l, 1.0);

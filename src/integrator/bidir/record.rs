@@ -41,6 +41,10 @@ pub struct SampleRecord {
     /// Per emission layer (`light::emission_layers`), the sample's own-pixel radiance with
     /// that layer's emission (path tracing only); empty without layers.
     pub layers: Vec<SampledSpectrum>,
+    /// Scratch of twice the layers' length for a path split at its first vertex
+    /// (`PathIntegrator::li_split`: the layers' shared sums and their running total), kept so
+    /// that a split sample allocates nothing.
+    pub split_layers: Vec<SampledSpectrum>,
 }
 
 impl SampleRecord {
@@ -53,6 +57,7 @@ impl SampleRecord {
             strategies: vec![Contribution::default(); strategy_count],
             cut: CutSample::default(),
             layers: Vec::new(),
+            split_layers: Vec::new(),
         }
     }
 
