@@ -84,11 +84,26 @@ struct PathState {
 }
 
 /// A scattering vertex's BSDF, the point its rays leave from and its bounce's block of
-/// dimensions (`dimensions::bounce`).
-struct Vertex {
-    bsdf: Bsdf,
+/// dimensions (`dimensions::bounce`). The BSDF is the caller's local ([`PathIntegrator::prepare`]
+/// builds it in place): held by value here, it was built aside and copied in, 284 bytes a
+/// vertex (design.md §8, session 40).
+struct Vertex<'b> {
+    bsdf: &'b Bsdf,
     from: SpawnPoint,
     block: u32,
+}
+
+impl<'b> Vertex<'b> {
+    /// The vertex at `si` with the BSDF `bsdf` and the dimensions' `block`.
+    #[inline(always)]
+    fn new(si: &SurfaceHit, bsdf: &'b Bsdf, block: u32) -> Vertex<'b> {
+        Vertex {
+            bsdf,
+            // The offset off the surface, shared by the shadow ray and the next ray.
+            from: SpawnPoint::new(si.p, si.p_error, si.ng),
+            block,
+        }
+    }
 }
 
 impl PathState {
@@ -249,7 +264,10 @@ impl PathIntegrator {
             return;
         };
         let wo = -st.ray.d;
-        let v = self.prepare::<DISPERSION>(scene, si, &mut st, &mut lambda, spectra);
+        // Each decision draws from its own dimensions of this bounce (`dimensions.rs`).
+        let block = dimensions::bounce(st.depth, 0);
+        let bsdf = self.prepare::<DISPERSION>(scene, si, &mut st, &mut lambda, spectra);
+        let v = Vertex::new(si, &bsdf, block);
         let at = v.bsdf.at(wo);
         self.nee(scene, si, &v, &at, &mut st, &lambda, sampler, g);
         let n = if v.bsdf.is_specular() { 1 } else { self.split };
@@ -372,7 +390,9 @@ impl PathIntegrator {
             return 0;
         };
         let wo = -st.ray.d;
-        let v = self.prepare::<DISPERSION>(scene, &si, &mut st, &mut lambda, spectra);
+        let block = dimensions::bounce(st.depth, 0);
+        let bsdf = self.prepare::<DISPERSION>(scene, &si, &mut st, &mut lambda, spectra);
+        let v = Vertex::new(&si, &bsdf, block);
         let at = v.bsdf.at(wo);
         self.nee(scene, &si, &v, &at, &mut st, &lambda, sampler, &mut g);
         *shared = PilotGroup {
@@ -602,15 +622,19 @@ impl PathIntegrator {
         spectra: &mut SpectraCache,
     ) -> bool {
         let wo = -st.ray.d;
-        let v = self.prepare::<DISPERSION>(scene, si, st, lambda, spectra);
+        let block = dimensions::bounce(st.depth, 0);
+        let bsdf = self.prepare::<DISPERSION>(scene, si, st, lambda, spectra);
+        let v = Vertex::new(si, &bsdf, block);
         // The BSDF's terms of ωo, shared by next event estimation and the BSDF sample.
         let at = v.bsdf.at(wo);
         self.nee(scene, si, &v, &at, st, lambda, sampler, g);
         self.bounce(si, &v, &at, st, sampler)
     }
 
-    /// The vertex's BSDF and spawn point, its bounce's block of dimensions; counts the
-    /// scattering event and terminates the secondary wavelengths at a dispersive material.
+    /// The vertex's BSDF; counts the scattering event and terminates the secondary
+    /// wavelengths at a dispersive material. The caller takes the bounce's block of
+    /// dimensions before (`dimensions::bounce` of the depth before the count) and makes the
+    /// [`Vertex`] after.
     #[inline(always)]
     fn prepare<const DISPERSION: bool>(
         &self,
@@ -619,9 +643,7 @@ impl PathIntegrator {
         st: &mut PathState,
         lambda: &mut SampledWavelengths,
         spectra: &mut SpectraCache,
-    ) -> Vertex {
-        // Each decision draws from its own dimensions of this bounce (`dimensions.rs`).
-        let block = dimensions::bounce(st.depth, 0);
+    ) -> Bsdf {
         st.depth += 1;
         let index = si.material as usize;
         let material = &scene.materials[index];
@@ -629,12 +651,7 @@ impl PathIntegrator {
             lambda.terminate_secondary();
         }
         let tc = scene.tex_coord(si, self.filter);
-        Vertex {
-            bsdf: spectra.bsdf(material, index, tc, si.ns, lambda),
-            // The offset off the surface, shared by the shadow ray and the next ray.
-            from: SpawnPoint::new(si.p, si.p_error, si.ng),
-            block,
-        }
+        spectra.bsdf(material, index, tc, si.ns, lambda)
     }
 
     /// Next-event estimation at the vertex `v` (none at a specular one), into `g`.

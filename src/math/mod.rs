@@ -9,6 +9,7 @@
 
 pub mod angle32;
 pub mod frame;
+pub mod octant;
 pub mod ratio;
 
 pub use frame::Frame;

@@ -1,8 +1,9 @@
 //! Warps from [0,1)² to shapes and directions, with their pdfs.
 
+use crate::math::octant::sin_cos_octant;
 use crate::math::{safe_sqrt, INV_4PI, INV_PI};
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_PI_4, PI};
 
 /// Concentric map of the square to the unit disk (Shirley & Chiu 1997; PBR 4ed §A.5.1).
 #[inline]
@@ -11,12 +12,15 @@ pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
+    // θ = (π/4)(y/x) within the octant about the x axis, or π/2 − (π/4)(x/y) about the y
+    // axis, whose cosine and sine are the sine and cosine of (π/4)(x/y).
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sin_cos_octant(FRAC_PI_4 * (o.y / o.x));
+        o.x * Vec2::new(c, s)
     } else {
-        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+        let (s, c) = sin_cos_octant(FRAC_PI_4 * (o.x / o.y));
+        o.y * Vec2::new(s, c)
+    }
 }
 
 /// Cosine-weighted hemisphere around +Z by Malley's method (PBR 4ed §A.5.3).
