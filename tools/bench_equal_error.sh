@@ -6,8 +6,9 @@
 # is measured).
 #
 #   tools/bench_equal_error.sh [--rounds N] [--spp 64 256 1024] [--rr-depth N…] [--split N…]
-#   [--no-adaptive]
-#   (equal_error.py)
+#   [--no-adaptive] [--unsplit-independent] [--baseline OTHER_BUILD]
+#   (equal_error.py; --baseline adds a row of another build of ours, e.g. the commit issue 18
+#   was measured on, c5d7459, for its samples/s in the same run)
 #
 # Needs the peers' venv (../shared/peers/README.md; PEERS_VENV, default ~/peers/venv) and
 # DRJIT_LIBLLVM_PATH for the llvm variant. The reference is Mitsuba llvm_ad_spectral at

@@ -47,15 +47,17 @@ from compare_mitsuba import emitter_mask  # noqa: E402
 EXE = os.path.join(ROOT, "target", "release", "spectral-render")
 
 
-def ours(sampler, spp, res, seed, tmp, rr_depth=None, adaptive=False, split=None):
-    out = os.path.join(tmp, f"ours_{sampler}_{rr_depth}_{adaptive}_{split}_{spp}_{seed}.exr")
-    rr = ["--rr-depth", str(rr_depth)] if rr_depth else []
+def ours(sampler, spp, res, seed, tmp, rr_depth=None, adaptive=False, split=None, exe=None):
+    tag = "base" if exe else sampler
+    out = os.path.join(tmp, f"ours_{tag}_{rr_depth}_{adaptive}_{split}_{spp}_{seed}.exr")
+    rr = ["--sampler", sampler] if sampler else []
+    rr += ["--rr-depth", str(rr_depth)] if rr_depth else []
     rr += ["--split", str(split)] if split else []
     rr += ["--adaptive"] if adaptive else []
     t0 = time.perf_counter()
-    subprocess.run([EXE, os.path.join(PEERS, "cbox.usda"), "-o", out, "--spp", str(spp),
+    subprocess.run([exe or EXE, os.path.join(PEERS, "cbox.usda"), "-o", out, "--spp", str(spp),
                     "--resolution", f"{res}x{res}", "--max-depth", "7", "--seed", str(seed),
-                    "--integrator", "path", "--sampler", sampler] + rr,
+                    "--integrator", "path"] + rr,
                    check=True, stderr=subprocess.DEVNULL)
     process = time.perf_counter() - t0
     return render_seconds(out), process, common.read_exr(out)
@@ -127,6 +129,12 @@ def main():
                     help="extra rows: ours (zsobol) with --split N")
     ap.add_argument("--no-adaptive", action="store_true",
                     help="leave out the row of ours with --adaptive")
+    ap.add_argument("--unsplit-independent", action="store_true",
+                    help="a row of ours with the independent sampler, --rr-depth 2 --split 1: "
+                         "the estimator of issue 18's first table")
+    ap.add_argument("--baseline", metavar="EXE",
+                    help="a row of another build of ours (say, the one issue 18 was measured "
+                         "on), run with only --integrator path and the common options")
     a = ap.parse_args()
     ref = common.read_exr(a.reference)[..., :3].astype(np.float64)
     mask = emitter_mask(ref)
@@ -144,6 +152,13 @@ def main():
     for n in a.split:
         configs.append((f"ours path zsobol split {n}",
                         lambda spp, s, tmp, n=n: ours("zsobol", spp, a.res, s, tmp, split=n)))
+    if a.unsplit_independent:
+        configs.append(("ours path independent rr-depth 2 split 1",
+                        lambda spp, s, tmp: ours("independent", spp, a.res, s, tmp, 2,
+                                                 split=1)))
+    if a.baseline:
+        configs.append((f"ours path, {os.path.basename(a.baseline)}",
+                        lambda spp, s, tmp: ours(None, spp, a.res, s, tmp, exe=a.baseline)))
     scenes = {}
     for v in a.variants:
         configs.append((f"Mitsuba {v}",

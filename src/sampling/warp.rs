@@ -109,6 +109,35 @@ mod tests {
         }
     }
 
+    /// The map is Shirley and Chiu's definition, evaluated in f64, up to round-off: both
+    /// octant cases, the diagonals between them, the axes and the square's corners.
+    #[test]
+    fn the_concentric_map_is_the_definition_up_to_round_off() {
+        let exact = |u: [f32; 2]| {
+            let (x, y) = (2.0 * f64::from(u[0]) - 1.0, 2.0 * f64::from(u[1]) - 1.0);
+            if x == 0.0 && y == 0.0 {
+                return (0.0, 0.0);
+            }
+            let q = std::f64::consts::FRAC_PI_4;
+            let (r, theta) = if x.abs() > y.abs() {
+                (x, q * (y / x))
+            } else {
+                (y, 2.0 * q - q * (x / y))
+            };
+            (r * theta.cos(), r * theta.sin())
+        };
+        let n = 512;
+        let mut worst = 0f64;
+        for i in 0..=n {
+            for j in 0..=n {
+                let u = [i as f32 / n as f32, j as f32 / n as f32];
+                let (d, e) = (concentric_disk(u), exact(u));
+                worst = worst.max((f64::from(d.x) - e.0).abs().max((f64::from(d.y) - e.1).abs()));
+            }
+        }
+        assert!(worst < 3e-7, "{worst:e}");
+    }
+
     #[test]
     fn cosine_hemisphere_has_the_right_mean_cosine() {
         // E[cos θ] under p = cos θ/π is 2/3; standard deviation of cos θ is sqrt(1/2 - 4/9).
