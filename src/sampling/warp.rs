@@ -132,7 +132,11 @@ mod tests {
             for j in 0..=n {
                 let u = [i as f32 / n as f32, j as f32 / n as f32];
                 let (d, e) = (concentric_disk(u), exact(u));
-                worst = worst.max((f64::from(d.x) - e.0).abs().max((f64::from(d.y) - e.1).abs()));
+                worst = worst.max(
+                    (f64::from(d.x) - e.0)
+                        .abs()
+                        .max((f64::from(d.y) - e.1).abs()),
+                );
             }
         }
         assert!(worst < 3e-7, "{worst:e}");
