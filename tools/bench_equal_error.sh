@@ -17,6 +17,16 @@
 # missing (about 5 min on an idle 2-core machine at 16384 spp). Its noise over the masked
 # pixels, from its checkpoint at a quarter of REF_SPP, is subtracted (equal_error.py).
 set -euo pipefail
+# --baseline's path as given from the caller's directory, before the cd below.
+args=()
+while [[ $# -gt 0 ]]; do
+    if [[ $1 == --baseline && $# -gt 1 ]]; then
+        args+=("$1" "$(realpath "$2")"); shift 2
+    else
+        args+=("$1"); shift
+    fi
+done
+set -- "${args[@]+"${args[@]}"}"
 cd "$(dirname "$0")/.."
 VENV="${PEERS_VENV:-$HOME/peers/venv}"
 OUT="${PEERS_OUT:-$HOME/peers/out}"

@@ -6,7 +6,10 @@ tools/bench_equal_error.sh, which names the reference; see that script for the o
 For each configuration and sample count (64, 256 by default) and each of --rounds rounds
 (configurations interleaved within a round, seeds 1, 2, ...):
 - ours: the release binary on ../shared/peers/cbox.usda, --max-depth 7 (path with each sampler,
-  and zsobol with --adaptive: the spp is then the mean of the pixels' counts), timed by the render
+  and zsobol with --adaptive: the spp is then the mean of the pixels' counts; on request, zsobol
+  with each --rr-depth and --split, the independent sampler unsplit from bounce 2
+  (--unsplit-independent), and another build of ours, --baseline EXE, with only the common
+  options, for an old commit's samples/s in the same run), timed by the render
   loop's own wall time (the EXR header's `spectralRender:wallTime`: scene load and EXR write
   not counted, as Mitsuba's scene load is not), with the whole process's wall time in a
   column of its own (sessions before 31 timed the whole process);
@@ -50,14 +53,14 @@ EXE = os.path.join(ROOT, "target", "release", "spectral-render")
 def ours(sampler, spp, res, seed, tmp, rr_depth=None, adaptive=False, split=None, exe=None):
     tag = "base" if exe else sampler
     out = os.path.join(tmp, f"ours_{tag}_{rr_depth}_{adaptive}_{split}_{spp}_{seed}.exr")
-    rr = ["--sampler", sampler] if sampler else []
-    rr += ["--rr-depth", str(rr_depth)] if rr_depth else []
-    rr += ["--split", str(split)] if split else []
-    rr += ["--adaptive"] if adaptive else []
+    args = ["--sampler", sampler] if sampler else []
+    args += ["--rr-depth", str(rr_depth)] if rr_depth else []
+    args += ["--split", str(split)] if split else []
+    args += ["--adaptive"] if adaptive else []
     t0 = time.perf_counter()
     subprocess.run([exe or EXE, os.path.join(PEERS, "cbox.usda"), "-o", out, "--spp", str(spp),
                     "--resolution", f"{res}x{res}", "--max-depth", "7", "--seed", str(seed),
-                    "--integrator", "path"] + rr,
+                    "--integrator", "path"] + args,
                    check=True, stderr=subprocess.DEVNULL)
     process = time.perf_counter() - t0
     return render_seconds(out), process, common.read_exr(out)

@@ -85,8 +85,9 @@ struct PathState {
 
 /// A scattering vertex's BSDF, the point its rays leave from and its bounce's block of
 /// dimensions (`dimensions::bounce`). The BSDF is the caller's local ([`PathIntegrator::prepare`]
-/// builds it in place): held by value here, it was built aside and copied in, 284 bytes a
-/// vertex (design.md §8, session 40).
+/// builds it in place): held by value here (before session 40), it was built aside and copied
+/// in, 284 bytes a vertex (design.md §8, "Samples/s against the build issue 18 was measured
+/// on").
 struct Vertex<'b> {
     bsdf: &'b Bsdf,
     from: SpawnPoint,

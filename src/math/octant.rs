@@ -1,7 +1,8 @@
-//! Sine and cosine of an angle within an octant, |θ| ≤ π/4, inline and without range
-//! reduction: the concentric disk map (`sampling/warp.rs`) needs only these, and a library
-//! `sincosf` call costs about 40 instructions, a call and the caller's spilled vector registers,
-//! a few times a path (docs/design.md §8, "session 40").
+//! Sine and cosine of an angle of at most π/4 in magnitude (an octant on either side of an
+//! axis), inline and without range reduction: the concentric disk map (`sampling/warp.rs`)
+//! needs only these, and a library `sincosf` call costs about 40 instructions and a call, a
+//! few times a path (docs/design.md §8, "Samples/s against the build issue 18 was measured
+//! on").
 //!
 //! The polynomials are Cephes `sinf`/`cosf`'s for |x| ≤ π/4 (Moshier 1989, "Methods and Programs
 //! for Mathematical Functions", §6.4; Cephes Math Library 2.2, `sinf.c`, freely distributable):
