@@ -8,9 +8,9 @@ use common::*;
 use spectral_render::integrator::Integrator;
 use spectral_render::output::exr;
 use spectral_render::sampling::SamplerKind;
-use spectral_render::scene::{self, Scene};
+use spectral_render::scene;
 use spectral_render::session::layers::LayerOptions;
-use spectral_render::session::{self, RenderOptions, RenderOutput};
+use spectral_render::session::{self, RenderOptions};
 
 fn options(spp: u32, seed: u64, sampler: SamplerKind, adaptive: bool) -> RenderOptions {
     RenderOptions {
@@ -29,12 +29,6 @@ fn options(spp: u32, seed: u64, sampler: SamplerKind, adaptive: bool) -> RenderO
     }
 }
 
-fn render(scene: &Scene, opts: &RenderOptions) -> RenderOutput {
-    let out = session::render(scene, opts).unwrap_or_else(|e| panic!("{e}"));
-    assert_finite(&out);
-    out
-}
-
 #[test]
 fn adaptive_images_agree_with_uniform_ones() {
     // The image is unbiased whatever the allocation (session::adaptive): its mean luminance
@@ -43,8 +37,8 @@ fn adaptive_images_agree_with_uniform_ones() {
     // odd halves. Seeds differ, so the two renders are independent.
     let scene = scene::load(&cbox_path(), Some((96, 72))).unwrap();
     for sampler in [SamplerKind::ZSobol, SamplerKind::Independent] {
-        let adaptive = render(&scene, &options(64, 11, sampler, true));
-        let uniform = render(&scene, &options(64, 12, sampler, false));
+        let adaptive = render_checked(&scene, &options(64, 11, sampler, true));
+        let uniform = render_checked(&scene, &options(64, 12, sampler, false));
         let z = z_scores(&adaptive, &uniform, 1.0);
         eprintln!("{sampler:?}: z {z:.2?}");
         assert!(
@@ -66,7 +60,7 @@ fn adaptive_images_are_bit_identical_for_one_and_two_threads() {
                 threads: Some(threads),
                 ..options(24, 5, sampler, true)
             };
-            render(&scene, &opts)
+            render_checked(&scene, &opts)
         };
         let (one, two) = (run(1), run(2));
         assert_eq!(one.xyz, two.xyz, "{sampler:?}");
@@ -77,7 +71,7 @@ fn adaptive_images_are_bit_identical_for_one_and_two_threads() {
 #[test]
 fn counts_keep_the_mean_and_follow_the_noise() {
     let scene = scene::load(&cbox_path(), Some((64, 48))).unwrap();
-    let out = render(&scene, &options(64, 3, SamplerKind::ZSobol, true));
+    let out = render_checked(&scene, &options(64, 3, SamplerKind::ZSobol, true));
     let a = out.layers.adaptive.as_ref().unwrap();
     let n = a.samples.len() as f64;
     let mean = a.samples.iter().map(|&c| f64::from(c)).sum::<f64>() / n;
@@ -87,7 +81,7 @@ fn counts_keep_the_mean_and_follow_the_noise() {
     assert!(a.samples.iter().all(|&c| c >= pilot as f32));
     // The noisier half of the pixels (by a uniform render's variance estimates, summed over
     // 5 × 5 boxes as the allocation does) takes more samples than the quieter half.
-    let uniform = render(&scene, &options(64, 4, SamplerKind::ZSobol, false));
+    let uniform = render_checked(&scene, &options(64, 4, SamplerKind::ZSobol, false));
     let v = uniform.layers.variance.as_ref().unwrap();
     let mask = vec![true; v.len()];
     let v: Vec<f64> = v.iter().map(|&x| f64::from(x)).collect();

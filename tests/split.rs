@@ -9,9 +9,9 @@ use spectral_render::integrator::roulette::RrStart;
 use spectral_render::integrator::split::Split;
 use spectral_render::integrator::Integrator;
 use spectral_render::sampling::SamplerKind;
-use spectral_render::scene::{self, Scene};
+use spectral_render::scene;
 use spectral_render::session::layers::LayerOptions;
-use spectral_render::session::{self, RenderOptions, RenderOutput};
+use spectral_render::session::RenderOptions;
 use std::path::Path;
 
 fn options(spp: u32, seed: u64, sampler: SamplerKind, split: u32) -> RenderOptions {
@@ -32,12 +32,6 @@ fn options(spp: u32, seed: u64, sampler: SamplerKind, split: u32) -> RenderOptio
     }
 }
 
-fn render(scene: &Scene, opts: &RenderOptions) -> RenderOutput {
-    let out = session::render(scene, opts).unwrap_or_else(|e| panic!("{e}"));
-    assert_finite(&out);
-    out
-}
-
 /// Split renders agree with unsplit ones: mean luminance over each quarter and the whole
 /// within |z| < 3.5 (two-sided p = 4.7e-4 each), on the box with both samplers (split 4) and
 /// on the prism, whose dispersive glass terminates a continuation's secondary wavelengths on
@@ -55,8 +49,8 @@ fn split_images_agree_with_unsplit_ones() {
         ("prism zsobol", &prism, SamplerKind::ZSobol, 2, 64),
     ];
     for (name, scene, sampler, n, spp) in cases {
-        let split = render(scene, &options(spp, 11, sampler, n));
-        let unsplit = render(scene, &options(spp * n, 12, sampler, 1));
+        let split = render_checked(scene, &options(spp, 11, sampler, n));
+        let unsplit = render_checked(scene, &options(spp * n, 12, sampler, 1));
         let z = z_scores(&split, &unsplit, 1.0);
         eprintln!("{name}: z {z:.2?}");
         assert!(z.iter().all(|z| z.abs() < 3.5), "{name}: biased: {z:?}");
@@ -72,8 +66,8 @@ fn split_images_agree_with_unsplit_ones() {
 #[test]
 fn the_depth_cut_of_a_split_render_agrees() {
     let scene = scene::load(&cbox_path(), Some((48, 36))).unwrap();
-    let split = render(&scene, &options(64, 3, SamplerKind::ZSobol, 4));
-    let unsplit = render(&scene, &options(256, 4, SamplerKind::ZSobol, 1));
+    let split = render_checked(&scene, &options(64, 3, SamplerKind::ZSobol, 4));
+    let unsplit = render_checked(&scene, &options(256, 4, SamplerKind::ZSobol, 1));
     let (a, b) = (split.depth_cut.unwrap(), unsplit.depth_cut.unwrap());
     let se = ((a.ci95 / 1.96).powi(2) + (b.ci95 / 1.96).powi(2)).sqrt();
     eprintln!(
@@ -99,7 +93,7 @@ fn split_images_are_bit_identical_for_one_and_two_threads() {
                 threads: Some(threads),
                 ..options(8, 5, sampler, 4)
             };
-            render(&scene, &opts)
+            render_checked(&scene, &opts)
         };
         assert_eq!(run(1).xyz, run(2).xyz, "{sampler:?}");
     }
@@ -111,8 +105,8 @@ fn split_images_are_bit_identical_for_one_and_two_threads() {
 fn auto_reports_its_split() {
     let scene = scene::load(&cbox_path(), Some((40, 30))).unwrap();
     let opts = options(4, 5, SamplerKind::ZSobol, 1);
-    let one = render(&scene, &opts);
-    let two = render(
+    let one = render_checked(&scene, &opts);
+    let two = render_checked(
         &scene,
         &RenderOptions {
             split: Split::At(2),
@@ -121,7 +115,7 @@ fn auto_reports_its_split() {
     );
     assert_ne!(one.xyz, two.xyz);
     assert_eq!((one.split, two.split), (Some(1), Some(2)));
-    let auto = render(
+    let auto = render_checked(
         &scene,
         &RenderOptions {
             split: Split::Auto,
@@ -150,12 +144,12 @@ fn split_emission_layers_are_the_replaced_scenes_renders() {
     scene
         .add_illuminant_layers(&names.map(String::from))
         .unwrap();
-    let one_pass = render(&scene, &opts);
+    let one_pass = render_checked(&scene, &opts);
     assert_eq!(one_pass.split, Some(4));
     for (layer, name) in one_pass.layers.emission.iter().zip(names) {
         let mut replaced = load();
         replaced.replace_emission(name).unwrap();
-        let separate = render(&replaced, &opts);
+        let separate = render_checked(&replaced, &opts);
         assert!(layer.xyz == separate.xyz, "layer {name} differs");
     }
 }

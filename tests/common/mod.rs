@@ -71,7 +71,13 @@ pub fn render_file(
         max_depth,
         ..Default::default()
     };
-    let out = session::render(&scene, &opts).unwrap();
+    render_checked(&scene, &opts)
+}
+
+/// Renders `scene` and checks the image ([`assert_finite`]); a render error fails the test
+/// with its message.
+pub fn render_checked(scene: &Scene, opts: &RenderOptions) -> RenderOutput {
+    let out = session::render(scene, opts).unwrap_or_else(|e| panic!("{e}"));
     assert_finite(&out);
     out
 }
