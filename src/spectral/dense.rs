@@ -7,6 +7,35 @@ use glam::{UVec4, Vec4};
 /// Number of 1 nm samples in [`LAMBDA_MIN`, `LAMBDA_MAX`].
 pub const DENSE_LEN: usize = (LAMBDA_MAX - LAMBDA_MIN) as usize + 1;
 
+/// Where four wavelengths fall in a 1 nm table ([`DenseSpectrum::eval_lanes`], and the CIE
+/// observer's rows in `xyz.rs`): each lane's lower node and weight, and whether it lies in the
+/// range. A lane outside it (or NaN) reads node 0 and is zeroed by the caller.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LaneLookup {
+    pub inside: glam::BVec4A,
+    /// The lower node, at most `DENSE_LEN − 2`.
+    pub index: [usize; N_LAMBDA],
+    /// The upper node's weight, in [0, 1].
+    pub t: Vec4,
+}
+
+impl LaneLookup {
+    #[inline]
+    pub fn new(lambda: [f32; N_LAMBDA]) -> LaneLookup {
+        let x = Vec4::from_array(lambda) - Vec4::splat(LAMBDA_MIN);
+        let last = Vec4::splat((DENSE_LEN - 1) as f32);
+        // `contains`: false for NaN; such lanes are read at index 0 and give 0.
+        let inside = x.cmpge(Vec4::ZERO) & x.cmple(last);
+        let x = Vec4::select(inside, x, Vec4::ZERO);
+        let i = x.as_uvec4().min(UVec4::splat(DENSE_LEN as u32 - 2));
+        LaneLookup {
+            inside,
+            index: i.to_array().map(|k| k as usize),
+            t: x - i.as_vec4(),
+        }
+    }
+}
+
 /// Values at every integer nm from 360 to 830, linearly interpolated in between and
 /// zero outside.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,18 +98,11 @@ impl DenseSpectrum {
     /// time, the two table reads per lane.
     #[inline]
     pub fn eval_lanes(&self, lambda: [f32; N_LAMBDA]) -> [f32; N_LAMBDA] {
-        let x = Vec4::from_array(lambda) - Vec4::splat(LAMBDA_MIN);
-        let last = Vec4::splat((DENSE_LEN - 1) as f32);
-        // `contains`: false for NaN; such lanes are read at index 0 and give 0.
-        let inside = x.cmpge(Vec4::ZERO) & x.cmple(last);
-        let x = Vec4::select(inside, x, Vec4::ZERO);
-        let i = x.as_uvec4().min(UVec4::splat(DENSE_LEN as u32 - 2));
-        let t = x - i.as_vec4();
-        let index = i.to_array().map(|k| k as usize);
-        let lo = Vec4::from_array(index.map(|k| self.values[k]));
-        let hi = Vec4::from_array(index.map(|k| self.values[k + 1]));
-        let v = lo * (Vec4::ONE - t) + hi * t;
-        Vec4::select(inside, v, Vec4::ZERO).to_array()
+        let at = LaneLookup::new(lambda);
+        let lo = Vec4::from_array(at.index.map(|k| self.values[k]));
+        let hi = Vec4::from_array(at.index.map(|k| self.values[k + 1]));
+        let v = lo * (Vec4::ONE - at.t) + hi * at.t;
+        Vec4::select(at.inside, v, Vec4::ZERO).to_array()
     }
 
     /// ∫ self(λ) other(λ) dλ over the range by the trapezoidal rule on the 1 nm grid.

@@ -1,7 +1,8 @@
 //! From spectra to CIE 1931 XYZ in photometric units (Y in cd/m² for a radiance).
 
 use super::data;
-use super::dense::DenseSpectrum;
+use super::dense::{DenseSpectrum, LaneLookup, DENSE_LEN};
+use glam::Vec4;
 use super::{SampledSpectrum, SampledWavelengths, K_M, N_LAMBDA};
 use std::sync::OnceLock;
 
@@ -14,18 +15,56 @@ pub fn sampled_to_xyz(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
     if l.is_black() {
         return [0.0; 3];
     }
-    let [xb, yb, zb] = data::cie_xyz().each_ref().map(|c| c.eval_lanes(w.lambda));
-    let mut xyz = [0.0f32; 3];
-    for i in 0..N_LAMBDA {
-        if w.pdf[i] == 0.0 || l[i] == 0.0 {
-            continue;
-        }
-        let v = l[i] / w.pdf[i];
-        xyz[0] += v * xb[i];
-        xyz[1] += v * yb[i];
-        xyz[2] += v * zb[i];
+    let cmf = cmf_rows().at(w.lambda);
+    let (l, pdf) = (Vec4::from_array(l.0), Vec4::from_array(w.pdf));
+    // A lane with pdf 0 or L 0 adds nothing (0 × the observer's finite, non-negative values
+    // is +0, and adding +0 changes no sum): the same sums, in the same order, as skipping it.
+    let carried = pdf.cmpne(Vec4::ZERO) & l.cmpne(Vec4::ZERO);
+    let v = Vec4::select(carried, l / pdf, Vec4::ZERO);
+    let mut xyz = Vec4::ZERO;
+    for (i, row) in cmf.iter().enumerate() {
+        xyz += v[i] * *row;
     }
-    xyz.map(|c| c * K_M / N_LAMBDA as f32)
+    [xyz.x, xyz.y, xyz.z].map(|c| c * K_M / N_LAMBDA as f32)
+}
+
+/// The CIE 1931 observer as one table of rows (x̄, ȳ, z̄, 0) at every integer nm: a
+/// wavelength's three values are one interpolation of two rows, where the three tables of
+/// [`data::cie_xyz`] took three lookups of two reads each (once per image sample in the film,
+/// design.md §8, session 41). The values are those tables' `eval` bit for bit (tested).
+struct CmfRows {
+    rows: Box<[Vec4; DENSE_LEN]>,
+}
+
+impl CmfRows {
+    /// (x̄, ȳ, z̄, 0)(λ) of each lane, zero outside the range: per component the arithmetic of
+    /// [`DenseSpectrum::eval_lanes`].
+    #[inline]
+    fn at(&self, lambda: [f32; N_LAMBDA]) -> [Vec4; N_LAMBDA] {
+        let at = LaneLookup::new(lambda);
+        let inside = at.inside.bitmask();
+        std::array::from_fn(|i| {
+            let (k, t) = (at.index[i], at.t[i]);
+            let v = self.rows[k] * (1.0 - t) + self.rows[k + 1] * t;
+            if inside & (1 << i) != 0 {
+                v
+            } else {
+                Vec4::ZERO
+            }
+        })
+    }
+}
+
+fn cmf_rows() -> &'static CmfRows {
+    static ROWS: OnceLock<CmfRows> = OnceLock::new();
+    ROWS.get_or_init(|| {
+        let [x, y, z] = data::cie_xyz();
+        let mut rows = Box::new([Vec4::ZERO; DENSE_LEN]);
+        for (k, r) in rows.iter_mut().enumerate() {
+            *r = Vec4::new(x.values[k], y.values[k], z.values[k], 0.0);
+        }
+        CmfRows { rows }
+    })
 }
 
 /// XYZ of a reflectance `r` lit by D65 scaled to luminance 1, from one set of hero
@@ -61,6 +100,28 @@ pub fn luminance(s: &DenseSpectrum) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The rows' values are the three tables' `eval` bit for bit, at nodes, between them, at
+    /// the ends, outside the range and at NaN.
+    #[test]
+    fn the_observer_rows_are_the_three_tables_bit_for_bit() {
+        let tables = data::cie_xyz();
+        let mut rng = crate::testing::rng::Rng::new(3);
+        let mut lambdas: Vec<f32> = vec![360.0, 830.0, 829.999, 359.999, 830.001, 555.0, f32::NAN];
+        lambdas.extend((0..4000).map(|_| rng.range(340.0, 850.0)));
+        for quad in lambdas.chunks(N_LAMBDA) {
+            let mut lambda = [555.5; N_LAMBDA];
+            lambda[..quad.len()].copy_from_slice(quad);
+            let rows = cmf_rows().at(lambda);
+            for (i, l) in lambda.iter().enumerate() {
+                for (c, table) in tables.iter().enumerate() {
+                    let want = table.eval(*l).to_bits();
+                    assert_eq!(rows[i][c].to_bits(), want, "λ = {l}, component {c}");
+                }
+                assert_eq!(rows[i].w, 0.0);
+            }
+        }
+    }
 
     #[test]
     fn y_bar_integral_matches_cie() {
