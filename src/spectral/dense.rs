@@ -2,7 +2,7 @@
 //! curve (CIE observer, illuminants, reflectances, metal n and k).
 
 use super::{LAMBDA_MAX, LAMBDA_MIN, N_LAMBDA};
-use glam::{UVec4, Vec4};
+use glam::{BVec4A, UVec4, Vec4};
 
 /// Number of 1 nm samples in [`LAMBDA_MIN`, `LAMBDA_MAX`].
 pub const DENSE_LEN: usize = (LAMBDA_MAX - LAMBDA_MIN) as usize + 1;
@@ -12,7 +12,8 @@ pub const DENSE_LEN: usize = (LAMBDA_MAX - LAMBDA_MIN) as usize + 1;
 /// range. A lane outside it (or NaN) reads node 0 and is zeroed by the caller.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LaneLookup {
-    pub inside: glam::BVec4A,
+    /// The lanes in [LAMBDA_MIN, LAMBDA_MAX] (false for NaN).
+    pub inside: BVec4A,
     /// The lower node, at most `DENSE_LEN − 2`.
     pub index: [usize; N_LAMBDA],
     /// The upper node's weight, in [0, 1].

@@ -2,13 +2,13 @@
 
 use super::data;
 use super::dense::{DenseSpectrum, LaneLookup, DENSE_LEN};
-use glam::Vec4;
 use super::{SampledSpectrum, SampledWavelengths, K_M, N_LAMBDA};
+use glam::Vec4;
 use std::sync::OnceLock;
 
 /// Monte Carlo estimate of K_m ∫ L(λ) {x̄,ȳ,z̄}(λ) dλ from one set of hero wavelengths:
 /// the mean over lanes of L(λᵢ) x̄(λᵢ) / p(λᵢ) (lanes with pdf 0 contribute nothing).
-/// A black `l` (every lane skipped below) is zero without the tables' lookups: about one
+/// A black `l` (every lane weighted 0 below) is zero without the rows' lookup: about one
 /// image sample in six on the peers' box (design.md §8, "The per-sample cost, seventh pass").
 #[inline]
 pub fn sampled_to_xyz(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
@@ -17,8 +17,10 @@ pub fn sampled_to_xyz(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
     }
     let cmf = cmf_rows().at(w.lambda);
     let (l, pdf) = (Vec4::from_array(l.0), Vec4::from_array(w.pdf));
-    // A lane with pdf 0 or L 0 adds nothing (0 × the observer's finite, non-negative values
-    // is +0, and adding +0 changes no sum): the same sums, in the same order, as skipping it.
+    // A lane with pdf 0 or L 0 is weighted 0, where it used to be skipped: the rows are
+    // finite (the tables' loader rejects non-finite values, and lanes outside the range are
+    // zero), so it adds ±0, and the sums start at +0 and so are never −0, which adding ±0
+    // leaves unchanged. The same sums, in the same order, as skipping it (tested).
     let carried = pdf.cmpne(Vec4::ZERO) & l.cmpne(Vec4::ZERO);
     let v = Vec4::select(carried, l / pdf, Vec4::ZERO);
     let mut xyz = Vec4::ZERO;
@@ -100,6 +102,59 @@ pub fn luminance(s: &DenseSpectrum) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `sampled_to_xyz` as it was written before the rows (three tables, a lane skipped when
+    /// its pdf or L is 0): the reference of the bit-for-bit test below.
+    fn sampled_to_xyz_by_tables(l: SampledSpectrum, w: &SampledWavelengths) -> [f32; 3] {
+        if l.is_black() {
+            return [0.0; 3];
+        }
+        let [xb, yb, zb] = data::cie_xyz().each_ref().map(|c| c.eval_lanes(w.lambda));
+        let mut xyz = [0.0f32; 3];
+        for i in 0..N_LAMBDA {
+            if w.pdf[i] == 0.0 || l[i] == 0.0 {
+                continue;
+            }
+            let v = l[i] / w.pdf[i];
+            xyz[0] += v * xb[i];
+            xyz[1] += v * yb[i];
+            xyz[2] += v * zb[i];
+        }
+        xyz.map(|c| c * K_M / N_LAMBDA as f32)
+    }
+
+    /// The rows and the weighted lanes give the three tables' skipped-lane sums bit for bit:
+    /// for sampled wavelengths with all four pdfs and with the secondaries terminated, and
+    /// for L with zeros of either sign, negative, huge, infinite and NaN lanes (NaN for NaN).
+    #[test]
+    fn sampled_to_xyz_is_the_three_tables_sum_bit_for_bit() {
+        let mut rng = crate::testing::rng::Rng::new(17);
+        let specials = [0.0, -0.0, -1.5, 3e38, f32::INFINITY, f32::NAN, 1e-30];
+        for k in 0..20_000 {
+            let mut w = SampledWavelengths::sample_visible(rng.f32());
+            if k % 3 == 0 {
+                w.terminate_secondary();
+            }
+            if k % 7 == 0 {
+                // A wavelength outside the range (0 rows) with a nonzero pdf.
+                w.lambda[1] = 900.0;
+            }
+            let mut l = SampledSpectrum::ZERO;
+            for v in l.0.iter_mut() {
+                *v = if rng.below(4) == 0 {
+                    specials[rng.below(specials.len())]
+                } else {
+                    rng.range(0.0, 10.0)
+                };
+            }
+            let (got, want) = (sampled_to_xyz(l, &w), sampled_to_xyz_by_tables(l, &w));
+            for (g, x) in got.iter().zip(want) {
+                // A NaN is a NaN (its sign bit is the operations' choice; the film drops it).
+                let same = g.to_bits() == x.to_bits() || (g.is_nan() && x.is_nan());
+                assert!(same, "{l:?} {w:?}: {got:?} vs {want:?}");
+            }
+        }
+    }
 
     /// The rows' values are the three tables' `eval` bit for bit, at nodes, between them, at
     /// the ends, outside the range and at NaN.
