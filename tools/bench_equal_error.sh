@@ -3,7 +3,8 @@
 # independent, and zsobol with --adaptive) against Mitsuba 3 llvm_ad_spectral and
 # scalar_spectral, interleaved in one run: samples/s, relRMSE at 64, 256 and 1024 spp, time to
 # relRMSE 5 % with the visible light masked, and the ratios (tools/equal_error.py says how each
-# is measured).
+# is measured; `tools/equal_error.py --from-log LOG` reprints the table of a run from what it
+# printed to stderr).
 #
 #   tools/bench_equal_error.sh [--rounds N] [--spp 64 256 1024] [--rr-depth N…] [--split N…]
 #   [--no-adaptive] [--unsplit-independent] [--baseline OTHER_BUILD]

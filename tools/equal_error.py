@@ -18,12 +18,19 @@ For each configuration and sample count (64, 256 by default) and each of --round
   variant (the llvm variant's JIT compile is not counted).
 relRMSE = RMS over the pixels away from the visible light (compare_mitsuba.py's mask on the
 reference) and the RGB channels of (image − reference), over the reference's mean there.
-Time to relRMSE 5 %: where the measured (time, relRMSE) points cross 5 %, interpolated
+Time to relRMSE 5 %: where a round's (time, relRMSE) points cross 5 %, interpolated
 linearly in log time and log error between the two sample counts that bracket it (64, 256 and
 1024 spp by default; marked "measured"); where every count stays above 5 %, extrapolated from
 the largest with error ∝ 1/√time (marked "extrapolated": the Monte Carlo rate, which the
-low-discrepancy sampler beats, so its figure is then conservative). Sessions before 31
-extrapolated from 256 spp alone. The reference's own noise over the masked pixels is
+low-discrepancy sampler beats, so its figure is then conservative). Each round's own points
+give its time, and the table shows the mean over the rounds with their range: our default
+(`--rr-depth auto --split auto`) lets a pilot choose its roulette and split per seed, so two
+rounds may be two estimators, and the mean time of one at the RMS error of both lies above
+either's curve (sessions before 42 pooled the rounds first: with seed 3's choice among seeds
+1–3 that read 14.7 s for rounds whose own times were 13.8 s each). Sessions before 31
+extrapolated from 256 spp alone. Samples/s: the median over every render of a row (rounds ×
+sample counts) of its own samples/s, with their range: one render slowed by a neighbour on a
+shared machine does not move it (sessions before 42 took the mean time at the largest count). The reference's own noise over the masked pixels is
 subtracted from the squared error: mitsuba_reference.py writes a checkpoint at a quarter of
 the reference's samples, whose passes are the reference's first quarter, so the two differ
 with variance 3σ²/N per pixel (σ²/N the reference's own) — `ref_noise2` below. (Its log's
@@ -99,12 +106,6 @@ def ref_noise2_masked(path, ref, mask):
     return float(np.mean((q - ref)[mask] ** 2) / 3.0)
 
 
-def mean_point(runs):
-    """(mean render s, mean process s, relRMSE over the rounds) of one configuration."""
-    t, tp, e = map(np.array, zip(*runs))
-    return float(t.mean()), float(tp.mean()), float(np.sqrt(np.mean(e ** 2)))
-
-
 def time_to(target, pts):
     """The time at which relRMSE reaches `target`, from (time, relRMSE) points in order of
     sample count: log-log interpolation between the first point at or below the target and
@@ -121,7 +122,10 @@ def time_to(target, pts):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--reference", required=True)
+    ap.add_argument("--reference")
+    ap.add_argument("--from-log", metavar="LOG",
+                    help="print the table of a previous run from what it printed to stderr "
+                         "(its per-render lines), rendering nothing")
     ap.add_argument("--res", type=int, default=256)
     ap.add_argument("--spp", type=int, nargs="+", default=[64, 256, 1024])
     ap.add_argument("--rounds", type=int, default=2)
@@ -139,6 +143,15 @@ def main():
                     help="a row of another build of ours (say, the one issue 18 was measured "
                          "on), run with only --integrator path and the common options")
     a = ap.parse_args()
+    if a.from_log:
+        rows, names, counts, rounds = read_log(a.from_log)
+        if not rows:
+            sys.exit(f"{a.from_log}: no render lines (\"round N NAME SPP spp: ...\")")
+        print(f"cbox {a.res}x{a.res}, {rounds} rounds, from {os.path.basename(a.from_log)}")
+        report(rows, names, counts, a.res)
+        return
+    if not a.reference:
+        ap.error("--reference is required (unless --from-log)")
     ref = common.read_exr(a.reference)[..., :3].astype(np.float64)
     mask = emitter_mask(ref)
     ref_mean = ref[mask].mean()
@@ -177,32 +190,78 @@ def main():
                 rows.setdefault((name, spp), []).append((t, tp, err))
                 print(f"round {r + 1} {name:28} {spp:5} spp: {t:7.2f} s "
                       f"(process {tp:7.2f} s), relRMSE {err:.4f}", file=sys.stderr)
-    px = a.res * a.res
     print(f"cbox {a.res}x{a.res}, max depth 7 (Mitsuba 8), {a.rounds} interleaved rounds, "
           f"reference {os.path.basename(a.reference)} (its relative noise "
           f"{np.sqrt(ref_noise2):.4f} subtracted), light masked")
-    hdr = ["renderer", "samples/s"] + [f"relRMSE {s} spp" for s in a.spp] + \
-          [f"relRMSE²×spp @{a.spp[-1]}", "time to 5 % (s)", "vs ours zsobol",
-           "time to 5 %, whole process (s)"]
+    report(rows, [name for name, _ in configs], a.spp, a.res)
+
+
+LOG_LINE = re.compile(r"round (\d+) (.+?) +(\d+) spp: +([\d.]+) s \(process +([\d.]+) s\), "
+                      r"relRMSE ([\d.]+)$")
+
+
+def read_log(path):
+    """The renders of a previous run, from the lines it printed to stderr: (rows, names in
+    order, sample counts, rounds)."""
+    rows, names, counts, rounds = {}, [], [], 0
+    try:
+        lines = open(path).read().splitlines()
+    except OSError as e:
+        sys.exit(f"{path}: {e.strerror}")
+    for line in lines:
+        m = LOG_LINE.match(line.strip())
+        if not m:
+            continue
+        r, name, spp = int(m.group(1)), m.group(2), int(m.group(3))
+        t, tp, err = map(float, m.group(4, 5, 6))
+        rows.setdefault((name, spp), []).append((t, tp, err))
+        names += [name] if name not in names else []
+        counts += [spp] if spp not in counts else []
+        rounds = max(rounds, r)
+    return rows, names, counts, rounds
+
+
+def report(rows, names, counts, res):
+    """The table: per row, samples/s (median and range over its renders), relRMSE at each
+    count (RMS over the rounds), relRMSE² × spp at the largest, and the time to 5 % (mean
+    and range of the rounds' own, by the render loop and by the whole process)."""
+    px = res * res
+    counts = sorted(counts)
+    hdr = ["renderer", "samples/s (median)", "samples/s range"] + \
+          [f"relRMSE {s} spp" for s in counts] + \
+          [f"relRMSE²×spp @{counts[-1]}", "time to 5 % (s, mean of rounds)", "rounds' range",
+           "vs ours zsobol", "time to 5 %, whole process (s)"]
     print("| " + " | ".join(hdr) + " |")
     print("|" + "---|" * len(hdr))
-    t5, t5p, how = {}, {}, {}
-    for name, _ in configs:
-        pts = [mean_point(rows[(name, s)]) for s in sorted(a.spp)]
-        t5[name], how[name] = time_to(0.05, [(t, e) for t, _, e in pts])
-        t5p[name], _ = time_to(0.05, [(tp, e) for _, tp, e in pts])
-    base = t5[configs[0][0]]
-    for name, _ in configs:
-        t = np.array([x[0] for x in rows[(name, a.spp[-1])]])
-        sps = px * a.spp[-1] / t.mean()
+    t5 = {name: rounds_time_to(0.05, [rows[(name, s)] for s in counts]) for name in names}
+    base = t5[names[0]][0]
+    for name in names:
+        sps = np.array([px * s / t for s in counts for t, _, _ in rows[(name, s)]])
         errs = [float(np.sqrt(np.mean(np.array([x[2] for x in rows[(name, s)]]) ** 2)))
-                for s in a.spp]
-        per_sample = errs[-1] ** 2 * a.spp[-1]
-        cells = [name, f"{sps / 1e6:.2f} M"] + [f"{x:.4f}" for x in errs] + \
-                [f"{per_sample:.2f}", f"{t5[name]:.1f} ({how[name]})",
-                 f"{t5[name] / base:.2f}×", f"{t5p[name]:.1f}"]
+                for s in counts]
+        per_sample = errs[-1] ** 2 * counts[-1]
+        mean, lo, hi, how, mean_p = t5[name]
+        cells = [name, f"{np.median(sps) / 1e6:.2f} M",
+                 f"{sps.min() / 1e6:.2f}–{sps.max() / 1e6:.2f} M"] + \
+                [f"{x:.4f}" for x in errs] + \
+                [f"{per_sample:.2f}", f"{mean:.1f} ({how})", f"{lo:.1f}–{hi:.1f}",
+                 f"{mean / base:.2f}×", f"{mean_p:.1f}"]
         print("| " + " | ".join(cells) + " |")
 
+
+def rounds_time_to(target, per_count):
+    """(mean, min, max, how, whole-process mean) of the rounds' own times to `target`;
+    `per_count[c][r]` is round r's (render s, process s, relRMSE) at the c-th count."""
+    times, process, hows = [], [], set()
+    for r in range(min(len(runs) for runs in per_count)):
+        pts = [runs[r] for runs in per_count]
+        t, how = time_to(target, [(t, e) for t, _, e in pts])
+        tp, _ = time_to(target, [(tp, e) for _, tp, e in pts])
+        times.append(t)
+        process.append(tp)
+        hows.add(how)
+    how = hows.pop() if len(hows) == 1 else "mixed"
+    return float(np.mean(times)), min(times), max(times), how, float(np.mean(process))
 
 if __name__ == "__main__":
     main()
