@@ -25,12 +25,13 @@ the largest with error ∝ 1/√time (marked "extrapolated": the Monte Carlo rat
 low-discrepancy sampler beats, so its figure is then conservative). Each round's own points
 give its time, and the table shows the mean over the rounds with their range: our default
 (`--rr-depth auto --split auto`) lets a pilot choose its roulette and split per seed, so two
-rounds may be two estimators, and the mean time of one at the RMS error of both lies above
-either's curve (sessions before 42 pooled the rounds first: with seed 3's choice among seeds
-1–3 that read 14.7 s for rounds whose own times were 13.8 s each). Sessions before 31
+rounds may be two estimators, and the mean time of the rounds at their RMS error is not a
+point of any of them (sessions before 42 pooled the rounds first: with seed 3's choice among
+seeds 1–3 that read 14.7 s for rounds whose own times were 13.6–13.9 s). Sessions before 31
 extrapolated from 256 spp alone. Samples/s: the median over every render of a row (rounds ×
 sample counts) of its own samples/s, with their range: one render slowed by a neighbour on a
-shared machine does not move it (sessions before 42 took the mean time at the largest count). The reference's own noise over the masked pixels is
+shared machine does not move it (sessions before 42 took the pixels × the largest count over
+the mean time of its renders). The reference's own noise over the masked pixels is
 subtracted from the squared error: mitsuba_reference.py writes a checkpoint at a quarter of
 the reference's samples, whose passes are the reference's first quarter, so the two differ
 with variance 3σ²/N per pixel (σ²/N the reference's own) — `ref_noise2` below. (Its log's
@@ -55,6 +56,9 @@ import common  # noqa: E402
 from compare_mitsuba import emitter_mask  # noqa: E402
 
 EXE = os.path.join(ROOT, "target", "release", "spectral-render")
+# A render's line on stderr, as main prints it (read back by --from-log).
+LOG_LINE = re.compile(r"round (\d+) (.+?) +(\d+) spp: +([\d.]+) s \(process +([\d.]+) s\), "
+                      r"relRMSE (\S+)$")
 
 
 def ours(sampler, spp, res, seed, tmp, rr_depth=None, adaptive=False, split=None, exe=None):
@@ -145,9 +149,11 @@ def main():
     a = ap.parse_args()
     if a.from_log:
         rows, names, counts, rounds = read_log(a.from_log)
-        if not rows:
-            sys.exit(f"{a.from_log}: no render lines (\"round N NAME SPP spp: ...\")")
-        print(f"cbox {a.res}x{a.res}, {rounds} rounds, from {os.path.basename(a.from_log)}")
+        if not rounds:
+            sys.exit(f"{a.from_log}: no complete round of render lines "
+                     f"(\"round N NAME SPP spp: ...\")")
+        print(f"cbox {a.res}x{a.res} (--res: the log does not say), {rounds} rounds, "
+              f"from {os.path.basename(a.from_log)}")
         report(rows, names, counts, a.res)
         return
     if not a.reference:
@@ -196,29 +202,35 @@ def main():
     report(rows, [name for name, _ in configs], a.spp, a.res)
 
 
-LOG_LINE = re.compile(r"round (\d+) (.+?) +(\d+) spp: +([\d.]+) s \(process +([\d.]+) s\), "
-                      r"relRMSE ([\d.]+)$")
-
-
 def read_log(path):
     """The renders of a previous run, from the lines it printed to stderr: (rows, names in
-    order, sample counts, rounds)."""
-    rows, names, counts, rounds = {}, [], [], 0
+    order, sample counts, rounds). Only the rounds complete for every row and count are kept
+    (a run stopped mid-round leaves a partial one), in round order."""
+    by_round, names, counts = {}, [], []
     try:
-        lines = open(path).read().splitlines()
+        with open(path) as f:
+            lines = f.read().splitlines()
     except OSError as e:
         sys.exit(f"{path}: {e.strerror}")
     for line in lines:
-        m = LOG_LINE.match(line.strip())
+        m = LOG_LINE.search(line)
         if not m:
+            if "round " in line and " spp: " in line:
+                print(f"warning: {path}: not read: {line.strip()}", file=sys.stderr)
             continue
         r, name, spp = int(m.group(1)), m.group(2), int(m.group(3))
-        t, tp, err = map(float, m.group(4, 5, 6))
-        rows.setdefault((name, spp), []).append((t, tp, err))
-        names += [name] if name not in names else []
-        counts += [spp] if spp not in counts else []
-        rounds = max(rounds, r)
-    return rows, names, counts, rounds
+        by_round[(name, spp, r)] = (float(m.group(4)), float(m.group(5)), float(m.group(6)))
+        if name not in names:
+            names.append(name)
+        if spp not in counts:
+            counts.append(spp)
+    found = sorted({r for _, _, r in by_round})
+    rounds = [r for r in found if all((n, s, r) in by_round for n in names for s in counts)]
+    if len(rounds) < len(found):
+        print(f"warning: {path}: incomplete rounds left out: "
+              f"{sorted(set(found) - set(rounds))}", file=sys.stderr)
+    rows = {(n, s): [by_round[(n, s, r)] for r in rounds] for n in names for s in counts}
+    return rows, names, counts, len(rounds)
 
 
 def report(rows, names, counts, res):
@@ -230,7 +242,7 @@ def report(rows, names, counts, res):
     hdr = ["renderer", "samples/s (median)", "samples/s range"] + \
           [f"relRMSE {s} spp" for s in counts] + \
           [f"relRMSE²×spp @{counts[-1]}", "time to 5 % (s, mean of rounds)", "rounds' range",
-           "vs ours zsobol", "time to 5 %, whole process (s)"]
+           f"vs {names[0]}", "time to 5 %, whole process (s)"]
     print("| " + " | ".join(hdr) + " |")
     print("|" + "---|" * len(hdr))
     t5 = {name: rounds_time_to(0.05, [rows[(name, s)] for s in counts]) for name in names}
@@ -255,13 +267,14 @@ def rounds_time_to(target, per_count):
     times, process, hows = [], [], set()
     for r in range(min(len(runs) for runs in per_count)):
         pts = [runs[r] for runs in per_count]
-        t, how = time_to(target, [(t, e) for t, _, e in pts])
-        tp, _ = time_to(target, [(tp, e) for _, tp, e in pts])
-        times.append(t)
-        process.append(tp)
+        render, how = time_to(target, [(t, e) for t, _, e in pts])
+        whole, _ = time_to(target, [(tp, e) for _, tp, e in pts])
+        times.append(render)
+        process.append(whole)
         hows.add(how)
     how = hows.pop() if len(hows) == 1 else "mixed"
     return float(np.mean(times)), min(times), max(times), how, float(np.mean(process))
+
 
 if __name__ == "__main__":
     main()
