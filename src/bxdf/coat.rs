@@ -16,6 +16,8 @@ use super::fresnel::{diffuse_fresnel, fr_dielectric, schlick, schlick1, simpson}
 use super::microfacet::TrowbridgeReitz;
 use crate::spectral::SampledSpectrum;
 use glam::Vec3;
+use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock};
 
 /// Nodes of a rough coat's albedo table.
 pub const TABLE_SIZE: usize = 16;
@@ -68,14 +70,29 @@ pub enum CoatAlbedo {
 }
 
 impl CoatAlbedo {
-    /// The albedo of the coat `distrib` with Fresnel `fresnel` (computed once per material).
+    /// The albedo of the coat `distrib` with Fresnel `fresnel` (computed once per material;
+    /// a rough coat's table is kept for the process, [`MEMO_TABLES`], so that materials alike
+    /// share one computation).
     pub fn new(distrib: TrowbridgeReitz, fresnel: ScalarFresnel) -> CoatAlbedo {
         if distrib.effectively_smooth() {
             return CoatAlbedo::Smooth(fresnel);
         }
-        CoatAlbedo::Table(std::array::from_fn(|j| {
-            let x = j as f32 / (TABLE_SIZE - 1) as f32;
-            rough_albedo(distrib, fresnel, (x * x).max(1e-4))
+        let key = memo_key(distrib, fresnel);
+        let memo = || TABLES.get_or_init(Default::default);
+        let known = memo()
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .get(&key)
+            .copied();
+        CoatAlbedo::Table(known.unwrap_or_else(|| {
+            let table = rough_table(distrib, fresnel);
+            let mut tables = memo()
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            if tables.len() < MEMO_TABLES {
+                tables.insert(key, table);
+            }
+            table
         }))
     }
 
@@ -149,6 +166,39 @@ impl CoatAlbedo {
 }
 
 /// E(μ) of a rough coat by stratified quadrature over the visible normals.
+/// Rough coats' tables computed so far in this process, by [`memo_key`]: a table takes about
+/// 16 M instructions (16 nodes × 64² quadrature points), and a stage's materials often repeat
+/// their roughness and Fresnel (the peers' Cornell box: six of them alike). The same inputs
+/// give the same bits whether computed or recalled.
+static TABLES: OnceLock<Mutex<HashMap<MemoKey, [f32; TABLE_SIZE]>>> = OnceLock::new();
+/// The tables kept at most (16 floats and a 16-byte key each: under 0.5 MB); past that a
+/// table is computed and not kept.
+pub const MEMO_TABLES: usize = 4096;
+
+/// (α_x, α_y, Fresnel kind, its parameter), as bits.
+type MemoKey = (u32, u32, u8, u32);
+
+fn memo_key(distrib: TrowbridgeReitz, fresnel: ScalarFresnel) -> MemoKey {
+    let (kind, value) = match fresnel {
+        ScalarFresnel::Dielectric { eta } => (0, eta),
+        ScalarFresnel::Schlick { f0 } => (1, f0),
+    };
+    (
+        distrib.alpha_x.to_bits(),
+        distrib.alpha_y.to_bits(),
+        kind,
+        value.to_bits(),
+    )
+}
+
+/// E at the table's nodes μ = (j / (N − 1))², j = 0 … N − 1.
+fn rough_table(distrib: TrowbridgeReitz, fresnel: ScalarFresnel) -> [f32; TABLE_SIZE] {
+    std::array::from_fn(|j| {
+        let x = j as f32 / (TABLE_SIZE - 1) as f32;
+        rough_albedo(distrib, fresnel, (x * x).max(1e-4))
+    })
+}
+
 fn rough_albedo(distrib: TrowbridgeReitz, fresnel: ScalarFresnel, mu: f32) -> f32 {
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let mut sum = 0.0f64;
@@ -259,6 +309,31 @@ impl SpecularCoat {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A recalled table is the computed one bit for bit, for either Fresnel, and inputs that
+    /// differ in any part of the key get their own.
+    #[test]
+    fn recalled_tables_are_the_computed_ones() {
+        let d = TrowbridgeReitz::new(0.3, 0.45);
+        for f in [
+            ScalarFresnel::Dielectric { eta: 1.37 },
+            ScalarFresnel::Schlick { f0: 0.07 },
+        ] {
+            let fresh = CoatAlbedo::Table(rough_table(d, f));
+            assert_eq!(CoatAlbedo::new(d, f), fresh);
+            assert_eq!(CoatAlbedo::new(d, f), fresh, "recalled");
+        }
+        let a = CoatAlbedo::new(d, ScalarFresnel::Schlick { f0: 0.07 });
+        let others = [
+            CoatAlbedo::new(d, ScalarFresnel::Dielectric { eta: 0.07 }),
+            CoatAlbedo::new(
+                TrowbridgeReitz::new(0.45, 0.3),
+                ScalarFresnel::Schlick { f0: 0.07 },
+            ),
+            CoatAlbedo::new(d, ScalarFresnel::Schlick { f0: 0.08 }),
+        ];
+        assert!(others.iter().all(|o| *o != a));
+    }
 
     #[test]
     fn smooth_average_transmittance_is_one_minus_diffuse_fresnel() {
