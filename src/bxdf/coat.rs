@@ -17,7 +17,7 @@ use super::microfacet::TrowbridgeReitz;
 use crate::spectral::SampledSpectrum;
 use glam::Vec3;
 use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Mutex, MutexGuard, OnceLock, PoisonError};
 
 /// Nodes of a rough coat's albedo table.
 pub const TABLE_SIZE: usize = 16;
@@ -71,26 +71,19 @@ pub enum CoatAlbedo {
 
 impl CoatAlbedo {
     /// The albedo of the coat `distrib` with Fresnel `fresnel` (computed once per material;
-    /// a rough coat's table is kept for the process, [`MEMO_TABLES`], so that materials alike
-    /// share one computation).
+    /// a rough coat's table is kept for the process, so that materials alike share one
+    /// computation).
     pub fn new(distrib: TrowbridgeReitz, fresnel: ScalarFresnel) -> CoatAlbedo {
         if distrib.effectively_smooth() {
             return CoatAlbedo::Smooth(fresnel);
         }
         let key = memo_key(distrib, fresnel);
-        let memo = || TABLES.get_or_init(Default::default);
-        let known = memo()
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-            .get(&key)
-            .copied();
+        let known = tables().get(&key).copied();
         CoatAlbedo::Table(known.unwrap_or_else(|| {
             let table = rough_table(distrib, fresnel);
-            let mut tables = memo()
-                .lock()
-                .unwrap_or_else(|poisoned| poisoned.into_inner());
-            if tables.len() < MEMO_TABLES {
-                tables.insert(key, table);
+            let mut kept = tables();
+            if kept.len() < MEMO_TABLES {
+                kept.insert(key, table);
             }
             table
         }))
@@ -165,7 +158,6 @@ impl CoatAlbedo {
     }
 }
 
-/// E(μ) of a rough coat by stratified quadrature over the visible normals.
 /// Rough coats' tables computed so far in this process, by [`memo_key`]: a table takes about
 /// 16 M instructions (16 nodes × 64² quadrature points), and a stage's materials often repeat
 /// their roughness and Fresnel (the peers' Cornell box: six of them alike). The same inputs
@@ -173,7 +165,15 @@ impl CoatAlbedo {
 static TABLES: OnceLock<Mutex<HashMap<MemoKey, [f32; TABLE_SIZE]>>> = OnceLock::new();
 /// The tables kept at most (16 floats and a 16-byte key each: under 0.5 MB); past that a
 /// table is computed and not kept.
-pub const MEMO_TABLES: usize = 4096;
+const MEMO_TABLES: usize = 4096;
+
+/// The kept tables, locked (a panic elsewhere while it was held leaves whole entries only).
+fn tables() -> MutexGuard<'static, HashMap<MemoKey, [f32; TABLE_SIZE]>> {
+    TABLES
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+}
 
 /// (α_x, α_y, Fresnel kind, its parameter), as bits.
 type MemoKey = (u32, u32, u8, u32);
@@ -199,6 +199,7 @@ fn rough_table(distrib: TrowbridgeReitz, fresnel: ScalarFresnel) -> [f32; TABLE_
     })
 }
 
+/// E(μ) of a rough coat by stratified quadrature over the visible normals.
 fn rough_albedo(distrib: TrowbridgeReitz, fresnel: ScalarFresnel, mu: f32) -> f32 {
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let mut sum = 0.0f64;
