@@ -61,6 +61,23 @@ fn rustc_args<'a>(crate_name: &'a str, opt: &'a str, emit: &'a str, hash: &'a st
     ]
 }
 
+/// This crate's release build, as Cargo compiles its library.
+fn release_args(hash: &str) -> Vec<&str> {
+    rustc_args(
+        "spectral_render",
+        "opt-level=3",
+        "--emit=dep-info,link",
+        hash,
+    )
+}
+
+/// A test build of this crate's release-profile library: the `testing` feature on.
+fn test_build_args(hash: &str) -> Vec<&str> {
+    let mut args = release_args(hash);
+    args.extend(["--cfg", "feature=\"testing\""]);
+    args
+}
+
 fn profile_flag(out: &str) -> bool {
     out.contains("-Cprofile-use=")
 }
@@ -68,12 +85,7 @@ fn profile_flag(out: &str) -> bool {
 #[test]
 fn the_release_build_of_this_crate_gets_the_profile() {
     let hash = format!("metadata={}", listed_hashes()[0]);
-    let args = rustc_args(
-        "spectral_render",
-        "opt-level=3",
-        "--emit=dep-info,link",
-        &hash,
-    );
+    let args = release_args(&hash);
     let (out, err) = run(&args, None);
     let profile = root().join("pgo/spectral-render.profdata");
     let profile = profile.canonicalize().unwrap();
@@ -116,30 +128,8 @@ fn other_crates_and_builds_run_unchanged_and_silently() {
             ),
             None,
         ),
-        (
-            "SPECTRAL_RENDER_PGO=0",
-            rustc_args(
-                "spectral_render",
-                "opt-level=3",
-                "--emit=dep-info,link",
-                &hash,
-            ),
-            Some("0"),
-        ),
-        (
-            "a test build",
-            [
-                rustc_args(
-                    "spectral_render",
-                    "opt-level=3",
-                    "--emit=dep-info,link",
-                    &hash,
-                ),
-                vec!["--cfg", "feature=\"testing\""],
-            ]
-            .concat(),
-            None,
-        ),
+        ("SPECTRAL_RENDER_PGO=0", release_args(&hash), Some("0")),
+        ("a test build", test_build_args(&hash), None),
     ];
     for (what, args, pgo) in cases {
         let (out, err) = run(&args, pgo);
@@ -160,22 +150,8 @@ fn every_environment_variable_reaches_the_compiler() {
     let name = "CARGO_BIN_EXE_pgo-wrapper-test";
     let cases = [
         vec!["--crate-name", "glam"],
-        rustc_args(
-            "spectral_render",
-            "opt-level=3",
-            "--emit=dep-info,link",
-            &hash,
-        ),
-        [
-            rustc_args(
-                "spectral_render",
-                "opt-level=3",
-                "--emit=dep-info,link",
-                &hash,
-            ),
-            vec!["--cfg", "feature=\"testing\""],
-        ]
-        .concat(),
+        release_args(&hash),
+        test_build_args(&hash),
     ];
     for args in cases {
         // printenv prints the variable it is asked for (the other arguments name none).
@@ -200,12 +176,7 @@ fn a_build_the_profile_was_not_written_for_is_plain_and_says_so() {
     } else {
         "0"
     });
-    let args = rustc_args(
-        "spectral_render",
-        "opt-level=3",
-        "--emit=dep-info,link",
-        &hash,
-    );
+    let args = release_args(&hash);
     let (out, err) = run(&args, None);
     assert!(!profile_flag(&out), "{out}");
     assert_eq!(out.trim_end(), args.join(" "));
